@@ -1,0 +1,1 @@
+"""One module per ``cfa-mitsuba`` sub-command (see :mod:`cfa_mitsuba.cli`)."""

@@ -1,0 +1,15 @@
+"""``cfa-mitsuba capture``: placeholder until its issue lands (see DESIGN.md)."""
+
+from __future__ import annotations
+
+from ..errors import CfaMitsubaError
+
+HELP = "capture (not implemented yet)"
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("rest", nargs="*")
+
+
+def run(args) -> int:
+    raise CfaMitsubaError("'capture' is not implemented yet")

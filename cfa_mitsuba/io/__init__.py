@@ -1,0 +1,5 @@
+"""io/: spectral OpenEXR (JCGT layout) and sidecar JSON, plain images, raw
+mosaics; every write is atomic."""
+
+from .atomic import atomic_output, check_writable_dir  # noqa: F401
+from .images import ImageFile, read_image, write_image  # noqa: F401

@@ -1,0 +1,58 @@
+"""Atomic file output: write to a temporary file beside the target, then
+rename, so that an interrupted or failed write never leaves a file a later
+run would trust (DESIGN.md, scale-out decision)."""
+
+from __future__ import annotations
+
+__all__ = ["atomic_output", "check_writable_dir"]
+
+import contextlib
+import os
+import tempfile
+from pathlib import Path
+
+from ..errors import CfaMitsubaError
+
+
+def check_writable_dir(directory, *, create: bool = True) -> Path:
+    """Return ``directory`` as a Path, creating it if asked; refuse it with a
+    one-line error if it is a file or cannot be written."""
+    d = Path(directory)
+    if d.exists() and not d.is_dir():
+        raise CfaMitsubaError(f"output directory {str(d)!r} is a file")
+    if not d.exists():
+        if not create:
+            raise CfaMitsubaError(f"output directory {str(d)!r} does not exist")
+        try:
+            d.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise CfaMitsubaError(f"cannot create output directory {str(d)!r}: {exc.strerror}") from None
+    if not os.access(d, os.W_OK | os.X_OK):
+        raise CfaMitsubaError(f"output directory {str(d)!r} is not writable")
+    return d
+
+
+@contextlib.contextmanager
+def atomic_output(path, *, suffix: str | None = None):
+    """Context manager yielding a temporary path in the target's directory.
+
+    Write the file there; on normal exit it is renamed onto ``path`` (atomic
+    on POSIX within one filesystem), on any exception it is removed and the
+    target is left untouched.  ``suffix`` (default: the target's) keeps
+    writers that look at the extension happy.
+    """
+    target = Path(path)
+    check_writable_dir(target.parent if str(target.parent) else ".", create=True)
+    fd, tmp = tempfile.mkstemp(
+        prefix=f".{target.name}.", suffix=(suffix if suffix is not None else target.suffix) + ".part",
+        dir=target.parent if str(target.parent) else ".",
+    )
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        yield tmp_path
+        os.replace(tmp_path, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp_path.unlink()
+        raise

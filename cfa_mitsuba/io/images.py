@@ -1,0 +1,219 @@
+"""Plain (non-spectral) images in and out: PNG (8 and 16 bit), OpenEXR, NPY
+and NPZ.
+
+Reading returns the stored numbers unchanged (code values for PNG, floats for
+EXR/NPY), with what the file said about them; interpreting them (sRGB code
+values, linear, XYZ) is the caller's business.  16-bit PNGs are decoded with
+pypng, because Pillow silently reduces 16-bit RGB PNGs to 8 bit
+(shared/reference/README.md, s. 1.1).
+"""
+
+from __future__ import annotations
+
+__all__ = ["ImageFile", "read_image", "write_image", "IMAGE_SUFFIXES"]
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import CfaMitsubaError
+from .atomic import atomic_output
+
+IMAGE_SUFFIXES = (".png", ".exr", ".npy", ".npz")
+
+#: Channel orders recognised in EXR files, in order of preference.
+_EXR_LAYOUTS = (("X", "Y", "Z"), ("R", "G", "B"), ("Y",), ("L",))
+
+
+@dataclass
+class ImageFile:
+    """An image as read from disk.
+
+    Attributes
+    ----------
+    data : (H, W) or (H, W, C) float64, the stored values (PNG code values
+        0..255 or 0..65535; EXR/NPY floats as stored).
+    format : 'png', 'exr', 'npy' or 'npz'.
+    bit_depth : 8 or 16 for PNG, else None.
+    channels : channel names where the file names them (EXR), else None.
+    meta : JSON metadata stored by :func:`write_image`, if any.
+    """
+
+    data: np.ndarray
+    format: str
+    bit_depth: int | None = None
+    channels: tuple[str, ...] | None = None
+    meta: dict = field(default_factory=dict)
+
+
+def _read_png(path: Path) -> ImageFile:
+    import png
+
+    try:
+        width, height, rows, info = png.Reader(filename=str(path)).asDirect()
+        planes = int(info["planes"])
+        arr = np.vstack([np.asarray(r, dtype=np.uint32) for r in rows]).reshape(height, width, planes)
+    except png.Error as exc:
+        raise CfaMitsubaError(f"{str(path)!r} is not a readable PNG: {exc}") from None
+    if planes in (2, 4):  # drop alpha
+        arr = arr[..., :-1]
+    if arr.shape[2] == 1:
+        arr = arr[..., 0]
+    return ImageFile(arr.astype(np.float64), "png", int(info["bitdepth"]))
+
+
+def _read_exr(path: Path) -> ImageFile:
+    import OpenEXR
+
+    try:
+        with OpenEXR.File(str(path)) as f:
+            header = dict(f.header().items())
+            chans = {name: np.asarray(c.pixels, dtype=np.float64) for name, c in f.channels().items()}
+    except Exception as exc:  # OpenEXR raises plain Exceptions on bad files
+        raise CfaMitsubaError(f"{str(path)!r} is not a readable OpenEXR file: {exc}") from None
+    if "spectralLayoutVersion" in header or any(k.startswith("S0.") for k in chans):
+        raise CfaMitsubaError(
+            f"{str(path)!r} is a spectral EXR (radiance); capture and process it first, "
+            "or pass a camera output image"
+        )
+    # Multi-part or RGB-interleaved reads come back as one (H, W, C) channel.
+    if len(chans) == 1:
+        (name, arr), = chans.items()
+        names = tuple(name) if arr.ndim == 3 and len(name) == arr.shape[2] else None
+        return ImageFile(arr, "exr", None, names, _meta_from(header))
+    for layout in _EXR_LAYOUTS:
+        if all(c in chans for c in layout):
+            data = np.stack([chans[c] for c in layout], axis=-1)
+            return ImageFile(data[..., 0] if len(layout) == 1 else data, "exr", None, layout, _meta_from(header))
+    raise CfaMitsubaError(
+        f"{str(path)!r}: EXR channels {sorted(chans)} are none of X,Y,Z / R,G,B / Y"
+    )
+
+
+def _meta_from(header: dict) -> dict:
+    raw = header.get("cfaMitsuba")
+    if isinstance(raw, bytes):
+        raw = raw.decode()
+    try:
+        return json.loads(raw) if isinstance(raw, str) else {}
+    except ValueError:
+        return {}
+
+
+def read_image(path, *, key: str | None = None) -> ImageFile:
+    """Read a PNG, EXR, NPY or NPZ image (see module docstring).
+
+    ``key`` picks the array of an NPZ; by default the first of ``xyz``,
+    ``image``, ``srgb``, ``raw`` present, or its only array.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise CfaMitsubaError(f"no such file: {str(p)!r}")
+    if p.is_dir():
+        raise CfaMitsubaError(f"{str(p)!r} is a directory, not an image")
+    suffix = p.suffix.lower()
+    if suffix == ".png":
+        return _read_png(p)
+    if suffix == ".exr":
+        return _read_exr(p)
+    if suffix in (".npy", ".npz"):
+        try:
+            loaded = np.load(p, allow_pickle=False)
+        except (ValueError, OSError) as exc:
+            raise CfaMitsubaError(f"{str(p)!r} is not a readable numpy file: {exc}") from None
+        if suffix == ".npy":
+            arr = loaded
+            meta = {}
+        else:
+            with loaded:
+                names = list(loaded.files)
+                if key is None:
+                    key = next((k for k in ("xyz", "image", "srgb", "raw") if k in names), None)
+                    if key is None and len(names) == 1:
+                        key = names[0]
+                if key not in names:
+                    raise CfaMitsubaError(f"{str(p)!r}: no array {key!r} (arrays: {', '.join(names)})")
+                arr = loaded[key]
+                meta = json.loads(str(loaded["meta"])) if "meta" in names else {}
+        if arr.dtype.kind not in "biuf":
+            raise CfaMitsubaError(f"{str(p)!r}: array of type {arr.dtype} is not numeric")
+        return ImageFile(np.asarray(arr, dtype=np.float64), suffix[1:], None, None, meta)
+    raise CfaMitsubaError(f"{str(p)!r}: unsupported image type (expected {', '.join(IMAGE_SUFFIXES)})")
+
+
+def _png_bytes_writer(tmp: Path, codes: np.ndarray, bit_depth: int) -> None:
+    import png
+
+    h, w = codes.shape[:2]
+    planes = 1 if codes.ndim == 2 else codes.shape[2]
+    greyscale = planes == 1
+    writer = png.Writer(width=w, height=h, bitdepth=bit_depth, greyscale=greyscale, alpha=planes in (2, 4))
+    with open(tmp, "wb") as fh:
+        writer.write(fh, codes.reshape(h, w * planes).tolist())
+
+
+def write_image(path, data, *, channels=None, meta: dict | None = None, bit_depth: int = 8, arrays=None) -> Path:
+    """Write an image atomically; the format follows the suffix.
+
+    - ``.png``: ``data`` in 0..1 (already display-encoded, e.g. sRGB), gray
+      or RGB, quantised to ``bit_depth`` (8 or 16) with rounding; values
+      outside 0..1 are clipped.
+    - ``.exr``: float32 channels named by ``channels`` (default X, Y, Z for
+      3-channel data, Y for 2-D); ``meta`` stored as a JSON string attribute.
+    - ``.npy``: the array as float64.
+    - ``.npz``: ``data`` as ``image`` plus any extra ``arrays`` and ``meta``.
+    """
+    p = Path(path)
+    suffix = p.suffix.lower()
+    arr = np.asarray(data, dtype=np.float64)
+    if arr.ndim not in (2, 3):
+        raise CfaMitsubaError(f"cannot write an image of shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise CfaMitsubaError(f"refusing to write {str(p)!r}: image contains NaN or infinite values")
+    if suffix == ".png":
+        if bit_depth not in (8, 16):
+            raise CfaMitsubaError("PNG bit depth must be 8 or 16")
+        top = (1 << bit_depth) - 1
+        codes = np.rint(np.clip(arr, 0.0, 1.0) * top).astype(np.uint16 if bit_depth == 16 else np.uint8)
+        with atomic_output(p) as tmp:
+            _png_bytes_writer(tmp, codes, bit_depth)
+    elif suffix == ".exr":
+        import OpenEXR
+
+        if channels is None:
+            channels = ("Y",) if arr.ndim == 2 else ("X", "Y", "Z") if arr.shape[2] == 3 else tuple(f"C{i}" for i in range(arr.shape[2]))
+        planes = [arr] if arr.ndim == 2 else [arr[..., i] for i in range(arr.shape[2])]
+        if len(planes) != len(channels):
+            raise CfaMitsubaError(f"{len(channels)} channel names for {len(planes)} channels")
+        header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+        if meta:
+            header["cfaMitsuba"] = json.dumps(meta, default=_json_default)
+        chans = {c: np.ascontiguousarray(pl, dtype=np.float32) for c, pl in zip(channels, planes)}
+        with atomic_output(p) as tmp:
+            with OpenEXR.File(header, chans) as f:
+                f.write(str(tmp))
+    elif suffix == ".npy":
+        with atomic_output(p) as tmp:
+            with open(tmp, "wb") as fh:
+                np.save(fh, arr)
+    elif suffix == ".npz":
+        payload = {"image": arr, **{k: np.asarray(v) for k, v in (arrays or {}).items()}}
+        payload["meta"] = np.array(json.dumps(meta or {}, default=_json_default))
+        with atomic_output(p) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez_compressed(fh, **payload)
+    else:
+        raise CfaMitsubaError(f"{str(p)!r}: unsupported output type (expected .png, .exr, .npy or .npz)")
+    return p
+
+
+def _json_default(obj):
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, (np.floating, np.integer, np.bool_)):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON-serialisable: {type(obj).__name__}")

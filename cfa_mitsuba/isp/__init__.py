@@ -1,0 +1,1 @@
+"""isp/: white balance, demosaicing, colour correction -> XYZ and sRGB."""

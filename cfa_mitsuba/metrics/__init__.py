@@ -1,0 +1,1 @@
+"""metrics/: the eight image-quality metrics, pure functions on arrays."""

@@ -1,0 +1,1 @@
+"""report/: plots, tables and the HTML report."""

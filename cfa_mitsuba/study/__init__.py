@@ -1,0 +1,1 @@
+"""study/: configs, the runner, executors, caches, normalisation, ranks."""
