@@ -1,0 +1,79 @@
+"""Input checks and the few filtering conventions the metrics share."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import signal
+
+from ..errors import CfaMitsubaError, require, require_finite
+
+
+def as_image(arr, what: str, *, channels=(3,), allow_gray: bool = False, min_size: int = 1) -> np.ndarray:
+    """``arr`` as a finite float64 (H, W, C) (or (H, W) if ``allow_gray``) array."""
+    a = require_finite(arr, what)
+    if a.ndim == 3 and a.shape[2] == 1 and allow_gray:
+        a = a[..., 0]
+    if a.ndim == 2:
+        require(allow_gray, f"{what} must be (H, W, {'/'.join(map(str, channels))}), got a 2-D array of shape {a.shape}")
+    elif a.ndim == 3:
+        require(a.shape[2] in channels, f"{what} must have {' or '.join(map(str, channels))} channels, got shape {a.shape}")
+    else:
+        raise CfaMitsubaError(f"{what} must be an image (H, W[, C]), got shape {a.shape}")
+    require(min(a.shape[:2]) >= min_size,
+            f"{what} is {a.shape[0]} x {a.shape[1]} px: this metric needs at least {min_size} x {min_size}")
+    return a
+
+
+def as_pair(reference, test, *, channels=(3,), allow_gray=False, min_size=1):
+    """Check a (reference, test) pair: same shape, finite, big enough."""
+    r = as_image(reference, "reference image", channels=channels, allow_gray=allow_gray)
+    t = as_image(test, "test image", channels=channels, allow_gray=allow_gray)
+    require(r.shape == t.shape, f"reference and test images differ in shape: {r.shape} vs {t.shape}")
+    require(min(r.shape[:2]) >= min_size,
+            f"images are {r.shape[0]} x {r.shape[1]} px: this metric needs at least {min_size} x {min_size}")
+    return r, t
+
+
+def as_white(white_xyz) -> np.ndarray:
+    """A white point (Xw, Yw, Zw), finite and positive."""
+    w = require_finite(white_xyz, "white point").reshape(-1)
+    require(w.size == 3, f"white point must have 3 values (X, Y, Z), got {w.size}")
+    require(bool(np.all(w > 0)), f"white point must be positive, got {w.tolist()}")
+    return w
+
+
+def code_range(reference, test, data_range: float, what: str):
+    """Rescale 0..data_range inputs to the 0..255 range the constants assume.
+
+    SSIM's L, MDSI's C1..C3 and HaarPSI's C are defined for 8-bit code
+    values; 0..1 data with the default ``data_range=255`` gives plausible but
+    wrong numbers without any error (reference README s. 5), so that case is
+    refused.
+    """
+    require(np.isfinite(data_range) and data_range > 0, f"data_range must be positive, got {data_range}")
+    if data_range == 255.0:
+        top = max(float(np.max(reference)), float(np.max(test)))
+        fractional = (np.any(reference != np.round(reference)) or np.any(test != np.round(test)))
+        require(not (0.0 < top <= 1.0 and fractional),
+                f"{what}: values lie in 0..1 but data_range is 255 (8-bit codes); "
+                "pass data_range=1 or 8-bit code values")
+        return reference, test
+    k = 255.0 / float(data_range)
+    return reference * k, test * k
+
+
+def conv2_same(x: np.ndarray, kernel: np.ndarray) -> np.ndarray:
+    """MATLAB ``conv2(x, kernel, 'same')``: zero padding, MATLAB's alignment.
+
+    For an even-sized kernel MATLAB keeps the central part of the full
+    convolution starting at index ``floor(m/2)``; scipy's ``'same'`` picks the
+    other centre, so we slice the full result ourselves.
+    """
+    full = signal.convolve2d(x, kernel, mode="full")
+    r0, c0 = kernel.shape[0] // 2, kernel.shape[1] // 2
+    return full[r0:r0 + x.shape[0], c0:c0 + x.shape[1]]
+
+
+def round_half_away(x: float) -> int:
+    """MATLAB's ``round`` (half away from zero), not Python's banker's rounding."""
+    return int(np.sign(x) * np.floor(abs(x) + 0.5))
