@@ -67,7 +67,7 @@ def delta_e(reference_xyz, test_xyz, white_xyz, *, patches=None, grey_patches=No
     0.0
     >>> r = delta_e(img, img * [1.02, 1.0, 1.0], [95.05, 100.0, 108.9], patches=[(0, 0, 4, 4)])
     >>> round(r.details["mean_de1976"], 3), r.unit
-    (2.307, 'dE00')
+    (2.481, 'dE00')
     """
     require(version in _VERSIONS, f"unknown dE version {version!r} (expected '2000' or '1976')")
     ref, test = as_pair(reference_xyz, test_xyz)

@@ -35,7 +35,10 @@ def _gradient(lum: np.ndarray) -> np.ndarray:
 
 
 def _similarity(a, b, c):
-    return (2.0 * a * b + c) / (a * a + b * b + c)
+    # (2ab + c) / (a^2 + b^2 + c) written as 1 - (a - b)^2 / (...): the same
+    # number to rounding, but exactly 1 for equal inputs, so identical images
+    # give exactly 0 (the 4th roots would lift rounding noise of 1e-16 to 1e-4).
+    return 1.0 - (a - b) ** 2 / (a * a + b * b + c)
 
 
 def mdsi(reference, test, *, data_range: float = 255.0, combination: str = "sum") -> float:
@@ -87,7 +90,7 @@ def mdsi(reference, test, *, data_range: float = 255.0, combination: str = "sum"
 
     h_w, m_w = np.array([0.30, 0.04, -0.35]), np.array([0.34, -0.60, 0.17])
     h1, h2, m1, m2 = r @ h_w, d @ h_w, r @ m_w, d @ m_w
-    cs = (2.0 * (h1 * h2 + m1 * m2) + C3) / (h1 * h1 + h2 * h2 + m1 * m1 + m2 * m2 + C3)
+    cs = 1.0 - ((h1 - h2) ** 2 + (m1 - m2) ** 2) / (h1 * h1 + h2 * h2 + m1 * m1 + m2 * m2 + C3)
 
     gs_c, cs_c = gs.astype(np.complex128), cs.astype(np.complex128)
     if combination == "sum":
