@@ -103,6 +103,8 @@ def haarpsi(reference, test, *, data_range: float = 255.0, subsample: bool = Tru
         sims.append((_similarity(ci[0], ci[1]) + _similarity(ci[2], ci[3])) / 2.0)
         weights.append((weights[0] + weights[1]) / 2.0)
     s, w = np.stack(sims), np.stack(weights)
+    if np.all(s == 1.0):  # identical structure everywhere: exactly 1, not 1 - 4e-16
+        return 1.0
     total = w.sum()
     pooled = (_sigmoid(s) * w).sum() / total if total > 0 else _sigmoid(s).mean()
     # Similarities are <= 1, so the score is <= 1; the sigmoid/logit round trip

@@ -59,9 +59,11 @@ def mdsi(reference, test, *, data_range: float = 255.0, combination: str = "sum"
     float
         ``mad(GCS^(1/4))^(1/4)``, mad = mean absolute deviation, computed on
         complex values where GCS < 0.  Both images are first averaged and
-        subsampled by ``f = max(1, round(min(H, W) / 256))``.  Images without
-        any variation give 0 whatever their colours (deviation pooling is
-        blind to a uniform difference).
+        subsampled by ``f = max(1, round(min(H, W) / 256))``.  Deviation
+        pooling measures how *unevenly* the similarity is spread: a uniform
+        colour difference over a flat image registers only through the
+        zero-padded border of the gradient filters (finite, but not a
+        colour-accuracy measure; use delta-e or scielab for that).
 
     References
     ----------
