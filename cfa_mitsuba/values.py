@@ -57,12 +57,17 @@ class OpticalImage:
     sample_pitch_um : spacing of the samples on the sensor plane (um); the
         sensor pitch divided by the oversampling factor.
     meta : the scene's meta plus the optics settings used.
+    pixel_irradiance_w_m2_nm : optional (H/K, W/K, B): the irradiance
+        averaged over each sensor pixel's photosensitive area (fill factor
+        ``meta['fill_factor']``), computed once so that every CFA captured
+        from this image reuses it; None until computed.
     """
 
     irradiance_w_m2_nm: np.ndarray
     wavelengths: np.ndarray
     sample_pitch_um: float
     meta: dict[str, Any] = field(default_factory=dict)
+    pixel_irradiance_w_m2_nm: np.ndarray | None = None
 
 
 @dataclass
