@@ -15,7 +15,16 @@ filters are built from them, C = G + B, M = R + B, Y = R + G, W = R + G + B
 transmittances, a dye's transmittance being its sensitivity divided by W's,
 so that the silicon's QE counts once: C2 = (C/W)^2 W, R = (M/W)(Y/W) W, ...
 All curves are built on the camera data's native 5-nm grid and band-averaged
-to a render's grid only when used (:meth:`CFA.sensitivities`).
+to a render's grid only when used (:meth:`CFA.sensitivities`).  A curve
+tabulated exactly on the requested band centres is taken as band values
+as it stands, so a CFA rebuilt from a raw file's ``spectra``
+(:func:`cfa_from_raw`) reproduces them bit for bit.
+
+A CFA is refused, with one line naming the problem, when its tile is empty
+or ragged, a filter name is invalid or has no spectrum, a spectrum is given
+for a filter the tile does not use, or a spectrum is NaN, infinite,
+negative, zero everywhere, above 1 (quantum efficiencies are electrons per
+photon) or not on ascending wavelengths.
 """
 
 from __future__ import annotations
@@ -27,6 +36,8 @@ __all__ = [
     "list_cfas",
     "register_cfa",
     "load_cfa_toml",
+    "make_cfa",
+    "cfa_from_raw",
     "builtin_filter_curve",
 ]
 
@@ -80,10 +91,23 @@ class CFA:
 
     def sensitivities(self, wavelengths=_spectra.DEFAULT_WAVELENGTHS) -> np.ndarray:
         """Band-averaged quantum efficiencies, shape (C, B), rows in
-        ``channels`` order, electrons per photon."""
-        return np.stack(
-            [_spectra.band_average(*self.curves[c], wavelengths) for c in self.channels]
-        )
+        ``channels`` order, electrons per photon.  A curve tabulated exactly
+        on ``wavelengths`` is returned as it stands (module doc)."""
+        wl = _spectra.validate_wavelengths(wavelengths)
+        key = tuple(wl.tolist())
+        cache = self.__dict__.setdefault("_band_cache", {})
+        if key not in cache:
+            rows = []
+            for c in self.channels:
+                cwl, cqe = self.curves[c]
+                if cwl.shape == wl.shape and np.array_equal(cwl, wl):
+                    rows.append(np.array(cqe, dtype=np.float64))
+                else:
+                    rows.append(_spectra.band_average(cwl, cqe, wl))
+            out = np.stack(rows)
+            out.flags.writeable = False
+            cache[key] = out
+        return cache[key].copy()
 
     def channel_index(self, shape: tuple[int, int]) -> np.ndarray:
         """(H, W) int array: the index into ``channels`` of each pixel's filter."""
@@ -142,6 +166,11 @@ def _check_curve(name: str, wl, qe, where: str):
         raise CfaMitsubaError(f"{where}: spectrum of {name!r} has negative values")
     if not np.any(qe > 0):
         raise CfaMitsubaError(f"{where}: spectrum of {name!r} is zero everywhere")
+    if np.any(qe > 1.0 + 1e-9):
+        raise CfaMitsubaError(
+            f"{where}: spectrum of {name!r} peaks at {qe.max():g}, above 1: give a quantum efficiency "
+            "(electrons per photon), e.g. with 'scale'"
+        )
     if wl[0] > 400.0 or wl[-1] < 700.0:
         warnings.warn(
             f"{where}: spectrum of {name!r} covers only {wl[0]:g}..{wl[-1]:g} nm; "
@@ -235,8 +264,13 @@ _REGISTRY: dict[str, CFA] = {}
 
 
 def register_cfa(cfa: CFA, *, replace: bool = False) -> CFA:
-    """Add a CFA to the registry under ``cfa.name``."""
-    if cfa.name in _REGISTRY and not replace:
+    """Add a CFA to the registry under ``cfa.name`` (a built-in name only
+    with ``replace=True``; ``ideal`` never)."""
+    if not isinstance(cfa, CFA):
+        raise CfaMitsubaError(f"register_cfa needs a CFA, got {type(cfa).__name__}")
+    if cfa.name == "ideal":
+        raise CfaMitsubaError("'ideal' is reserved for the XYZ reference sensor")
+    if (cfa.name in _REGISTRY or cfa.name in _BUILTINS) and not replace:
         raise CfaMitsubaError(f"a CFA named {cfa.name!r} is already registered")
     _REGISTRY[cfa.name] = cfa
     return cfa
@@ -323,15 +357,21 @@ def _curve_from_toml(letter: str, spec, base: Path, where: str):
         if unknown:
             raise CfaMitsubaError(f"{where}: spectra.{letter}: unknown key {sorted(unknown)[0]!r}")
         scale = spec.get("scale", 1.0)
-        if not isinstance(scale, (int, float)) or not scale > 0:
+        if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not scale > 0:
             raise CfaMitsubaError(f"{where}: spectra.{letter}.scale must be a positive number")
         if "wavelengths" in spec or "values" in spec:
-            return _check_curve(letter, spec.get("wavelengths", []), np.asarray(spec.get("values", []), float) * scale, where)
+            try:
+                wl = np.asarray(spec.get("wavelengths", []), dtype=np.float64)
+                qe = np.asarray(spec.get("values", []), dtype=np.float64) * scale
+            except (TypeError, ValueError):
+                raise CfaMitsubaError(f"{where}: spectra.{letter}: wavelengths and values must be lists of numbers") from None
+            return _check_curve(letter, wl, qe, where)
         if "source" not in spec:
             raise CfaMitsubaError(f"{where}: spectra.{letter} needs 'source' or 'wavelengths' and 'values'")
         spec = spec["source"]
     if not isinstance(spec, str):
-        raise CfaMitsubaError(f"{where}: spectra.{letter} must be a string or a table")
+        raise CfaMitsubaError(f"{where}: spectra.{letter} must be a string (built-in filter, .csv file or "
+                              "'colour:CAMERA/LABEL') or a table")
     if spec.startswith("colour:"):
         wl, qe = _colour_curve(spec, where)
     elif spec.lower().endswith(".csv"):
@@ -350,12 +390,13 @@ def _curve_from_toml(letter: str, spec, base: Path, where: str):
 def load_cfa_toml(path) -> CFA:
     """Read a user CFA.
 
-    Format (``configs/examples/`` has a complete file)::
+    Format (``configs/cfas/`` has complete files; docs/sensor.md)::
 
         name = "rgbw-alt"              # optional, defaults to the file stem
         description = "..."            # optional
         tile = ["W R", "B W"]          # or "W R / B W", or [["W","R"],["B","W"]]
-        [spectra]                      # optional for the built-in letters R G B C M Y W
+        [spectra]                      # optional for the built-in filters
+                                       # R G B C M Y W C2 M2 Y2 MY CY CM
         W = "W"                        # a built-in filter
         R = "my_red.csv"               # CSV: wavelength_nm, qe (relative to this file)
         B = { source = "colour:Nikon 5100 (NPL)/blue", scale = 0.4 }
@@ -385,9 +426,34 @@ def load_cfa_toml(path) -> CFA:
     for letter in _order_channels(pattern):
         if letter in given:
             continue
-        if letter not in CANONICAL_ORDER:
-            raise CfaMitsubaError(f"{where}: unknown filter letter {letter!r}: give its spectrum under [spectra]")
+        if letter not in _builtin_curves():
+            raise CfaMitsubaError(
+                f"{where}: unknown filter {letter!r} in the tile: give its spectrum under [spectra] "
+                f"(built-in filters: {', '.join(_builtin_curves())})"
+            )
         curves[letter] = builtin_filter_curve(letter)
     for letter, spec in given.items():
         curves[letter] = _curve_from_toml(letter, spec, p.parent, where)
     return make_cfa(name, pattern.tolist(), curves, str(data.get("description", "")), where)
+
+
+def cfa_from_raw(raw) -> CFA:
+    """The CFA a :class:`~cfa_mitsuba.values.RawImage` was captured with,
+    rebuilt from its ``pattern``, ``channels``, ``spectra`` and
+    ``wavelengths`` (what a raw file holds); ``sensitivities(wavelengths)``
+    returns ``spectra`` exactly."""
+    if getattr(raw, "is_ideal", False):
+        raise CfaMitsubaError("the ideal sensor's raw image has no CFA (it is XYZ at every pixel)")
+    pattern = np.asarray(raw.pattern, dtype=str)
+    spectra = np.asarray(raw.spectra, dtype=np.float64)
+    wl = np.asarray(raw.wavelengths, dtype=np.float64)
+    channels = tuple(str(c) for c in raw.channels)
+    if spectra.shape != (len(channels), wl.size):
+        raise CfaMitsubaError(f"raw spectra have shape {spectra.shape}, expected ({len(channels)}, {wl.size})")
+    info = (getattr(raw, "settings", None) or {}).get("cfa", {}) or {}
+    cfa = make_cfa(str(info.get("name") or "custom"), pattern.tolist(),
+                   {c: (wl, spectra[i]) for i, c in enumerate(channels)}, str(info.get("description") or ""),
+                   where="raw file CFA")
+    if cfa.channels != channels:
+        raise CfaMitsubaError(f"raw file CFA: channels {channels} do not match the tile's {cfa.channels}")
+    return cfa

@@ -1,0 +1,317 @@
+"""Sensor-plane irradiance -> raw mosaic (any CFA) or the ideal XYZ image.
+
+Electrons of the pixel at (i, j), whose filter is channel c (ISETCam
+``signalCurrent`` / ``spatialIntegration``, research/isetcam.md s. 1.5):
+
+    e = s t A FF sum_b E_b(i, j) QE_cb (lambda_b / (h c)) dlambda_b
+
+with E_b the irradiance averaged over the photosensitive area (W/(m^2 nm),
+:func:`cfa_mitsuba.optics.compute_optics`), s the luminance scale (the
+requested mean luminance over the scene's), t the exposure (s), A the pixel
+area (m^2), FF the fill factor, QE the channel's quantum efficiency and
+dlambda the band width (nm).
+
+The ideal sensor (ISETCam ``cameraCompute`` 'idealxyz': same optics and
+pixel, no noise, no mosaic) reads CIE 1931 XYZ on an absolute scale:
+
+    X, Y, Z = K_m sum_b [E_b / (pi T_b / (1 + 4 N^2 (1 + |m|)^2))] (xbar, ybar, zbar)_b dlambda_b
+
+i.e. the irradiance referred back to radiance by the on-axis optics factor,
+so that Y is in cd/m^2 of the scene: a uniform white field of luminance Lw
+reads Y = Lw on the axis (less the relative illumination off it), after the
+same OTF and pixel-area integration as the camera.
+"""
+
+from __future__ import annotations
+
+__all__ = ["capture", "capture_ideal", "capture_many", "auto_exposure", "optical_image_for",
+           "DEFAULT_REFERENCE_LUMINANCE_CD_M2", "AUTO_EXPOSURE_LEVEL", "IDEAL_NOMINAL_EXPOSURE_S"]
+
+import copy
+import math
+
+import numpy as np
+
+from .. import spectra as _spectra
+from ..errors import CfaMitsubaError, require
+from ..optics import OpticsParams, compute_optics, integrate_pixels
+from ..values import OpticalImage, RawImage, SpectralImage
+from .cfa import CFA, get_cfa
+from .noise import collect_electrons, read_out, temporal_rng
+from .params import NOISE_MODES, SensorParams
+
+#: Auto exposure is chosen for the scene scaled to this mean luminance and
+#: kept for any other luminance, so that dim scenes really are noisier
+#: (Bae 2020 sweeps 3..400 cd/m^2 around 100 cd/m^2).
+DEFAULT_REFERENCE_LUMINANCE_CD_M2 = 100.0
+#: ISETCam ``autoExposure(oi, sensor, 0.95, 'luminance')``: the brightest
+#: pixel reaches 95 % of the well.
+AUTO_EXPOSURE_LEVEL = 0.95
+#: Exposure recorded for the ideal sensor under 'auto': its XYZ scale does
+#: not depend on exposure; ISETCam's ideal sensors integrate 1 s
+#: (``sensorCreateIdeal``).
+IDEAL_NOMINAL_EXPOSURE_S = 1.0
+
+
+def _electrons_per_irradiance(wl: np.ndarray, sensor: SensorParams) -> np.ndarray:
+    """(B,) electrons per second per unit QE per W/(m^2 nm) of band irradiance:
+    A FF (lambda / h c) dlambda."""
+    return (sensor.pixel_area_m2 * sensor.fill_factor * _spectra.photons_per_joule(wl)
+            * _spectra.band_widths(wl))
+
+
+def optical_image_for(image, sensor: SensorParams, optics: OpticsParams | None = None,
+                      oversample=None) -> OpticalImage:
+    """The OpticalImage to capture from: computed from a SpectralImage, or an
+    OpticalImage checked against the sensor (same pixel pitch)."""
+    if isinstance(image, SpectralImage):
+        return compute_optics(image, optics, pixel_pitch_um=sensor.pixel_pitch_um, oversample=oversample,
+                              fill_factor=sensor.fill_factor)
+    if isinstance(image, OpticalImage):
+        require(optics is None, "optics settings apply when computing the optical image "
+                                "(cm.optics.compute_optics), not to an existing OpticalImage")
+        meta = image.meta or {}
+        require("pixel_pitch_um" in meta and "oversample" in meta,
+                "this OpticalImage was not made by cm.optics.compute_optics (no pixel pitch / oversample)")
+        require(oversample is None or int(oversample) == int(meta["oversample"]),
+                f"oversample {oversample} differs from the optical image's {meta['oversample']}")
+        require(math.isclose(float(meta["pixel_pitch_um"]), sensor.pixel_pitch_um, rel_tol=1e-12),
+                f"the optical image was computed for {meta['pixel_pitch_um']} um pixels, "
+                f"the sensor has {sensor.pixel_pitch_um} um")
+        return image
+    raise CfaMitsubaError(f"capture needs a SpectralImage or an OpticalImage, got {type(image).__name__}")
+
+
+def _pixel_irradiance(oi: OpticalImage, fill_factor: float) -> np.ndarray:
+    """(H/K, W/K, B), reusing the optical image's when the fill factor matches."""
+    cached = oi.pixel_irradiance_w_m2_nm
+    if cached is not None and math.isclose(float(oi.meta.get("fill_factor", -1)), fill_factor, rel_tol=1e-12):
+        return cached
+    return integrate_pixels(oi.irradiance_w_m2_nm, int(oi.meta["oversample"]), fill_factor)
+
+
+def _luminance_scale(oi: OpticalImage, luminance_cd_m2) -> float:
+    if luminance_cd_m2 is None:
+        return 1.0
+    require(isinstance(luminance_cd_m2, (int, float)) and not isinstance(luminance_cd_m2, bool)
+            and math.isfinite(luminance_cd_m2) and luminance_cd_m2 > 0,
+            f"luminance must be a positive number of cd/m^2, got {luminance_cd_m2!r}")
+    scene = float(oi.meta["scene_luminance_cd_m2"])
+    require(scene > 0, "the scene is black (mean luminance 0): it cannot be scaled to a luminance")
+    return float(luminance_cd_m2) / scene
+
+
+def auto_exposure(oi: OpticalImage, spectra_cb: np.ndarray, sensor: SensorParams,
+                  reference_luminance_cd_m2: float | None = DEFAULT_REFERENCE_LUMINANCE_CD_M2,
+                  luminance_scale: float = 1.0) -> float:
+    """Exposure (s) that fills the brightest pixel's well to 95 %.
+
+    ISETCam's rule (``autoExposure.m``, 'luminance'): the scene pixel of
+    highest luminance, without OTF or off-axis falloff, taken as a uniform
+    field on the axis; the exposure brings its most sensitive channel to
+    0.95 x well (dark current left out).  The scene is first scaled to
+    ``reference_luminance_cd_m2`` (mean luminance), or by
+    ``luminance_scale`` when that is None.
+
+    Parameters
+    ----------
+    oi : from :func:`cfa_mitsuba.optics.compute_optics`.
+    spectra_cb : (C, B) quantum efficiencies of the sensor's channels.
+    sensor : the pixel.
+    """
+    meta = oi.meta
+    wl = np.asarray(oi.wavelengths, dtype=np.float64)
+    if reference_luminance_cd_m2 is None:
+        scale = float(luminance_scale)
+    else:
+        require(isinstance(reference_luminance_cd_m2, (int, float)) and reference_luminance_cd_m2 > 0,
+                f"reference luminance must be positive, got {reference_luminance_cd_m2!r}")
+        scene = float(meta["scene_luminance_cd_m2"])
+        require(scene > 0, "auto exposure needs light: the scene is black (give a fixed exposure)")
+        scale = float(reference_luminance_cd_m2) / scene
+    irradiance = np.asarray(meta["brightest_radiance"]) * np.asarray(meta["on_axis_factor"]) * scale
+    rate = np.asarray(spectra_cb) @ (irradiance * _electrons_per_irradiance(wl, sensor))  # e-/s per channel
+    peak = float(rate.max())
+    require(peak > 0, "auto exposure needs light the sensor sees: the brightest pixel gives no signal")
+    return AUTO_EXPOSURE_LEVEL * sensor.well_capacity_e / peak
+
+
+def _resolve_exposure(exposure_s, auto) -> tuple[float, str]:
+    if isinstance(exposure_s, str):
+        if exposure_s.strip().lower() != "auto":
+            raise CfaMitsubaError(f"exposure must be a time in seconds or 'auto', got {exposure_s!r}")
+        return auto(), "auto"
+    ok = isinstance(exposure_s, (int, float)) and not isinstance(exposure_s, bool)
+    ok = ok and math.isfinite(exposure_s) and exposure_s > 0
+    require(ok, f"exposure must be a positive number of seconds or 'auto', got {exposure_s!r}")
+    return float(exposure_s), "fixed"
+
+
+def _scaled_meta(oi: OpticalImage, s: float) -> dict:
+    meta = copy.deepcopy(oi.meta)
+    scene = float(meta["scene_luminance_cd_m2"])
+    if "luminance_cd_m2" in meta:
+        meta["render_luminance_cd_m2"] = meta["luminance_cd_m2"]
+    meta["luminance_cd_m2"] = scene * s
+    meta["luminance_scale"] = s
+    meta["white_radiance"] = (np.asarray(meta["white_radiance"]) * s).tolist()
+    meta["white_luminance_cd_m2"] = float(_spectra.luminance_cd_m2(np.asarray(meta["white_radiance"]),
+                                                                   oi.wavelengths))
+    meta["brightest_radiance"] = (np.asarray(meta["brightest_radiance"]) * s).tolist()
+    meta["brightest_luminance_cd_m2"] = float(meta["brightest_luminance_cd_m2"]) * s
+    return meta
+
+
+def _check_seed(seed) -> int:
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or int(seed) < 0:
+        raise CfaMitsubaError(f"seed must be a non-negative integer, got {seed!r}")
+    return int(seed)
+
+
+def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposure_s="auto",
+            noise: str = "all", seed: int = 0, sensor: SensorParams | None = None,
+            optics: OpticsParams | None = None, oversample=None,
+            reference_luminance_cd_m2: float | None = DEFAULT_REFERENCE_LUMINANCE_CD_M2) -> RawImage:
+    """Capture a raw mosaic.
+
+    Parameters
+    ----------
+    image : a SpectralImage (the optics are computed here) or an
+        OpticalImage (:func:`cfa_mitsuba.optics.compute_optics`; compute it
+        once and capture every CFA from it).
+    cfa : a :class:`CFA`, a registry name, a ``.toml`` path, or ``"ideal"``
+        (returns :func:`capture_ideal`).
+    luminance_cd_m2 : scale the scene to this mean luminance (cd/m^2);
+        None keeps its radiance.
+    exposure_s : seconds, or ``"auto"`` (:func:`auto_exposure` at the
+        reference luminance).
+    noise : ``off``, ``shot`` or ``all`` (:mod:`cfa_mitsuba.sensor.noise`).
+    seed : temporal noise seed (non-negative int); the fixed pattern comes
+        from ``sensor.sensor_seed``.
+    sensor : :class:`SensorParams` (defaults documented there).
+    optics, oversample : for a SpectralImage, as in ``compute_optics``.
+    reference_luminance_cd_m2 : mean luminance at which auto exposure is
+        chosen (default 100); None: at the captured luminance.
+
+    Returns
+    -------
+    RawImage: ``raw`` (H/K, W/K) DN, ``electrons_per_radiance`` (C, B),
+    ``white_radiance`` at the captured scale, settings and meta (module doc).
+    """
+    if isinstance(cfa, str) and cfa == "ideal":
+        return capture_ideal(image, luminance_cd_m2=luminance_cd_m2, exposure_s=exposure_s, sensor=sensor,
+                             optics=optics, oversample=oversample)
+    sensor = sensor or SensorParams()
+    if noise not in NOISE_MODES:
+        raise CfaMitsubaError(f"unknown noise mode {noise!r} (choose {', '.join(NOISE_MODES)})")
+    seed = _check_seed(seed)
+    cfa = get_cfa(cfa)
+    oi = optical_image_for(image, sensor, optics, oversample)
+    s = _luminance_scale(oi, luminance_cd_m2)
+    wl = np.asarray(oi.wavelengths, dtype=np.float64)
+    qe = cfa.sensitivities(wl)  # (C, B)
+    exposure, mode = _resolve_exposure(
+        exposure_s, lambda: auto_exposure(oi, qe, sensor, reference_luminance_cd_m2, s))
+
+    pix = _pixel_irradiance(oi, sensor.fill_factor)
+    h, w, nb = pix.shape
+    th, tw = cfa.tile_shape
+    require(h >= th and w >= tw, f"the sensor ({w} x {h} pixels) is smaller than the CFA tile ({tw} x {th})")
+    k = _electrons_per_irradiance(wl, sensor) * (exposure * s)  # (B,)
+    weights = (qe * k).T  # (B, C)
+    idx = cfa.channel_index((h, w))
+    photo = np.empty((h, w))
+    # Per channel, only the pixels that carry it: (N_c, B) @ (B,).
+    for c in range(len(cfa.channels)):
+        sel = idx == c
+        photo[sel] = pix[sel] @ weights[:, c]
+    np.maximum(photo, 0.0, out=photo)
+
+    rng = temporal_rng(seed) if noise != "off" else None
+    electrons = collect_electrons(photo, exposure_s=exposure, sensor=sensor, noise=noise, rng=rng)
+    raw = read_out(electrons, sensor=sensor, noise=noise, rng=rng)
+
+    factor = np.asarray(oi.meta["on_axis_factor"], dtype=np.float64)
+    epr = qe * (factor * _electrons_per_irradiance(wl, sensor) * exposure)[None, :]
+    meta = _scaled_meta(oi, s)
+    settings = {
+        "cfa": {"name": cfa.name, "description": cfa.description, "tile": cfa.tile_text()},
+        "noise": noise,
+        "exposure_mode": mode,
+        "exposure_s": exposure,
+        "reference_luminance_cd_m2": reference_luminance_cd_m2 if mode == "auto" else None,
+        "auto_exposure_level": AUTO_EXPOSURE_LEVEL if mode == "auto" else None,
+        "luminance_cd_m2": meta["luminance_cd_m2"],
+        "luminance_scale": s,
+        "sensor": sensor.to_dict(),
+        "optics": oi.meta["optics"],
+        "oversample": int(oi.meta["oversample"]),
+    }
+    return RawImage(
+        raw=raw, pattern=cfa.pattern.copy(), channels=tuple(cfa.channels), spectra=qe, wavelengths=wl.copy(),
+        electrons_per_radiance=epr, white_radiance=np.asarray(meta["white_radiance"]), exposure_s=exposure,
+        dn_per_electron=sensor.dn_per_electron,
+        black_level_dn=float(sensor.black_level_dn) if noise == "all" else 0.0,
+        seed=seed, settings=settings, meta=meta,
+    )
+
+
+def capture_ideal(image, *, luminance_cd_m2: float | None = None, exposure_s="auto",
+                  sensor: SensorParams | None = None, optics: OpticsParams | None = None,
+                  oversample=None) -> RawImage:
+    """The ideal XYZ sensor: same optics and pixel, CIE 1931 XYZ at every
+    pixel, no noise, no mosaic, no clipping.
+
+    Returns a RawImage whose ``raw`` is (H/K, W/K, 3) XYZ with Y in cd/m^2
+    of the scene (module doc), ``pattern`` ``[['XYZ']]``, ``channels``
+    ('X', 'Y', 'Z'), ``spectra`` the colour-matching functions (3, B),
+    ``electrons_per_radiance`` K_m cmf dlambda (XYZ per unit band radiance,
+    so ``raw`` of a uniform field on the axis is ``electrons_per_radiance @
+    L``), ``dn_per_electron`` 1 and ``exposure_s`` the given exposure or,
+    for 'auto', :data:`IDEAL_NOMINAL_EXPOSURE_S` (the XYZ scale does not
+    depend on it).
+    """
+    sensor = sensor or SensorParams()
+    oi = optical_image_for(image, sensor, optics, oversample)
+    s = _luminance_scale(oi, luminance_cd_m2)
+    exposure, mode = _resolve_exposure(exposure_s, lambda: IDEAL_NOMINAL_EXPOSURE_S)
+    wl = np.asarray(oi.wavelengths, dtype=np.float64)
+    pix = _pixel_irradiance(oi, sensor.fill_factor)
+    h, w, nb = pix.shape
+    cmfs = _spectra.cmfs_xyz(wl)  # (B, 3)
+    per_radiance = cmfs * (_spectra.band_widths(wl) * _spectra.KM_LM_W)[:, None]  # (B, 3)
+    factor = np.asarray(oi.meta["on_axis_factor"], dtype=np.float64)
+    xyz = (pix.reshape(-1, nb) @ (per_radiance * (s / factor)[:, None])).reshape(h, w, 3)
+    meta = _scaled_meta(oi, s)
+    settings = {
+        "cfa": {"name": "ideal", "description": "CIE 1931 XYZ at every pixel, no noise, no mosaic",
+                "tile": "XYZ"},
+        "noise": "off",
+        "exposure_mode": mode,
+        "exposure_s": exposure,
+        "luminance_cd_m2": meta["luminance_cd_m2"],
+        "luminance_scale": s,
+        "xyz_scale": "absolute: Y in cd/m^2 of the scene (irradiance / on-axis optics factor)",
+        "sensor": sensor.to_dict(),
+        "optics": oi.meta["optics"],
+        "oversample": int(oi.meta["oversample"]),
+    }
+    return RawImage(
+        raw=xyz, pattern=np.array([["XYZ"]]), channels=("X", "Y", "Z"), spectra=np.ascontiguousarray(cmfs.T),
+        wavelengths=wl.copy(), electrons_per_radiance=np.ascontiguousarray(per_radiance.T),
+        white_radiance=np.asarray(meta["white_radiance"]), exposure_s=exposure, dn_per_electron=1.0,
+        black_level_dn=0.0, seed=None, settings=settings, meta=meta,
+    )
+
+
+def capture_many(image, cfas, **kwargs) -> dict[str, RawImage]:
+    """Capture several CFAs (names, paths, CFA objects, or ``"ideal"``) from
+    one scene, computing the optics once.  Keyword arguments as
+    :func:`capture`; ``optics`` and ``oversample`` apply to the optics."""
+    sensor = kwargs.pop("sensor", None) or SensorParams()
+    oi = optical_image_for(image, sensor, kwargs.pop("optics", None), kwargs.pop("oversample", None))
+    out = {}
+    for c in cfas:
+        name = c if isinstance(c, str) and c == "ideal" else get_cfa(c).name
+        out[name] = capture(oi, c, sensor=sensor, **kwargs)
+    return out

@@ -1,0 +1,151 @@
+"""The pixel and read-out chain: defaults, their sources, validation.
+
+Defaults follow ISETCam's default APS pixel (``sensor/pixel/pixelCreate.m``,
+``pixelAPSInit``: 2.8 um, voltage swing 1 V, conversion gain 100 uV/e-, so a
+10 000 e- well, read noise 1 mV, dark voltage 1 mV/s; research/isetcam.md
+s. 1.1), moved to the paper's 2.2 um pitch this way:
+
+* The voltage-domain values stay (swing 1 V, read noise 1 mV rms, dark
+  signal 1 mV/s).  The full well scales with the photodiode's area,
+  10 000 x (2.2 / 2.8)^2 = 6 173 e- (rounded to 6 200 e-); the conversion
+  gain follows as swing / well = 161 uV/e- (a smaller pixel has a smaller
+  sense node), so read noise is 1 mV / 161 uV = 6.2 e- and dark current
+  1 mV/s = 6.2 e-/s (also 10 e-/s x the area ratio).  For comparison, the
+  2.2 um pixel of onsemi's MT9P031 (datasheet rev. 10: SNR_max 38.1 dB,
+  pixel dynamic range 70.1 dB) holds 10^(38.1/10) = 6 500 e- (SNR_max =
+  sqrt(well)) with about 2 e- read noise: the well matches, the read noise
+  is ISETCam's, higher than a modern pixel's.
+* Fill factor 1: the quantum efficiencies (``spectra.CAMERA_PEAK_QE``, peak
+  0.6 for W) are EMVA 1288-style values referred to the whole pixel area,
+  as for a micro-lensed pixel, so a fill factor below 1 would count the
+  lost area twice.  ISETCam's 0.75 is available (``fill_factor=0.75``).
+* DSNU 0 and PRNU 0, as ISETCam's ``sensorCreate`` (typical EMVA 1288
+  datasheet values, 1-2 e- and 0.5-1 %, can be set).
+* Analog gain 1 (multiplies the signal; ISETCam divides by its gain).
+* ADC: 12 bits (ISETCam's vendor presets; its default is unquantised
+  'analog'), black level 64 DN, more than 10 read-noise sigmas above 0 so
+  that the dark tail is not clipped; the full well at gain 1 maps to the
+  top code: DN per electron = gain x (2^bits - 1 - black) / well.
+"""
+
+from __future__ import annotations
+
+__all__ = ["SensorParams", "NOISE_MODES"]
+
+import math
+from dataclasses import asdict, dataclass, fields, replace
+
+from ..errors import CfaMitsubaError
+
+#: ``off``: no noise of any kind (no DSNU/PRNU, no dark current, no ADC
+#: quantisation, no black level; the well still clips).  ``shot``: photon
+#: noise only (exact Poisson), no ADC.  ``all``: photon and dark-current shot
+#: noise, PRNU, DSNU, read noise, well clipping, analog gain, black level,
+#: ADC quantisation and clipping.
+NOISE_MODES = ("off", "shot", "all")
+
+_AREA_RATIO = (2.2 / 2.8) ** 2
+_WELL_E = 6200.0
+_SWING_V = 1.0
+_CG_V_PER_E = _SWING_V / _WELL_E
+
+
+@dataclass(frozen=True)
+class SensorParams:
+    """A sensor: pixel geometry, photodiode and read-out chain.
+
+    Attributes
+    ----------
+    pixel_pitch_um : pixel pitch (um), square pixels, no gaps.  2.2 (Bae
+        2020: Nyquist 227 cy/mm).
+    fill_factor : photosensitive fraction of the pixel area, (0, 1]; the
+        photodiode is a centred square of side sqrt(FF) x pitch.  1.0.
+    well_capacity_e : full-well capacity (electrons).  6200.
+    voltage_swing_v : sense-node voltage swing (V); conversion gain =
+        swing / well.  1.0 (ISETCam).
+    read_noise_e : read noise (electrons rms).  6.2 (ISETCam's 1 mV).
+    dark_current_e_s : dark current (electrons per second).  6.2 (ISETCam's
+        1 mV/s).
+    dsnu_e : dark-signal non-uniformity (electrons rms, a fixed offset per
+        pixel).  0.
+    prnu_percent : photo-response non-uniformity (percent rms of the photo
+        signal, a fixed gain per pixel).  0.
+    analog_gain : gain before the ADC (multiplies).  1.
+    adc_bits : ADC resolution.  12.
+    black_level_dn : offset added before quantisation (DN).  64.
+    sensor_seed : seed of the fixed-pattern maps (DSNU, PRNU): one seed is
+        one physical sensor.  0.
+    """
+
+    pixel_pitch_um: float = 2.2
+    fill_factor: float = 1.0
+    well_capacity_e: float = _WELL_E
+    voltage_swing_v: float = _SWING_V
+    read_noise_e: float = round(1e-3 / _CG_V_PER_E, 3)
+    dark_current_e_s: float = round(1e-3 / _CG_V_PER_E, 3)
+    dsnu_e: float = 0.0
+    prnu_percent: float = 0.0
+    analog_gain: float = 1.0
+    adc_bits: int = 12
+    black_level_dn: float = 64.0
+    sensor_seed: int = 0
+
+    def __post_init__(self):
+        def positive(name, v, allow_zero=False):
+            ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            ok = ok and (v >= 0 if allow_zero else v > 0)
+            if not ok:
+                raise CfaMitsubaError(f"sensor {name} must be a {'non-negative' if allow_zero else 'positive'} "
+                                      f"number, got {v!r}")
+
+        positive("pixel_pitch_um", self.pixel_pitch_um)
+        positive("fill_factor", self.fill_factor)
+        if self.fill_factor > 1:
+            raise CfaMitsubaError(f"sensor fill_factor must lie in (0, 1], got {self.fill_factor!r}")
+        positive("well_capacity_e", self.well_capacity_e)
+        positive("voltage_swing_v", self.voltage_swing_v)
+        for name in ("read_noise_e", "dark_current_e_s", "dsnu_e", "prnu_percent", "black_level_dn"):
+            positive(name, getattr(self, name), allow_zero=True)
+        positive("analog_gain", self.analog_gain)
+        if isinstance(self.adc_bits, bool) or not isinstance(self.adc_bits, int) or not 1 <= self.adc_bits <= 32:
+            raise CfaMitsubaError(f"sensor adc_bits must be an integer in 1..32, got {self.adc_bits!r}")
+        if self.black_level_dn >= 2**self.adc_bits - 1:
+            raise CfaMitsubaError(f"black level {self.black_level_dn:g} DN leaves no room in a "
+                                  f"{self.adc_bits}-bit ADC")
+        if isinstance(self.sensor_seed, bool) or not isinstance(self.sensor_seed, int) or self.sensor_seed < 0:
+            raise CfaMitsubaError(f"sensor_seed must be a non-negative integer, got {self.sensor_seed!r}")
+
+    @property
+    def conversion_gain_uv_per_e(self) -> float:
+        """Sense-node conversion gain (uV per electron) = swing / well."""
+        return self.voltage_swing_v / self.well_capacity_e * 1e6
+
+    @property
+    def pixel_area_m2(self) -> float:
+        return (self.pixel_pitch_um * 1e-6) ** 2
+
+    @property
+    def max_dn(self) -> int:
+        return 2**self.adc_bits - 1
+
+    @property
+    def dn_per_electron(self) -> float:
+        """Digital numbers per electron: analog gain x (2^bits - 1 - black
+        level) / well, so that at gain 1 a full well reaches the top code.
+        The same scale is used with noise ``off`` and ``shot`` (which add no
+        black level and do not quantise)."""
+        return self.analog_gain * (self.max_dn - self.black_level_dn) / self.well_capacity_e
+
+    def with_(self, **changes) -> "SensorParams":
+        """A copy with some settings changed (None values are ignored)."""
+        known = {f.name for f in fields(self)}
+        unknown = sorted(set(changes) - known)
+        if unknown:
+            raise CfaMitsubaError(f"unknown sensor setting {unknown[0]!r} (known: {', '.join(sorted(known))})")
+        return replace(self, **{k: v for k, v in changes.items() if v is not None})
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["conversion_gain_uv_per_e"] = self.conversion_gain_uv_per_e
+        d["dn_per_electron"] = self.dn_per_electron
+        return d
