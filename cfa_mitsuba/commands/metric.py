@@ -70,8 +70,19 @@ def add_arguments(parser) -> None:
     parser.add_argument("--json", action="store_true", help="print one JSON object on stdout")
 
 
+_NOTICES: list[str] = []
+
+
 def _notice(text: str) -> None:
-    sys.stderr.write(f"cfa-mitsuba metric: {text}\n")
+    """Queue a notice; printed to stderr only when the metric succeeds, so a
+    failure is exactly one line."""
+    _NOTICES.append(text)
+
+
+def _flush_notices() -> None:
+    for text in _NOTICES:
+        sys.stderr.write(f"cfa-mitsuba metric: {text}\n")
+    _NOTICES.clear()
 
 
 class _Loaded:
@@ -201,6 +212,7 @@ def run(args) -> int:
     from .. import metrics as cm
     from ..errors import CfaMitsubaError, require
 
+    _NOTICES.clear()
     info = cm.get_metric(args.name)
     single = args.name == "mtf"
     need = 1 if single else 2
@@ -262,6 +274,7 @@ def run(args) -> int:
 
 
 def _emit(args, result, imgs) -> int:
+    _flush_notices()
     payload = result.to_dict()  # maps summarised, curves kept
     payload["inputs"] = {im.path: im.mode for im in imgs}
     if args.json:

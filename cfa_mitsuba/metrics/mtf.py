@@ -179,7 +179,7 @@ def _polarity(work: np.ndarray) -> float:
     if not abs(right - left) > 0.02 * scale:
         raise CfaMitsubaError(
             f"no edge found: the two sides differ by {abs(right - left) / scale:.1%} "
-            "(need a dark/bright edge crossing the region; pass roi= to point at it)")
+            "(need a dark/bright edge crossing the region, or a ROI around one)")
     return 1.0 if right > left else -1.0
 
 
