@@ -69,7 +69,9 @@ def conv2_same(x: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     convolution starting at index ``floor(m/2)``; scipy's ``'same'`` picks the
     other centre, so we slice the full result ourselves.
     """
-    full = signal.convolve2d(x, kernel, mode="full")
+    # FFT for the larger kernels (HaarPSI's 4x4 and 8x8): ~3x faster, ~1e-13 apart.
+    conv = signal.fftconvolve if kernel.size >= 16 else signal.convolve2d
+    full = conv(x, kernel, mode="full")
     r0, c0 = kernel.shape[0] // 2, kernel.shape[1] // 2
     return full[r0:r0 + x.shape[0], c0:c0 + x.shape[1]]
 
