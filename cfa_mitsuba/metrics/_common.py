@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy import signal
 
 from ..errors import CfaMitsubaError, require, require_finite
 
@@ -69,6 +68,8 @@ def conv2_same(x: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     convolution starting at index ``floor(m/2)``; scipy's ``'same'`` picks the
     other centre, so we slice the full result ourselves.
     """
+    from scipy import signal  # lazy: scipy.signal costs 0.6 s to import
+
     # FFT for the larger kernels (HaarPSI's 4x4 and 8x8): ~3x faster, ~1e-13 apart.
     conv = signal.fftconvolve if kernel.size >= 16 else signal.convolve2d
     full = conv(x, kernel, mode="full")

@@ -14,7 +14,6 @@ from __future__ import annotations
 __all__ = ["moire", "block_chroma"]
 
 import numpy as np
-from scipy.ndimage import uniform_filter1d
 
 from ..errors import require, require_finite
 from ._common import as_pair, as_white
@@ -29,6 +28,8 @@ def block_chroma(xyz, white_xyz, *, row: int, block: int = 15) -> tuple[np.ndarr
     is NaN where the block does not fit inside the image (the first and last
     ``block // 2`` columns).
     """
+    from scipy.ndimage import uniform_filter1d  # lazy import
+
     xyz = np.asarray(xyz, dtype=np.float64)
     h = block // 2
     band = xyz[row - h:row + h + 1]

@@ -15,7 +15,6 @@ from __future__ import annotations
 __all__ = ["scielab", "scielab_filters", "OPPONENT_MATRICES", "FILTER_PARAMETERS"]
 
 import numpy as np
-from scipy import signal
 
 from ..errors import require
 from ._common import as_pair, as_white
@@ -87,6 +86,8 @@ def scielab_filters(samples_per_degree: float, *, parameters: str = "distributio
 
 def _filter_opponent(xyz: np.ndarray, matrix: np.ndarray, kernels) -> np.ndarray:
     """XYZ -> opponent, filter each channel (symmetric extension), -> XYZ."""
+    from scipy import signal  # lazy: keeps `import cfa_mitsuba` fast
+
     opp = xyz @ matrix.T
     half = kernels[0].shape[0] // 2
     out = np.empty_like(opp)
