@@ -17,14 +17,14 @@ CFAs compared (the paper chose its ranges "by considering the distribution
 of the measured values").  ``clip=True`` clips to [0, 1] as a radar plot
 needs.
 
-Default ranges: the paper's, except the MSP (see :data:`DEFAULT_RANGES`).
+Default ranges: the paper's, except the MSP (see :func:`default_ranges`).
 """
 
 from __future__ import annotations
 
 __all__ = [
-    "ScoreRange", "DEFAULT_RANGES", "METRIC_COLUMNS", "PAPER_PIXEL_PITCH_UM",
-    "msp_range_cpd", "normalise", "score", "rank_table",
+    "ScoreRange", "DEFAULT_RANGES", "METRIC_COLUMNS", "PAPER_PIXEL_PITCH_UM", "CHIRP_SAMPLES_PER_DEGREE",
+    "default_ranges", "msp_range_cpd", "normalise", "score", "rank_table",
 ]
 
 from dataclasses import dataclass
@@ -78,22 +78,47 @@ def msp_range_cpd(samples_per_degree: float, *, worst_cy_px: float = 0.04, best_
                       ("cy/deg",))
 
 
-#: Eq. 8's ranges.  The paper's values, except ``moire``: its 20..150 is a
-#: pixel position on its chirp; ours is in true cycles per degree,
-#: :func:`msp_range_cpd` at 50 samples/deg (our chirp: 500 px over 10 deg),
-#: i.e. 2..15 cy/deg.  ``mtf`` is in cy/mm on the sensor, as the paper; for a
-#: table in cy/px pass ``ScoreRange(0.066, 0.242, ('cy/px',))`` (the paper's
-#: range at its 2.2 um pitch).  The dE ranges apply to either dE formula.
-DEFAULT_RANGES: dict[str, ScoreRange] = {
-    "delta-e": ScoreRange(6.0, 2.2, ("dE00", "dE76")),
-    "scielab": ScoreRange(9.5, 2.5, ("dE00", "dE76")),
-    "ssim": ScoreRange(0.0, 1.0, ("",)),
-    "mtf": ScoreRange(30.0, 110.0, ("cy/mm",)),
-    "moire": msp_range_cpd(50.0),
-    "achromatic": ScoreRange(1.0, 0.5, ("L*",)),
-    "mdsi": ScoreRange(0.5, 0.0, ("",)),
-    "haarpsi": ScoreRange(0.0, 1.0, ("",)),
-}
+#: Samples per degree of our chirp as rendered by default: 500 EXR pixels at
+#: oversampling K = 4 over 10 degrees -> a 125-px camera image, 12.5 px/deg.
+CHIRP_SAMPLES_PER_DEGREE = 12.5
+
+
+def default_ranges(*, chirp_samples_per_degree: float = CHIRP_SAMPLES_PER_DEGREE,
+                   pixel_pitch_um: float | None = None) -> dict[str, ScoreRange]:
+    """Eq. 8's ranges for a study's geometry.
+
+    The paper's values, except:
+
+    - ``moire``: its 20..150 is a pixel position on its chirp; ours is in true
+      cycles per degree, :func:`msp_range_cpd` at the chirp camera image's
+      samples per degree (default 12.5: 0.5..3.75 cy/deg);
+    - ``mtf``: 30..110 cy/mm as the paper (its 2.2 um pitch); with
+      ``pixel_pitch_um`` the range is moved to that pitch so that the same
+      cycles per pixel (0.066..0.242) score the same.
+
+    The dE ranges apply to either dE formula (the paper's numbers).
+    """
+    mtf = ScoreRange(30.0, 110.0, ("cy/mm",))
+    if pixel_pitch_um is not None:
+        require(np.isfinite(pixel_pitch_um) and pixel_pitch_um > 0, f"pixel pitch must be positive, got {pixel_pitch_um}")
+        k = PAPER_PIXEL_PITCH_UM / float(pixel_pitch_um)
+        mtf = ScoreRange(30.0 * k, 110.0 * k, ("cy/mm",))
+    return {
+        "delta-e": ScoreRange(6.0, 2.2, ("dE00", "dE76")),
+        "scielab": ScoreRange(9.5, 2.5, ("dE00", "dE76")),
+        "ssim": ScoreRange(0.0, 1.0, ("",)),
+        "mtf": mtf,
+        "moire": msp_range_cpd(chirp_samples_per_degree),
+        "achromatic": ScoreRange(1.0, 0.5, ("L*",)),
+        "mdsi": ScoreRange(0.5, 0.0, ("",)),
+        "haarpsi": ScoreRange(0.0, 1.0, ("",)),
+    }
+
+
+#: :func:`default_ranges` for our default renders (chirp 12.5 px/deg; MTF50 in
+#: cy/mm as the paper).  For a table in cy/px pass
+#: ``ScoreRange(0.066, 0.242, ('cy/px',))`` (the paper's range at 2.2 um).
+DEFAULT_RANGES: dict[str, ScoreRange] = default_ranges()
 
 
 def _ranges(ranges) -> dict[str, ScoreRange]:
@@ -134,7 +159,8 @@ def normalise(metrics, ranges=None, *, clip: bool = False):
     metrics : DataFrame with columns ``scene, cfa, demosaic, luminance,
         metric, value, unit`` (one row per measurement).
     ranges : ``{metric: ScoreRange | (worst, best)}`` overriding
-        :data:`DEFAULT_RANGES`; a ``ScoreRange`` with units is checked
+        :data:`DEFAULT_RANGES` (see :func:`default_ranges` for a study's
+        own chirp sampling and pixel pitch); a ``ScoreRange`` with units is checked
         against each row's ``unit``.
     clip : clip scores to [0, 1] (default False: see the module docstring).
 
