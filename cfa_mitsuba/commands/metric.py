@@ -185,10 +185,11 @@ def _geometry(path, shape):
     geo = side.get("geometry", {}) if isinstance(side, dict) else {}
     freq = geo.get("frequency_cy_per_deg")
     exr_w = side.get("width") or (len(freq) if freq else None)
-    k = side.get("oversample") or geo.get("oversample")
-    if exr_w and not k:
-        k = max(1, int(round(exr_w / shape[1])))
-    k = int(k or 1)
+    # The image may be the EXR's size (K = 1) or the camera's (EXR / K): trust the sizes.
+    k = int(round(exr_w / shape[1])) if exr_w else int(side.get("oversample") or 1)
+    if k < 1 or (exr_w and abs(exr_w / k - shape[1]) > 1):
+        raise CfaMitsubaError(f"the sidecar's scene is {exr_w} px wide; the image ({shape[1]} px) is not "
+                              "that divided by a whole oversampling factor")
     out = {"oversample": k}
     if "patches" in geo:
         out["patches"] = [[int(round(v / k)) for v in (p.get("interior_rect") or p["rect"])] for p in geo["patches"]]
