@@ -1,0 +1,164 @@
+"""Demosaicing: the registry of methods and the checked entry point.
+
+``demosaic(raw, cfa, method, **options)`` takes a white-balanced mosaic
+(2-D float, any H x W at least one tile, partial tiles allowed at the
+borders) and returns (H, W, C) in ``cfa.channels`` order.  It applies no
+gains of its own and keeps every observed sample as it was.
+
+A method is one registry entry: a function ``f(raw, cfa, **options)`` that
+receives the checked float64 mosaic and a CFA (``pattern``, ``channels``)
+and returns (H, W, C).  Add one with :func:`register_demosaic`.
+"""
+
+from __future__ import annotations
+
+__all__ = ["demosaic", "register_demosaic", "list_demosaics", "get_demosaic"]
+
+import inspect
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from ..errors import CfaMitsubaError
+from .mosaic import geometry
+
+
+@dataclass(frozen=True)
+class _Entry:
+    name: str
+    function: Callable
+    description: str
+
+
+_REGISTRY: dict[str, _Entry] = {}
+
+
+def register_demosaic(name: str, function: Callable | None = None, *, description: str = "", replace: bool = False):
+    """Add a demosaicing method under ``name``.
+
+    ``function(raw, cfa, **options) -> (H, W, C)``; ``raw`` is a checked 2-D
+    float64 mosaic, ``cfa`` has ``pattern`` and ``channels``.  Usable as a
+    decorator (``@register_demosaic("mine", description="...")``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from cfa_mitsuba.isp import register_demosaic, demosaic
+    >>> def nearest(raw, cfa):  # copies each channel's sample from its tile
+    ...     return demosaic(raw, cfa, "bilinear")
+    >>> _ = register_demosaic("example-nearest", nearest, description="example", replace=True)
+    >>> demosaic(np.ones((4, 4)), "bayer", "example-nearest").shape
+    (4, 4, 3)
+    """
+
+    def add(fn: Callable) -> Callable:
+        if not callable(fn):
+            raise CfaMitsubaError(f"demosaic method {name!r} must be callable")
+        if name in _REGISTRY and not replace:
+            raise CfaMitsubaError(f"a demosaicing method named {name!r} is already registered")
+        desc = description or (inspect.getdoc(fn) or "").split("\n", 1)[0]
+        _REGISTRY[name] = _Entry(name, fn, desc)
+        return fn
+
+    return add(function) if function is not None else add
+
+
+def list_demosaics() -> list[tuple[str, str]]:
+    """(name, one-line description) of every registered method."""
+    return [(e.name, e.description) for e in _REGISTRY.values()]
+
+
+def get_demosaic(name: str) -> Callable:
+    """The function registered under ``name``."""
+    if name not in _REGISTRY:
+        raise CfaMitsubaError(f"unknown demosaicing method {name!r} (known: {', '.join(_REGISTRY)})")
+    return _REGISTRY[name].function
+
+
+def _resolve_cfa(cfa):
+    if isinstance(cfa, str):
+        from ..sensor import get_cfa
+
+        return get_cfa(cfa)
+    if not (hasattr(cfa, "pattern") and hasattr(cfa, "channels")):
+        raise CfaMitsubaError(f"expected a CFA or a CFA name, got {type(cfa).__name__}")
+    return cfa
+
+
+def check_mosaic(raw, cfa) -> np.ndarray:
+    """The mosaic as float64 (H, W), or a one-line error: not 2-D, smaller
+    than the tile, non-numeric, NaN or infinite."""
+    arr = np.asarray(raw)
+    if arr.dtype.kind not in "biuf":
+        raise CfaMitsubaError(f"mosaic must be numeric, got dtype {arr.dtype}")
+    if arr.ndim != 2:
+        raise CfaMitsubaError(
+            f"mosaic must be 2-D (H, W) for a CFA, got shape {arr.shape}"
+            + (" (a 3-channel image is the ideal sensor's XYZ: it needs no demosaicing)" if arr.ndim == 3 else "")
+        )
+    th, tw = np.asarray(cfa.pattern).shape
+    if arr.shape[0] < th or arr.shape[1] < tw:
+        raise CfaMitsubaError(
+            f"mosaic of {arr.shape[0]} x {arr.shape[1]} pixels is smaller than the CFA tile ({th} x {tw})"
+        )
+    arr = np.asarray(arr, dtype=np.float64)
+    finite = np.isfinite(arr)
+    if not finite.all():
+        bad = int(arr.size - np.count_nonzero(finite))
+        raise CfaMitsubaError(f"mosaic contains {bad} NaN or infinite value(s)")
+    return arr
+
+
+def demosaic(raw, cfa, method: str = "bilinear", **options) -> np.ndarray:
+    """Demosaic a white-balanced mosaic.
+
+    Parameters
+    ----------
+    raw : (H, W) array, a white-balanced mosaic (any linear unit; each
+        channel's response to the scene white should be equal, see
+        :func:`cfa_mitsuba.isp.white_balance`).  H, W at least the tile;
+        partial tiles at the borders are fine.  ``raw[0, 0]`` carries
+        ``cfa.pattern[0, 0]``.
+    cfa : a :class:`~cfa_mitsuba.sensor.cfa.CFA` or a registered CFA name.
+    method : a registered method (``cfa-mitsuba list demosaics``):
+        'bilinear', 'laplacian', 'adaptive-laplacian', 'pocs', or a user's.
+    **options : method options, e.g. ``iterations=`` and ``tolerance=`` for
+        'pocs', ``alpha=`` and ``chroma_gain=`` for the Laplacian methods,
+        ``reference=`` and ``luminance_weights=`` for every method but
+        'bilinear'.  An option a method does not take is an error.
+
+    Returns
+    -------
+    (H, W, C) float64 in ``cfa.channels`` order, in the unit of ``raw``;
+    observed samples unchanged.  No clipping: an all-zero mosaic gives
+    zeros, a uniform (e.g. saturated) mosaic gives that constant in every
+    channel, and gradient-corrected methods may overshoot slightly below 0
+    or above the input range at sharp edges (as real ISPs do before their
+    final clip).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from cfa_mitsuba.isp import demosaic
+    >>> demosaic(np.full((6, 6), 0.5), "rgbw2", "laplacian")[2, 3].round(12).tolist()
+    [0.5, 0.5, 0.5, 0.5]
+    """
+    cfa = _resolve_cfa(cfa)
+    fn = get_demosaic(method)
+    arr = check_mosaic(raw, cfa)
+    try:
+        inspect.signature(fn).bind(arr, cfa, **options)
+    except TypeError as exc:
+        raise CfaMitsubaError(f"demosaicing method {method!r}: {exc}") from None
+    out = np.asarray(fn(arr, cfa, **options), dtype=np.float64)
+    shape = (*arr.shape, len(cfa.channels))
+    if out.shape != shape:
+        raise CfaMitsubaError(f"demosaicing method {method!r} returned shape {out.shape}, expected {shape}")
+    mosaic = geometry(cfa)
+    th, tw = mosaic.tile_shape
+    for (i, j), c in np.ndenumerate(mosaic.index):  # observed samples are data, never estimates
+        out[i::th, j::tw, c] = arr[i::th, j::tw]
+    if not np.all(np.isfinite(out)):
+        raise CfaMitsubaError(f"demosaicing method {method!r} produced NaN or infinite values")
+    return out

@@ -1,0 +1,423 @@
+"""Gradient-corrected demosaicing: 'laplacian' (Malvar-He-Cutler /
+non-adaptive Hamilton-Adams) and 'adaptive-laplacian' (Hamilton-Adams
+edge-directed), generalised to any periodic CFA.
+
+Both run in two stages on a white-balanced mosaic y (research/cfa-demosaic.md
+s. 3.2, 3.3):
+
+1. **Reference.**  The reference is the densest channel (G of Bayer, Y of
+   cmy1, W of the Kodak RGBW tiles).  Where densities tie (stripes, CYGM,
+   rgbw1, cmy2) it is a luminance estimate L = sum_c w_c x_c (weights of
+   :func:`cfa_mitsuba.isp.colour.luminance_weights`).  'laplacian' estimates
+   the reference at every pixel p that does not carry it (centre channel k)
+   as the bilinear estimate plus a gradient correction from the centre's
+   own samples::
+
+       ref(p) = NC_ref(p) + a(p) * (y(p) - NC'_k(p))
+
+   NC'_k is the average of k's *other* samples in the smallest diamond
+   that surrounds p (:func:`~cfa_mitsuba.isp.mosaic.diamond_stencil`), and
+   a(p) = 4 alpha m2(NC_ref) / m2(NC'_k), m2 being the stencils' second
+   moments, so that the correction's scale follows the geometry; on Bayer
+   m2 = 1 and 4, a = alpha = 1/2 and this is Malvar-He-Cutler's green
+   kernel exactly.  For a luminance reference each missing channel gets
+   that correction, weighted by its w_c.
+
+   'adaptive-laplacian' instead interpolates the reference along each of the
+   directions H, V, and the two diagonals in which both the reference and
+   the centre channel have samples on both sides, as
+   ``lin_ref + a_d (y(p) - lin_k)`` (linear interpolation along the line,
+   a_d = 4 alpha t+ |t-| / (s+ |s-|) from the sample distances), and keeps
+   the direction of least cost ``|ref(t+) - ref(t-)| + 2 |y(p) - lin_k|``
+   (gradient plus second difference; ties averaged).  On Bayer that is
+   Hamilton-Adams' green exactly.  Where fewer than two directions exist it
+   is the non-adaptive estimate.  With a luminance reference the reference
+   is the non-adaptive one and only step 2 adapts.
+
+2. **Colour differences.**  Every other channel c at its gaps::
+
+       x_c(p) = NC_c(p) + g (ref(p) - NC_c[ref](p))
+
+   (bilinear of c plus g times the reference's detail that the bilinear
+   stencil misses; g = 1 is the constant-colour-difference assumption,
+   ISETCam's Laplacian.m uses 1/2).  'adaptive-laplacian' interpolates
+   along the direction (with c samples on both sides) of least cost
+   ``|c(t+) - c(t-)| + 2 |ref(p) - lin_ref|``; with one direction or none
+   it is the non-adaptive step (so Bayer's R at G is as in 'laplacian', R
+   at B chooses a diagonal as in Hamilton-Adams).
+
+Differs from ISETCam: every CFA is supported (ISETCam's Laplacian errors and
+AdaptiveLaplacian falls back to bilinear on non-Bayer tiles); no 1-pixel
+shift for any Bayer phase; the Laplacian term at blue sites is present
+(ISETCam reads the red plane there, which is zero); input is not rescaled.
+
+Written by hand: colour-demosaicing has Malvar2004 (Bayer only) and no
+Hamilton-Adams; nothing generalises them.
+
+References
+----------
+H. S. Malvar, L.-W. He, R. Cutler, "High-quality linear interpolation for
+demosaicing of Bayer-patterned color images", ICASSP 2004, vol. 3, 485-488.
+J. F. Hamilton, J. E. Adams, "Adaptive color plan interpolation in single
+sensor color electronic camera", US Patent 5,629,734 (1997).
+"""
+
+from __future__ import annotations
+
+__all__ = ["laplacian", "adaptive_laplacian", "Reference", "reference_for"]
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import CfaMitsubaError
+from .bilinear import interpolate_channel
+from .mosaic import (
+    Mosaic,
+    Stencil,
+    apply_stencils,
+    evaluate_stencil,
+    diamond_stencil,
+    directional_samples,
+    extend,
+    geometry,
+    phase_view,
+    tent_radius,
+    tent_stencil,
+)
+
+#: Malvar-He-Cutler's gain for the green step (alpha = 1/2).
+MHC_ALPHA = 0.5
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The detail carrier of the cross-channel methods.
+
+    channel : index of the reference channel, or None for a luminance.
+    weights : (C,) weights summing to 1 (one-hot for a channel).
+    """
+
+    channel: int | None
+    weights: tuple[float, ...]
+
+    @property
+    def name(self) -> str:
+        return "luminance" if self.channel is None else f"channel {self.channel}"
+
+
+def reference_for(cfa, mosaic: Mosaic, reference=None, luminance_weights=None) -> Reference:
+    """Choose the reference: ``reference`` = a channel name, 'luminance',
+    or None for automatic (the unique densest channel, else luminance).
+
+    ``luminance_weights``: (C,) or {channel: weight}; by default from the
+    CFA's spectral sensitivities (:func:`cfa_mitsuba.isp.colour.luminance_weights`).
+    """
+    n = len(mosaic.channels)
+    if reference is None:
+        dens = mosaic.densities
+        top = np.flatnonzero(dens >= dens.max() - 1e-12)
+        if top.size == 1:
+            reference = mosaic.channels[int(top[0])]
+        else:
+            reference = "luminance"
+    if reference != "luminance":
+        if reference not in mosaic.channels:
+            raise CfaMitsubaError(
+                f"reference {reference!r} is not a channel of the CFA ({', '.join(mosaic.channels)}) nor 'luminance'"
+            )
+        c = mosaic.channels.index(reference)
+        w = np.zeros(n)
+        w[c] = 1.0
+        return Reference(c, tuple(w.tolist()))
+    if luminance_weights is None:
+        from .colour import cfa_luminance_weights
+
+        w = cfa_luminance_weights(cfa)
+    elif isinstance(luminance_weights, dict):
+        unknown = set(luminance_weights) - set(mosaic.channels)
+        if unknown:
+            raise CfaMitsubaError(f"luminance weight for unknown channel {sorted(unknown)[0]!r}")
+        w = np.array([float(luminance_weights.get(c, 0.0)) for c in mosaic.channels])
+    else:
+        w = np.asarray(luminance_weights, dtype=np.float64).reshape(-1)
+        if w.size != n:
+            raise CfaMitsubaError(f"luminance_weights needs {n} values (one per channel), got {w.size}")
+    if not np.all(np.isfinite(w)) or abs(w.sum()) < 1e-12:
+        raise CfaMitsubaError("luminance_weights must be finite with a non-zero sum")
+    return Reference(None, tuple((w / w.sum()).tolist()))
+
+
+def _check_gains(alpha: float, chroma_gain: float) -> None:
+    for name, v in (("alpha", alpha), ("chroma_gain", chroma_gain)):
+        if not (isinstance(v, (int, float)) and np.isfinite(v) and 0 <= v <= 2):
+            raise CfaMitsubaError(f"{name} must be a number in 0..2, got {v!r}")
+
+
+# --- stage 1: the reference -----------------------------------------------------
+
+
+def _correction(mosaic: Mosaic, ref: Reference, alpha: float, i: int, j: int) -> dict:
+    """Taps of the gradient correction a(p) (y(p) - NC'_k(p)) at phase
+    (i, j): a(p) = sum over the missing channels c of w_c 4 alpha
+    m2(NC_c) / m2(NC'_k) (module doc)."""
+    k = int(mosaic.index[i, j])
+    dia = diamond_stencil(mosaic, k, i, j)
+    gain = sum(wc * 4.0 * alpha * tent_stencil(mosaic, c, i, j).second_moment / dia.second_moment
+               for c, wc in enumerate(ref.weights) if wc != 0.0 and c != k)
+    taps = {(0, 0): gain}
+    for q, w in zip(dia.offsets, dia.weights):
+        taps[q] = -gain * w
+    return taps
+
+
+def _stencil(taps: dict) -> Stencil:
+    offs = tuple(q for q in taps if taps[q] != 0.0)
+    return Stencil(offs, tuple(taps[q] for q in offs))
+
+
+def reference_stencils(mosaic: Mosaic, ref: Reference, alpha: float) -> dict:
+    """Per-phase stencils of the non-adaptive reference estimate (every
+    phase where it is not simply the observed sample)."""
+    out = {}
+    for (i, j), k in np.ndenumerate(mosaic.index):
+        if ref.channel == k:
+            continue
+        taps = _correction(mosaic, ref, alpha, i, j)
+        for c, wc in enumerate(ref.weights):
+            if wc == 0.0:
+                continue
+            if c == k:
+                taps[(0, 0)] = taps.get((0, 0), 0.0) + wc
+                continue
+            st = tent_stencil(mosaic, c, i, j)
+            for q, w in zip(st.offsets, st.weights):
+                taps[q] = taps.get(q, 0.0) + wc * w
+        out[(i, j)] = _stencil(taps)
+    return out
+
+
+def _stencil_radius(stencils: dict) -> int:
+    return max((s.radius for s in stencils.values()), default=0)
+
+
+def reference_laplacian(raw: np.ndarray, mosaic: Mosaic, ref: Reference, alpha: float) -> np.ndarray:
+    """(H, W) non-adaptive reference estimate."""
+    stencils = reference_stencils(mosaic, ref, alpha)
+    ext, ph, pw = extend(raw, mosaic, _stencil_radius(stencils))
+    out = raw.copy()  # the reference channel's own samples stay
+    return apply_stencils(ext, ph, pw, raw.shape, mosaic.tile_shape, stencils, out)
+
+
+def _lin(v_plus, v_minus, tp: int, tm: int):
+    """Linear interpolation at 0 between values at tp > 0 and tm < 0."""
+    if tp == -tm:
+        return 0.5 * (v_plus + v_minus)
+    return (-tm * v_plus + tp * v_minus) / (tp - tm)
+
+
+def _check_weighting(weighting) -> None:
+    if weighting not in ("soft", "hard"):
+        raise CfaMitsubaError(f"weighting must be 'soft' or 'hard', got {weighting!r}")
+
+
+def _eps(raw) -> float:
+    """Regulariser of the soft weights: 1e-3 of the mosaic's RMS (so the
+    method is scale-invariant)."""
+    return 1e-3 * float(np.sqrt(np.mean(raw * raw))) + np.finfo(float).tiny
+
+
+def _choose(estimates: list, costs: list, weighting: str, eps: float):
+    """Combine directional estimates by their costs: 'hard' keeps the one
+    of least cost (exact ties averaged: Hamilton-Adams), 'soft' weights
+    each by 1 / (cost + eps)."""
+    cost = np.stack(costs)
+    if weighting == "soft":
+        w = 1.0 / (cost + eps)
+    else:
+        w = (cost <= cost.min(axis=0)).astype(np.float64)
+    return np.einsum("d...,d...->...", np.stack(estimates), w) / w.sum(axis=0)
+
+
+def reference_adaptive(raw: np.ndarray, mosaic: Mosaic, ref: Reference, alpha: float,
+                       weighting: str = "soft") -> np.ndarray:
+    """(H, W) edge-directed reference estimate (Hamilton-Adams generalised;
+    the non-adaptive one for a luminance reference).
+
+    Along each direction d in which the reference has samples on both sides
+    (t+ > 0 > t-): ``lin_ref + correction``.  The correction is the centre
+    channel's directional second difference, ``a_d (y - lin_k)``, when its
+    own samples along d are close (s+ <= 2 t+ and -s- <= -2 t-, as on Bayer
+    where t = 1, s = 2); otherwise the non-directional gradient correction
+    of 'laplacian' (a second difference over a span wider than the
+    interpolation's measures a different scale: measured worse on rgb5,
+    rgbw2, rgb1 and rgb2).  The cost is ``|ref(t+) - ref(t-)| +
+    2 |y - lin_k|`` (the second term omitted where k has no sample along d).
+    With fewer than two directions, the non-adaptive estimate.
+    """
+    if ref.channel is None:
+        return reference_laplacian(raw, mosaic, ref, alpha)
+    th, tw = mosaic.tile_shape
+    limit = max(th, tw)
+    r = ref.channel
+    fallback = reference_stencils(mosaic, ref, alpha)
+    ext, ph, pw = extend(raw, mosaic, max(limit, _stencil_radius(fallback)))
+    out = raw.copy()
+    shape, tile = raw.shape, mosaic.tile_shape
+    eps = _eps(raw)
+    for (i, j), k in np.ndenumerate(mosaic.index):
+        if k == r:
+            continue
+        dirs = directional_samples(mosaic, r, i, j, limit)
+        if len(dirs) < 2:
+            apply_stencils(ext, ph, pw, shape, tile, {(i, j): fallback[(i, j)]}, out)
+            continue
+        own = {d: (sp, sm) for d, sp, sm in directional_samples(mosaic, int(k), i, j, limit)}
+
+        def at(t, d):
+            return phase_view(ext, ph, pw, shape, tile, i, j, t * d[0], t * d[1])
+
+        y0 = at(0, (0, 0))
+        corr = None
+        est, cost = [], []
+        for d, tp, tm in dirs:
+            a1, a2 = at(tp, d), at(tm, d)
+            c = np.abs(a1 - a2)
+            sp, sm = own.get(d, (None, None))
+            curv = None if sp is None else y0 - _lin(at(sp, d), at(sm, d), sp, sm)
+            if curv is not None and sp <= 2 * tp and -sm <= -2 * tm:
+                e = _lin(a1, a2, tp, tm) + (4.0 * alpha * (tp * -tm) / (sp * -sm)) * curv
+            else:
+                if corr is None:
+                    corr = evaluate_stencil(ext, ph, pw, shape, tile, i, j,
+                                            _stencil(_correction(mosaic, ref, alpha, i, j)))
+                e = _lin(a1, a2, tp, tm) + corr
+            if curv is not None:
+                c = c + 2.0 * np.abs(curv)
+            est.append(e)
+            cost.append(c)
+        out[i::th, j::tw] = _choose(est, cost, weighting, eps)
+    return out
+
+
+# --- stage 2: colour differences ----------------------------------------------------
+
+
+def colour_differences(raw, refimg, mosaic: Mosaic, ref: Reference, chroma_gain: float,
+                       weighting: str | None = None) -> np.ndarray:
+    """(H, W, C): every channel from its samples and the reference's detail;
+    edge-directed where ``weighting`` is 'soft' or 'hard'."""
+    adaptive = weighting is not None
+    shape, tile = raw.shape, mosaic.tile_shape
+    th, tw = tile
+    n = len(mosaic.channels)
+    limit = max(th, tw)
+    g = chroma_gain
+    radius = max(max(tent_radius(mosaic, c) for c in range(n)), limit if adaptive else 0)
+    # NC_c[y] - g NC_c[ref] = NC_c[y - g ref]: one stencil pass per channel.
+    ext_d, ph, pw = extend(raw - g * refimg, mosaic, radius)
+    if adaptive:
+        ext_y, _, _ = extend(raw, mosaic, radius)
+        ext_r, _, _ = extend(refimg, mosaic, radius)
+    out = np.empty((*shape, n))
+    eps = _eps(raw)
+    for c in range(n):
+        if c == ref.channel:
+            out[..., c] = refimg
+            continue
+        plane = out[..., c]
+        interpolate_channel(ext_d, ph, pw, shape, mosaic, c, plane)  # NC_c[y - g ref] at gaps
+        for i, j in mosaic.gaps(c):
+            plane[i::th, j::tw] += g * refimg[i::th, j::tw]
+        for i, j in mosaic.phases(c):
+            plane[i::th, j::tw] = raw[i::th, j::tw]
+        if not adaptive:
+            continue
+        for i, j in mosaic.gaps(c):
+            dirs = directional_samples(mosaic, c, i, j, limit)
+            if len(dirs) < 2:
+                continue
+
+            def at(e, t, d):
+                return phase_view(e, ph, pw, shape, tile, i, j, t * d[0], t * d[1])
+
+            r0 = refimg[i::th, j::tw]
+            est, cost = [], []
+            for d, tp, tm in dirs:
+                c1, c2 = at(ext_y, tp, d), at(ext_y, tm, d)
+                detail = r0 - _lin(at(ext_r, tp, d), at(ext_r, tm, d), tp, tm)
+                est.append(_lin(c1, c2, tp, tm) + g * detail)
+                cost.append(np.abs(c1 - c2) + 2.0 * np.abs(detail))
+            plane[i::th, j::tw] = _choose(est, cost, weighting, eps)
+    return out
+
+
+# --- the methods ------------------------------------------------------------------
+
+
+def laplacian(raw, cfa, *, alpha: float = MHC_ALPHA, chroma_gain: float = 1.0, reference=None, luminance_weights=None):
+    """Gradient-corrected linear demosaic (Malvar-He-Cutler on Bayer), any CFA.
+
+    Parameters
+    ----------
+    raw : (H, W) float64 white-balanced mosaic.
+    cfa : CFA (``pattern``, ``channels``).
+    alpha : gain of the gradient correction, expressed on Bayer's geometry
+        (1/2: Malvar-He-Cutler).
+    chroma_gain : g of the colour-difference step (1: full colour
+        difference; ISETCam uses 1/2).
+    reference : channel name, 'luminance', or None (densest channel, else
+        luminance).
+    luminance_weights : (C,) or {channel: weight} for a luminance
+        reference; default from the CFA's spectra.
+
+    Returns
+    -------
+    (H, W, C) float64 in ``cfa.channels`` order.
+
+    Examples
+    --------
+    A linear ramp is reproduced exactly on Bayer:
+
+    >>> import numpy as np
+    >>> from cfa_mitsuba.isp import demosaic
+    >>> ramp = np.add.outer(np.arange(8.0), np.arange(8.0))
+    >>> out = demosaic(ramp, "bayer", "laplacian")
+    >>> float(np.abs(out[2:-2, 2:-2] - ramp[2:-2, 2:-2, None]).max())
+    0.0
+    """
+    _check_gains(alpha, chroma_gain)
+    mosaic = geometry(cfa)
+    ref = reference_for(cfa, mosaic, reference, luminance_weights)
+    refimg = reference_laplacian(raw, mosaic, ref, alpha)
+    return colour_differences(raw, refimg, mosaic, ref, chroma_gain)
+
+
+def adaptive_laplacian(raw, cfa, *, alpha: float = MHC_ALPHA, chroma_gain: float = 1.0, weighting: str = "soft",
+                       reference=None, luminance_weights=None):
+    """Edge-directed demosaic (Hamilton-Adams on Bayer), any CFA.
+
+    Parameters and return as :func:`laplacian`, plus:
+
+    weighting : 'hard' keeps, per pixel, the direction of least cost
+        (ties averaged): Hamilton-Adams exactly.  'soft' (default) weights
+        every direction by 1 / (cost + eps), eps = 1e-3 of the mosaic's RMS:
+        the same classifiers without the hard switch, measured +0.6 dB on
+        scikit-image's photographs on Bayer (docs/isp.md) and no longer
+        behind Malvar-He-Cutler on any of them.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from cfa_mitsuba.isp import demosaic
+    >>> edge = np.where(np.arange(10)[None, :] < 5, 0.2, 0.8) * np.ones((10, 1))
+    >>> out = demosaic(edge, "bayer", "adaptive-laplacian")
+    >>> float(np.abs(out[2:-2, 2:-2] - edge[2:-2, 2:-2, None]).max())  # a vertical edge, kept sharp
+    0.0
+    """
+    _check_gains(alpha, chroma_gain)
+    _check_weighting(weighting)
+    mosaic = geometry(cfa)
+    ref = reference_for(cfa, mosaic, reference, luminance_weights)
+    refimg = reference_adaptive(raw, mosaic, ref, alpha, weighting)
+    return colour_differences(raw, refimg, mosaic, ref, chroma_gain, weighting)
