@@ -1,0 +1,291 @@
+"""Colour: white balance, the N x 3 colour-correction fit, XYZ -> sRGB.
+
+Scales (DESIGN.md: radiometry is absolute):
+
+* A camera channel's signal is in electrons; ``RawImage.electrons_per_radiance``
+  (C, B) predicts it for any spectral radiance L (B,) in W/(m^2 sr nm):
+  e_c = sum_b epr[c, b] L_b.
+* White balance divides each channel by its response to the scene white
+  (``RawImage.white_radiance``): *balanced* units, where a perfect white
+  diffuser reads 1.0 in every channel, so the channels agree on achromatic
+  content, which the cross-channel demosaics need.
+* The colour matrix M (N x 3) maps balanced channels to CIE 1931 XYZ in
+  cd/m^2 (Y = luminance): the ideal sensor's absolute scale, on which a
+  perfect white reads ``xyz_from_radiance(white_radiance)``.  It is fitted
+  by least squares on the 190 rawtoaces training reflectances under the
+  scene illuminant (never on the test chart), optionally constrained to map
+  white exactly to the white's XYZ (white-preserving, Finlayson & Drew 1996).
+* Display: sRGB (IEC 61966-2-1) with the scene white mapped to (1, 1, 1)
+  by a Bradford adaptation from the white's chromaticity to D65, encoded
+  with the sRGB transfer function and clipped to 0..1 (colour-science).
+
+The ISETCam route (research/isetcam.md s. 4.4) differs: it fits on the 24
+Macbeth patches (the test chart itself), clips at 0 and normalises every
+image by its own maximum; here the fit never sees the test chart and the
+output stays on the absolute scale.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "ColourFit",
+    "white_response",
+    "white_balance_gains",
+    "gray_world_gains",
+    "fit_colour_matrix",
+    "luminance_weights",
+    "cfa_luminance_weights",
+    "electrons_per_radiance_of",
+    "xyz_to_srgb",
+    "delta_e00",
+]
+
+import functools
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import spectra
+from ..errors import CfaMitsubaError
+
+
+def _colour():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        import colour
+
+    return colour
+
+
+def white_response(electrons_per_radiance, white_radiance) -> np.ndarray:
+    """(C,) electrons each channel collects from the scene white."""
+    epr = np.asarray(electrons_per_radiance, dtype=np.float64)
+    white = np.asarray(white_radiance, dtype=np.float64)
+    if epr.ndim != 2 or white.ndim != 1 or epr.shape[1] != white.size:
+        raise CfaMitsubaError(
+            f"electrons_per_radiance {epr.shape} and white_radiance {white.shape} do not share a band grid"
+        )
+    e = epr @ white
+    if not np.all(np.isfinite(e)) or np.any(e <= 0):
+        bad = int(np.flatnonzero(~(np.isfinite(e) & (e > 0)))[0])
+        raise CfaMitsubaError(f"channel {bad} collects no signal from the scene white: cannot white-balance")
+    return e
+
+
+def white_balance_gains(electrons_per_radiance, white_radiance) -> np.ndarray:
+    """(C,) gains per electron that make the scene white read 1.0 in every
+    channel (known-illuminant white balance): 1 / white_response.
+
+    Examples
+    --------
+    >>> white_balance_gains([[1.0, 1.0], [0.5, 0.0]], [2.0, 2.0]).tolist()
+    [0.25, 1.0]
+    """
+    return 1.0 / white_response(electrons_per_radiance, white_radiance)
+
+
+def gray_world_gains(mosaic_e, masks, electrons_per_radiance, white_radiance) -> np.ndarray:
+    """(C,) gray-world gains per electron: each channel's mean over the
+    image is made equal (the scene is assumed achromatic on average).
+
+    The common level is the density-weighted mean of the known-illuminant
+    balanced means, so gray world changes the colour of the light, not the
+    exposure scale.  A channel with a non-positive mean (an all-black
+    image) keeps its known-illuminant gain.
+    """
+    known = white_balance_gains(electrons_per_radiance, white_radiance)
+    m = np.asarray(masks, dtype=bool)
+    means = np.array([mosaic_e[mc].mean() if mc.any() else 0.0 for mc in m])
+    dens = m.reshape(m.shape[0], -1).mean(axis=1)
+    ok = means > 0
+    if not ok.any():
+        return known
+    level = float(np.sum((dens * means * known)[ok]) / np.sum(dens[ok]))
+    return np.where(ok, level / np.where(ok, means, 1.0), known)
+
+
+@dataclass(frozen=True)
+class ColourFit:
+    """A fitted colour correction.
+
+    matrix : (N, 3) balanced channels -> XYZ in cd/m^2 (row c: channel c's
+        contribution).
+    white_xyz : (3,) XYZ of the scene white, cd/m^2.
+    condition_number : of the white-normalised matrix (matrix / white_xyz
+        column-wise): sigma_max / sigma_min.
+    noise_gain : (3,) for X, Y, Z: ||M[:, j]|| / sum_c M[c, j], the output's
+        relative noise on a white patch when every balanced channel carries
+        unit relative noise, independent (1 for a 3-channel identity; CMY
+        and panchromatic channels raise it: physics, not a bug).
+    rms_error_training : RMS XYZ error on the training set relative to the
+        white's Y (dimensionless).
+    white_preserving : whether white maps exactly to ``white_xyz``.
+    """
+
+    matrix: np.ndarray
+    white_xyz: np.ndarray
+    condition_number: float
+    noise_gain: np.ndarray
+    rms_error_training: float
+    white_preserving: bool
+
+    def apply(self, balanced: np.ndarray) -> np.ndarray:
+        """(..., N) balanced channels -> (..., 3) XYZ in cd/m^2."""
+        return balanced @ self.matrix
+
+    def as_meta(self) -> dict:
+        return {
+            "colour_matrix": self.matrix.tolist(),
+            "condition_number": self.condition_number,
+            "noise_gain_xyz": self.noise_gain.tolist(),
+            "fit_rms_error_training": self.rms_error_training,
+            "white_preserving": self.white_preserving,
+        }
+
+
+def _balanced_responses(epr, white, reflectances):
+    radiance = reflectances * white[None, :]
+    cam = radiance @ epr.T / white_response(epr, white)[None, :]
+    return radiance, cam
+
+
+def fit_colour_matrix(electrons_per_radiance, white_radiance, wavelengths=spectra.DEFAULT_WAVELENGTHS, *,
+                      white_preserving: bool = True, reflectances=None) -> ColourFit:
+    """Fit the N x 3 matrix from balanced channels to absolute XYZ.
+
+    Parameters
+    ----------
+    electrons_per_radiance : (N, B) electrons per unit band radiance
+        (W/(m^2 sr nm)) of each channel (only its spectral shape matters
+        after white balance).
+    white_radiance : (B,) radiance of the scene's perfect white, W/(m^2 sr nm).
+    wavelengths : (B,) band centres, nm.
+    white_preserving : constrain white -> white's XYZ exactly (equality-
+        constrained least squares, Finlayson & Drew 1996).
+    reflectances : (K, B) training reflectances; default the 190 rawtoaces
+        patches (:func:`cfa_mitsuba.spectra.training_reflectances`).
+
+    Returns
+    -------
+    :class:`ColourFit`.
+
+    References
+    ----------
+    G. D. Finlayson, M. S. Drew, "Constrained least-squares regression in
+    color spaces", J. Electronic Imaging 6(4), 1997 (white-point preserving).
+
+    Examples
+    --------
+    An XYZ camera needs the identity (scaled to white's XYZ):
+
+    >>> from cfa_mitsuba import spectra
+    >>> wl = spectra.DEFAULT_WAVELENGTHS
+    >>> epr = (spectra.cmfs_xyz(wl) * spectra.band_widths(wl)[:, None] * 683).T
+    >>> fit = fit_colour_matrix(epr, spectra.illuminant("D65", wl) / 100)
+    >>> (fit.matrix / fit.white_xyz).round(9).tolist()
+    [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+    """
+    epr = np.asarray(electrons_per_radiance, dtype=np.float64)
+    white = np.asarray(white_radiance, dtype=np.float64)
+    wl = spectra.validate_wavelengths(wavelengths)
+    if epr.ndim != 2 or epr.shape[1] != wl.size or white.shape != (wl.size,):
+        raise CfaMitsubaError(
+            f"colour fit: electrons_per_radiance {epr.shape} and white_radiance {white.shape} "
+            f"must be on the {wl.size}-band grid"
+        )
+    refl = spectra.training_reflectances(wl) if reflectances is None else np.asarray(reflectances, float)
+    radiance, cam = _balanced_responses(epr, white, refl)
+    target = spectra.xyz_from_radiance(radiance, wl)
+    white_xyz = spectra.xyz_from_radiance(white, wl)
+    n = epr.shape[0]
+    if white_preserving:
+        # min ||A M - X||^2 subject to 1^T M = white_xyz, by the KKT system.
+        ones = np.ones((1, n))
+        kkt = np.block([[2 * cam.T @ cam, ones.T], [ones, np.zeros((1, 1))]])
+        rhs = np.vstack([2 * cam.T @ target, white_xyz[None, :]])
+        sol = np.linalg.lstsq(kkt, rhs, rcond=None)[0]
+        m = sol[:n]
+    else:
+        m = np.linalg.lstsq(cam, target, rcond=None)[0]
+    rel = m / white_xyz[None, :]
+    sv = np.linalg.svd(rel, compute_uv=False)
+    cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
+    noise = np.linalg.norm(m, axis=0) / np.abs(m.sum(axis=0))
+    rms = float(np.sqrt(np.mean((cam @ m - target) ** 2)) / white_xyz[1])
+    return ColourFit(m, white_xyz, cond, noise, rms, bool(white_preserving))
+
+
+def luminance_weights(electrons_per_radiance, white_radiance, wavelengths=spectra.DEFAULT_WAVELENGTHS) -> np.ndarray:
+    """(N,) non-negative weights, summing to 1, of the balanced channels
+    whose sum best predicts luminance Y over the training reflectances
+    (non-negative least squares).  The luminance reference of the
+    cross-channel demosaics when no channel is densest."""
+    from scipy.optimize import nnls
+
+    epr = np.asarray(electrons_per_radiance, dtype=np.float64)
+    white = np.asarray(white_radiance, dtype=np.float64)
+    wl = spectra.validate_wavelengths(wavelengths)
+    radiance, cam = _balanced_responses(epr, white, spectra.training_reflectances(wl))
+    y = spectra.luminance_cd_m2(radiance, wl) / spectra.luminance_cd_m2(white, wl)
+    w, _ = nnls(cam, y)
+    if w.sum() <= 0:
+        return np.full(epr.shape[0], 1.0 / epr.shape[0])
+    return w / w.sum()
+
+
+def electrons_per_radiance_of(sensitivities, wavelengths) -> np.ndarray:
+    """(C, B) relative electrons per unit band radiance for QE curves (C, B):
+    QE x photons per joule x band width (the optics and exposure factor,
+    common to all channels, is left out)."""
+    wl = spectra.validate_wavelengths(wavelengths)
+    return np.asarray(sensitivities, float) * (spectra.photons_per_joule(wl) * spectra.band_widths(wl))[None, :]
+
+
+@functools.lru_cache(maxsize=64)
+def _cfa_weights(key: tuple, sens: bytes, shape: tuple) -> tuple:
+    wl = spectra.DEFAULT_WAVELENGTHS
+    qe = np.frombuffer(sens, dtype=np.float64).reshape(shape)
+    w = luminance_weights(electrons_per_radiance_of(qe, wl), spectra.illuminant("D65", wl), wl)
+    return tuple(w.tolist())
+
+
+def cfa_luminance_weights(cfa) -> np.ndarray:
+    """:func:`luminance_weights` of a CFA's own spectra under D65 (equal
+    weights for a CFA object that has no ``sensitivities``)."""
+    n = len(cfa.channels)
+    if not hasattr(cfa, "sensitivities"):
+        return np.full(n, 1.0 / n)
+    qe = np.ascontiguousarray(cfa.sensitivities(spectra.DEFAULT_WAVELENGTHS), dtype=np.float64)
+    return np.array(_cfa_weights((getattr(cfa, "name", ""), tuple(cfa.channels)), qe.tobytes(), qe.shape))
+
+
+def xyz_to_srgb(xyz, white_xyz) -> np.ndarray:
+    """Display sRGB (IEC 61966-2-1), 0..1, of absolute XYZ.
+
+    ``xyz`` (..., 3) in cd/m^2 is divided by the white's luminance, adapted
+    (Bradford) from the white's chromaticity to sRGB's D65, converted and
+    encoded with colour-science's ``XYZ_to_sRGB``, then clipped to 0..1.
+    The scene white maps to (1, 1, 1).
+    """
+    colour = _colour()
+    white = np.asarray(white_xyz, dtype=np.float64)
+    if white.shape != (3,) or not np.all(np.isfinite(white)) or white[1] <= 0:
+        raise CfaMitsubaError(f"white XYZ must be 3 finite values with Y > 0, got {white.tolist()}")
+    xy = white[:2] / white.sum()
+    rel = np.asarray(xyz, dtype=np.float64) / white[1]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rgb = colour.XYZ_to_sRGB(rel, illuminant=xy, chromatic_adaptation_transform="Bradford")
+    return np.clip(rgb, 0.0, 1.0)
+
+
+def delta_e00(xyz_a, xyz_b, white_xyz) -> np.ndarray:
+    """CIEDE2000 between two absolute XYZ arrays (..., 3), CIELAB relative
+    to ``white_xyz`` (colour-science)."""
+    colour = _colour()
+    white = np.asarray(white_xyz, dtype=np.float64)
+    xy = white[:2] / white.sum()
+    lab_a = colour.XYZ_to_Lab(np.asarray(xyz_a, float) / white[1], xy)
+    lab_b = colour.XYZ_to_Lab(np.asarray(xyz_b, float) / white[1], xy)
+    return colour.delta_E(lab_a, lab_b, method="CIE 2000")

@@ -1,0 +1,166 @@
+"""The image processor: RawImage -> RenderedImage.
+
+    DN -> electrons (black level, DN per electron) -> white balance
+       -> demosaic -> colour matrix -> XYZ (cd/m^2) -> sRGB
+
+Scales and the colour fit: :mod:`cfa_mitsuba.isp.colour`.  The ideal
+sensor's RawImage (``raw`` (H, W, 3), already XYZ on the absolute scale)
+passes through unchanged to XYZ and sRGB.
+"""
+
+from __future__ import annotations
+
+__all__ = ["process", "WHITE_BALANCE_MODES"]
+
+import inspect
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import CfaMitsubaError
+from ..values import RawImage, RenderedImage
+from .colour import fit_colour_matrix, gray_world_gains, luminance_weights, white_balance_gains, xyz_to_srgb
+from .demosaic import check_mosaic, demosaic as _demosaic, get_demosaic
+from .mosaic import geometry
+
+#: ``illuminant``: gains from the sensor's response to the scene's white
+#: (known illuminant); ``gray-world``: the image's channel means made equal.
+WHITE_BALANCE_MODES = ("illuminant", "gray-world")
+
+
+@dataclass(frozen=True)
+class _TileCFA:
+    """The CFA a raw file describes (its tile, channel order and spectra)."""
+
+    name: str
+    pattern: np.ndarray
+    channels: tuple[str, ...]
+
+
+def _cfa_name(raw: RawImage) -> str:
+    info = (raw.settings or {}).get("cfa") or {}
+    return str(info.get("name") or "custom") if isinstance(info, dict) else "custom"
+
+
+def _check(raw: RawImage) -> None:
+    if not isinstance(raw, RawImage):
+        raise CfaMitsubaError(f"process needs a RawImage, got {type(raw).__name__}")
+    c = len(raw.channels)
+    wl = np.asarray(raw.wavelengths)
+    epr = np.asarray(raw.electrons_per_radiance)
+    if epr.shape != (c, wl.size) or np.asarray(raw.white_radiance).shape != (wl.size,):
+        raise CfaMitsubaError(
+            f"raw image: electrons_per_radiance {epr.shape} / white_radiance "
+            f"{np.asarray(raw.white_radiance).shape} do not match {c} channels x {wl.size} bands"
+        )
+    for name, v in (("dn_per_electron", raw.dn_per_electron), ("black_level_dn", raw.black_level_dn)):
+        if not np.isfinite(v) or (name == "dn_per_electron" and v <= 0):
+            raise CfaMitsubaError(f"raw image: {name} must be a finite{' positive' if name == 'dn_per_electron' else ''} "
+                                  f"number, got {v!r}")
+
+
+def _saturated_fraction(raw: RawImage) -> float | None:
+    bits = ((raw.settings or {}).get("sensor") or {}).get("adc_bits") if isinstance(raw.settings, dict) else None
+    if not isinstance(bits, int):
+        return None
+    return float(np.mean(raw.raw >= 2**bits - 1))
+
+
+def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: str = "illuminant",
+            white_preserving: bool = True, **options) -> RenderedImage:
+    """Process a raw capture into XYZ (absolute, cd/m^2) and display sRGB.
+
+    Parameters
+    ----------
+    raw_image : :class:`~cfa_mitsuba.values.RawImage` from
+        ``cm.sensor.capture`` or ``cm.io.raw_npz.load_raw_npz``.
+    demosaic : a registered demosaicing method (``cfa-mitsuba list
+        demosaics``).
+    white_balance : 'illuminant' (default; gains from the sensor's response
+        to ``white_radiance``) or 'gray-world'.
+    white_preserving : constrain the colour fit so the scene white maps
+        exactly to its XYZ (default True).
+    **options : passed to the demosaicing method (e.g. ``iterations=``).
+        Methods that take ``luminance_weights`` receive the channels'
+        luminance weights under this illuminant unless given.
+
+    Returns
+    -------
+    :class:`~cfa_mitsuba.values.RenderedImage`: ``xyz`` (H, W, 3) in
+    cd/m^2 on the ideal sensor's scale, ``srgb`` (H, W, 3) 0..1 with the
+    white mapped to 1, ``white_xyz``, and ``meta`` = the scene's meta plus
+    ``isp`` (CFA, method, options, white-balance gains, colour matrix,
+    condition number, noise gain) and ``sensor`` (the capture settings).
+
+    Saturated pixels are processed like any other (the white balance may
+    tint a clipped highlight); ``meta['isp']['saturated_fraction']``
+    reports how many there were.  Negative values after black-level
+    subtraction (read noise) are kept, not clipped, so noise stays unbiased
+    until the final sRGB encoding clips to 0..1.
+
+    Examples
+    --------
+    See ``tests/test_isp_process.py``; from a file::
+
+        import cfa_mitsuba as cm
+        from cfa_mitsuba.io.raw_npz import load_raw_npz
+        img = cm.isp.process(load_raw_npz("raw.npz"), "pocs")
+    """
+    _check(raw_image)
+    if white_balance not in WHITE_BALANCE_MODES:
+        raise CfaMitsubaError(f"unknown white balance {white_balance!r} (choose {', '.join(WHITE_BALANCE_MODES)})")
+    wl = np.asarray(raw_image.wavelengths, dtype=np.float64)
+    epr = np.asarray(raw_image.electrons_per_radiance, dtype=np.float64)
+    white = np.asarray(raw_image.white_radiance, dtype=np.float64)
+    fit = fit_colour_matrix(epr, white, wl, white_preserving=white_preserving) if not raw_image.is_ideal else None
+    meta = dict(raw_image.meta or {})
+    meta.setdefault("sensor", raw_image.settings)
+
+    if raw_image.is_ideal:
+        xyz = np.asarray(raw_image.raw, dtype=np.float64)
+        if xyz.shape[2] != 3:
+            raise CfaMitsubaError(f"the ideal sensor's image must be (H, W, 3) XYZ, got {xyz.shape}")
+        if not np.all(np.isfinite(xyz)):
+            raise CfaMitsubaError("the ideal sensor's XYZ image contains NaN or infinite values")
+        from .. import spectra
+
+        white_xyz = spectra.xyz_from_radiance(white, wl)
+        meta["isp"] = {"cfa": "ideal", "demosaic": None, "note": "ideal XYZ sensor: passed through"}
+        return RenderedImage(xyz=xyz.copy(), srgb=xyz_to_srgb(xyz, white_xyz), white_xyz=white_xyz, meta=meta)
+
+    cfa = _TileCFA(_cfa_name(raw_image), np.asarray(raw_image.pattern, dtype=str), tuple(raw_image.channels))
+    mosaic = geometry(cfa)
+    dn = check_mosaic(raw_image.raw, cfa)
+    electrons = (dn - float(raw_image.black_level_dn)) / float(raw_image.dn_per_electron)
+    if white_balance == "illuminant":
+        gains = white_balance_gains(epr, white)
+    else:
+        gains = gray_world_gains(electrons, mosaic.masks(dn.shape), epr, white)
+    th, tw = mosaic.tile_shape
+    balanced = np.empty_like(electrons)
+    for (i, j), c in np.ndenumerate(mosaic.index):
+        balanced[i::th, j::tw] = electrons[i::th, j::tw] * gains[c]
+
+    fn = get_demosaic(demosaic)
+    if "luminance_weights" in inspect.signature(fn).parameters and "luminance_weights" not in options:
+        options["luminance_weights"] = luminance_weights(epr, white, wl)
+    channels = _demosaic(balanced, cfa, demosaic, **options)
+    xyz = fit.apply(channels)
+    srgb = xyz_to_srgb(xyz, fit.white_xyz)
+
+    ref_gain = gains.min()  # reported relative to the most sensitive channel, as cameras do
+    meta["isp"] = {
+        "cfa": cfa.name,
+        "tile": " / ".join(" ".join(r) for r in cfa.pattern.tolist()),
+        "channels": list(cfa.channels),
+        "demosaic": demosaic,
+        "demosaic_options": {k: (np.asarray(v).tolist() if isinstance(v, np.ndarray) else v)
+                             for k, v in options.items() if k != "info"},
+        "white_balance": white_balance,
+        "white_balance_gains": (gains / ref_gain).tolist(),
+        "white_balance_gains_per_electron": gains.tolist(),
+        "white_xyz": fit.white_xyz.tolist(),
+        "saturated_fraction": _saturated_fraction(raw_image),
+        **fit.as_meta(),
+    }
+    return RenderedImage(xyz=xyz, srgb=srgb, white_xyz=fit.white_xyz.copy(), meta=meta)
