@@ -1,4 +1,30 @@
 """render/: Mitsuba 3 spectral rendering of the built-in scenes and users'
-scene files into a :class:`~cfa_mitsuba.values.SpectralImage` (W/(m^2 sr nm)).
+scene files into a :class:`~cfa_mitsuba.values.SpectralImage` (band-mean
+spectral radiance, W/(m^2 sr nm)).
 
-Mitsuba is imported lazily (only when something is rendered)."""
+Public interface::
+
+    list_scenes()                 -> [(name, description)]
+    get_scene(name_or_xml_path)   -> Scene (defaults, .metrics)
+    render(scene, **settings)     -> SpectralImage      (pure: no files)
+    render_cached(scene, **settings) -> SpectralImage   (through the cache)
+    cache_key(scene, **settings)  -> str
+    resolve_settings(scene, **settings) -> (Scene, RenderConfig)
+    choose_variant(requested=None) -> str
+
+Settings: width, height, spp, luminance (cd/m^2), variant, seed, bands,
+oversample, fov, max_depth.  Mitsuba is imported lazily (only when
+something is rendered), so importing this package is cheap.
+"""
+
+from .registry import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene, get_scene, list_scenes, register_scene  # noqa: F401
+from .variant import SPECTRAL_VARIANTS, choose_variant, find_libllvm  # noqa: F401
+from .engine import (  # noqa: F401
+    DEFAULT_LUMINANCE_CD_M2,
+    cache_key,
+    render,
+    render_cached,
+    render_canonical,
+    resolve_settings,
+    scale_to_luminance,
+)

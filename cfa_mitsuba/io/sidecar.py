@@ -1,0 +1,63 @@
+"""The sidecar: ``X.json`` beside ``X.exr``, the render's metadata as JSON.
+
+Its keys (render settings, units, field of view, the scene's geometry) are
+listed in docs/scenes.md; later stages read them from
+``SpectralImage.meta``.  Written atomically, read with one-line errors.
+"""
+
+from __future__ import annotations
+
+__all__ = ["sidecar_path", "read_sidecar", "write_sidecar", "json_default"]
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import CfaMitsubaError
+from .atomic import atomic_output
+
+
+def sidecar_path(exr_path) -> Path:
+    """``DIR/name.json`` for ``DIR/name.exr``."""
+    return Path(exr_path).with_suffix(".json")
+
+
+def json_default(obj):
+    """JSON encoder hook for numpy values, tuples kept as lists, paths."""
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, (np.floating, np.integer, np.bool_)):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON-serialisable: {type(obj).__name__}")
+
+
+def write_sidecar(path, meta: dict) -> Path:
+    """Write ``meta`` as indented JSON to ``path``, atomically.  NaN and
+    infinities are refused (JSON has no such numbers)."""
+    p = Path(path)
+    try:
+        text = json.dumps(meta, default=json_default, indent=1, allow_nan=False)
+    except ValueError as exc:
+        raise CfaMitsubaError(f"refusing to write sidecar {str(p)!r}: {exc}") from None
+    with atomic_output(p) as tmp:
+        tmp.write_text(text + "\n")
+    return p
+
+
+def read_sidecar(path) -> dict:
+    """Read a sidecar JSON object; a one-line error if missing or malformed."""
+    p = Path(path)
+    try:
+        meta = json.loads(p.read_text())
+    except FileNotFoundError:
+        raise CfaMitsubaError(f"no such sidecar: {str(p)!r}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CfaMitsubaError(f"cannot read sidecar {str(p)!r}: {exc}") from None
+    except ValueError as exc:
+        raise CfaMitsubaError(f"sidecar {str(p)!r} is not valid JSON: {exc}") from None
+    if not isinstance(meta, dict):
+        raise CfaMitsubaError(f"sidecar {str(p)!r} is not a JSON object")
+    return meta
