@@ -11,11 +11,12 @@ research/isetcam.md s. 2).
 
 from __future__ import annotations
 
-__all__ = ["compute_optics", "integrate_pixels", "aperture_weights", "scene_geometry_inputs"]
+__all__ = ["compute_optics", "integrate_pixels", "check_oversample", "scene_geometry_inputs"]
 
 import math
 
 import numpy as np
+import scipy.fft
 
 from .. import spectra as _spectra
 from ..errors import CfaMitsubaError, require
@@ -91,42 +92,63 @@ def scene_geometry_inputs(scene: SpectralImage, params: OpticsParams, oversample
     return out
 
 
-def aperture_weights(oversample: int, fill_factor: float) -> np.ndarray:
-    """Weights of the K sub-samples across one pixel, shape (K,), sum 1.
+def _aperture_axis(x: np.ndarray, axis: int, k: int, side: float, workers) -> np.ndarray:
+    """Average over a centred aperture of ``side`` pixel pitches along one
+    axis, sampled at the pixel centres (module doc of :func:`integrate_pixels`)."""
+    n = x.shape[axis]
+    c = scipy.fft.dct(x, type=2, axis=axis, workers=workers)
+    f_px = np.arange(n) * k / (2.0 * n)  # frequency of DCT term i in cycles per sensor pixel
+    q = np.sinc(side * f_px) / np.sinc(f_px / k)  # aperture box over the render's box of one sub-sample
+    shape = [1] * x.ndim
+    shape[axis] = n
+    c *= q.reshape(shape)
+    if k % 2:  # pixel centres sit on sub-sample centres
+        y = scipy.fft.idct(c, type=2, axis=axis, workers=workers)
+        return np.take(y, np.arange((k - 1) // 2, n, k), axis=axis)
+    # Even K: centres sit on the boundaries between sub-samples; the DCT-II
+    # interpolant there is a type-I DCT of the coefficients with a zero
+    # appended, divided by 2n.
+    pad = [(0, 0)] * x.ndim
+    pad[axis] = (0, 1)
+    y = scipy.fft.dct(np.pad(c, pad), type=1, axis=axis, workers=workers) / (2.0 * n)
+    return np.take(y, np.arange(k // 2, n, k), axis=axis)
 
-    The photosensitive area is a centred square of side sqrt(FF) x pitch
-    (ISETCam ``pixelCreate``: the photodiode is a centred square).  Each
-    sub-sample is an EXR pixel, a box average of the radiance (the render's
-    box filter), so the exact integral of that piecewise-constant field over
-    the aperture weights each sub-sample by the fraction of it the aperture
-    covers.  FF = 1 gives equal weights: the plain K x K block mean, whose
-    transfer function with the render's box is exactly sinc(pitch f).
-    """
-    k = int(oversample)
-    a = math.sqrt(float(fill_factor)) * k
-    lo, hi = (k - a) / 2.0, (k + a) / 2.0
-    j = np.arange(k, dtype=np.float64)
-    overlap = np.clip(np.minimum(j + 1.0, hi) - np.maximum(j, lo), 0.0, None)
-    return overlap / overlap.sum()
 
-
-def integrate_pixels(irradiance_hwb: np.ndarray, oversample: int, fill_factor: float) -> np.ndarray:
+def integrate_pixels(irradiance_hwb: np.ndarray, oversample: int, fill_factor: float,
+                     workers: int | None = None) -> np.ndarray:
     """Mean irradiance over each pixel's photosensitive area, (H/K, W/K, B).
 
-    With K = 1 the one sample is the pixel's value (ISETCam with one sample
-    per pixel: the fill factor then only scales the signal, which the sensor
-    does through the photosensitive area); the input is returned as is.
+    The photosensitive area is a centred square of side a = sqrt(FF) x pitch
+    (ISETCam ``pixelCreate``: the photodiode is a centred square), so the
+    pixel's aperture MTF is sinc(a f) along each axis.
+
+    * FF = 1: the K x K block mean.  Each EXR pixel is a box average of the
+      radiance over pitch / K (the render's box filter), so the block mean is
+      exactly the average over the whole pixel (transfer sinc(pitch f)); with
+      K = 1 the one sample is the pixel's value and is returned as is.
+    * FF < 1: the aperture does not fall on sub-sample boundaries, so it is
+      applied in the type-II DCT domain (mirror boundaries, as the OTF):
+      multiplied by sinc(a f) / sinc(pitch f / K), the aperture over the
+      render's box, then the band-limited interpolant is evaluated at the
+      pixel centres (on sub-sample centres for odd K, on their boundaries for
+      even K).  Exact when the irradiance is band-limited below the EXR's
+      Nyquist frequency, which diffraction ensures for K >= 3 at f/4; with
+      K = 1 it assumes the render itself is band-limited.  (ISETCam with one
+      sample per pixel lets the fill factor scale the signal only.)
     """
     k = int(oversample)
-    if k == 1:
-        return irradiance_hwb
+    ff = float(fill_factor)
     h, w, b = irradiance_hwb.shape
-    blocks = irradiance_hwb.reshape(h // k, k, w // k, k, b)
-    wts = aperture_weights(k, fill_factor)
-    if np.allclose(wts, 1.0 / k, rtol=0, atol=1e-15):
-        return blocks.mean(axis=(1, 3))
-    rows = np.tensordot(wts, blocks, axes=([0], [1]))  # (h/k, w/k, k, b)
-    return np.ascontiguousarray(np.tensordot(wts, rows, axes=([0], [2])))
+    if ff >= 1.0:
+        if k == 1:
+            return irradiance_hwb
+        return irradiance_hwb.reshape(h // k, k, w // k, k, b).mean(axis=(1, 3))
+    workers = workers or -1
+    side = math.sqrt(ff)
+    out = _aperture_axis(irradiance_hwb, 0, k, side, workers)
+    out = _aperture_axis(out, 1, k, side, workers)
+    # Band-limited interpolation can ring slightly below zero at hard edges.
+    return np.ascontiguousarray(np.maximum(out, 0.0))
 
 
 def _white_radiance(meta: dict, wl: np.ndarray, luminance: np.ndarray) -> tuple[np.ndarray, str]:
@@ -234,7 +256,7 @@ def compute_optics(scene: SpectralImage, params: OpticsParams | None = None, *,
         np.maximum(cube, 0.0, out=cube)
     irradiance = np.ascontiguousarray(np.moveaxis(cube, 0, 2))
     del cube
-    pixel = integrate_pixels(irradiance, k, fill_factor)
+    pixel = integrate_pixels(irradiance, k, fill_factor, workers=workers)
 
     meta.update({
         "optics": {**params.to_dict(), **geom.to_dict(), "fov_source": geo_in["fov_deg_source"],
