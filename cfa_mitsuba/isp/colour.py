@@ -266,7 +266,8 @@ def xyz_to_srgb(xyz, white_xyz) -> np.ndarray:
     ``xyz`` (..., 3) in cd/m^2 is divided by the white's luminance, adapted
     (Bradford) from the white's chromaticity to sRGB's D65, converted and
     encoded with colour-science's ``XYZ_to_sRGB``, then clipped to 0..1.
-    The scene white maps to (1, 1, 1).
+    The scene white maps to (1, 1, 1) (to 1e-4: the standard's XYZ -> RGB
+    matrix has four decimals).
     """
     colour = _colour()
     white = np.asarray(white_xyz, dtype=np.float64)

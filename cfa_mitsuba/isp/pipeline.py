@@ -90,7 +90,7 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     cd/m^2 on the ideal sensor's scale, ``srgb`` (H, W, 3) 0..1 with the
     white mapped to 1, ``white_xyz``, and ``meta`` = the scene's meta plus
     ``isp`` (CFA, method, options, white-balance gains, colour matrix,
-    condition number, noise gain) and ``sensor`` (the capture settings).
+    condition number, noise gain) and ``capture`` (the sensor settings).
 
     Saturated pixels are processed like any other (the white balance may
     tint a clipped highlight); ``meta['isp']['saturated_fraction']``
@@ -114,7 +114,7 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     white = np.asarray(raw_image.white_radiance, dtype=np.float64)
     fit = fit_colour_matrix(epr, white, wl, white_preserving=white_preserving) if not raw_image.is_ideal else None
     meta = dict(raw_image.meta or {})
-    meta.setdefault("sensor", raw_image.settings)
+    meta.setdefault("capture", raw_image.settings)
 
     if raw_image.is_ideal:
         xyz = np.asarray(raw_image.raw, dtype=np.float64)

@@ -1,0 +1,113 @@
+"""White balance, the N x 3 colour fit, its condition number and noise gain,
+sRGB; colour error of every CFA's fit on a set it was not fitted on."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cfa_mitsuba as cm
+from cfa_mitsuba import spectra
+from cfa_mitsuba.isp.colour import electrons_per_radiance_of, white_response
+
+WL = spectra.DEFAULT_WAVELENGTHS
+D65 = spectra.illuminant("D65", WL)
+WHITE = D65 * (100.0 / spectra.luminance_cd_m2(D65, WL))  # 100 cd/m^2 white
+
+
+def epr_of(name, scale=1e20):
+    return electrons_per_radiance_of(cm.sensor.get_cfa(name).sensitivities(WL), WL) * scale
+
+
+def test_white_balance_makes_white_one():
+    epr = epr_of("rgbw2")
+    g = cm.isp.white_balance_gains(epr, WHITE)
+    assert np.allclose(g * white_response(epr, WHITE), 1.0, rtol=1e-14)
+
+
+def test_white_balance_refuses_blind_channel():
+    epr = epr_of("bayer")
+    epr[2] = 0.0
+    with pytest.raises(cm.CfaMitsubaError, match="channel 2 collects no signal"):
+        cm.isp.white_balance_gains(epr, WHITE)
+
+
+@pytest.mark.parametrize("name", cm.sensor.list_cfas())
+def test_white_preserving_fit_maps_white_exactly(name):
+    fit = cm.isp.fit_colour_matrix(epr_of(name), WHITE, WL)
+    n = len(cm.sensor.get_cfa(name).channels)
+    assert fit.matrix.shape == (n, 3)
+    assert np.allclose(np.ones(n) @ fit.matrix, spectra.xyz_from_radiance(WHITE, WL), rtol=1e-10)
+    assert np.allclose(fit.white_xyz[1], 100.0)
+    assert np.isfinite(fit.condition_number) and fit.condition_number >= 1
+    assert np.all(fit.noise_gain > 0)
+
+
+def test_fit_is_independent_of_the_exposure_scale():
+    a = cm.isp.fit_colour_matrix(epr_of("cmy3", 1.0), WHITE, WL)
+    b = cm.isp.fit_colour_matrix(epr_of("cmy3", 1e6), WHITE, WL)
+    assert np.allclose(a.matrix, b.matrix, rtol=1e-9)
+
+
+def test_least_squares_fit_is_the_unconstrained_optimum():
+    epr = epr_of("bayer")
+    free = cm.isp.fit_colour_matrix(epr, WHITE, WL, white_preserving=False)
+    tied = cm.isp.fit_colour_matrix(epr, WHITE, WL)
+    assert not free.white_preserving and tied.white_preserving
+    assert free.rms_error_training <= tied.rms_error_training
+    # independent solution of the normal equations
+    refl = spectra.training_reflectances(WL)
+    rad = refl * WHITE
+    cam = rad @ epr.T / white_response(epr, WHITE)
+    m = np.linalg.solve(cam.T @ cam, cam.T @ spectra.xyz_from_radiance(rad, WL))
+    assert np.allclose(free.matrix, m, rtol=1e-8)
+
+
+def test_complementary_and_stacked_dyes_amplify_noise():
+    """Physics, reported rather than hidden: CMY subtract channels."""
+    g = {n: cm.isp.fit_colour_matrix(epr_of(n), WHITE, WL) for n in ("bayer", "cmy1", "cmy2")}
+    assert g["cmy1"].noise_gain[1] > g["bayer"].noise_gain[1]
+    assert g["cmy2"].condition_number > 3 * g["bayer"].condition_number
+
+
+@pytest.mark.parametrize("name", cm.sensor.list_cfas())
+def test_colour_error_on_the_chart_not_fitted(name):
+    """Fitted on the 190 training reflectances, tested on the 24
+    ColorChecker patches (the benchmark prints both directions)."""
+    epr = epr_of(name)
+    fit = cm.isp.fit_colour_matrix(epr, WHITE, WL)
+    _, chart = spectra.colorchecker(WL)
+    rad = chart * WHITE
+    cam = rad @ epr.T / white_response(epr, WHITE)
+    de = cm.isp.delta_e00(fit.apply(cam), spectra.xyz_from_radiance(rad, WL), fit.white_xyz)
+    assert de.mean() < 2.0 and de.max() < 6.0, (de.mean(), de.max())
+
+
+def test_srgb_white_and_grey():
+    white_xyz = spectra.xyz_from_radiance(WHITE, WL)
+    # 1 to within the standard's 4-decimal XYZ -> RGB matrix
+    assert np.allclose(cm.isp.xyz_to_srgb(white_xyz, white_xyz), 1.0, atol=1e-4)
+    grey = cm.isp.xyz_to_srgb(0.18 * white_xyz, white_xyz)
+    # IEC 61966-2-1 encoding of 0.18: 1.055 * 0.18^(1/2.4) - 0.055
+    assert np.allclose(grey, 1.055 * 0.18 ** (1 / 2.4) - 0.055, atol=1e-4)
+    assert np.all(cm.isp.xyz_to_srgb(np.array([-5.0, 300.0, 2.0]), white_xyz) >= 0)
+    with pytest.raises(cm.CfaMitsubaError, match="white XYZ"):
+        cm.isp.xyz_to_srgb(white_xyz, [1.0, 0.0, 1.0])
+
+
+def test_gray_world_on_an_achromatic_scene_matches_the_illuminant():
+    epr = epr_of("bayer")
+    cfa = cm.sensor.get_cfa("bayer")
+    e = np.broadcast_to(white_response(epr, WHITE) * 0.3, (8, 8, 3))
+    mosaic = cm.isp.mosaic_image(e, cfa)
+    gw = cm.isp.gray_world_gains(mosaic, cfa.masks((8, 8)), epr, WHITE)
+    assert np.allclose(gw * 0.3, cm.isp.white_balance_gains(epr, WHITE), rtol=1e-12)
+    # an all-black image keeps the known gains
+    black = cm.isp.gray_world_gains(np.zeros((8, 8)), cfa.masks((8, 8)), epr, WHITE)
+    assert np.allclose(black, cm.isp.white_balance_gains(epr, WHITE))
+
+
+def test_luminance_weights_non_negative_and_fit_luminance():
+    for name in ("rgb3", "cmy2", "cmy3", "rgbw1"):
+        w = cm.isp.luminance_weights(epr_of(name), WHITE, WL)
+        assert np.all(w >= 0) and abs(w.sum() - 1) < 1e-12
