@@ -118,14 +118,21 @@ def _scielab_cases(section, pids):
             yield pytest.param(section, pid, e, id=f"{pid}-{e['oracle']}-{e['variant']}")
 
 
-def _scielab(section, pid, variant, constants):
+def _scielab(section, pid, variant, constants, boundary="symmetric"):
     _, spd, matrix, de = variant.split("|")
     if section == "xyz_pairs":
         ref, dist = xyz_pair(pid)
     else:
         ref, dist = (mc.srgb8_to_xyz(a) for a in colour_pair(pid))
     return cm.scielab(ref, dist, WHITE, samples_per_degree=float(spd.split("=")[1]), matrix=matrix,
-                      version=de[2:], lab_constants=constants)
+                      version=de[2:], lab_constants=constants, boundary=boundary)
+
+
+def _check_isetcam_map(r, want, rel):
+    assert r.details["map"].shape == (want["rows"], want["cols"])
+    assert float(r) == pytest.approx(want["mean"], rel=rel)
+    for k in ("median", "p95", "max", "mean_interior"):
+        assert r.details[k] == pytest.approx(want[k], rel=rel), k
 
 
 @pytest.mark.parametrize("section,pid,entry", list(_scielab_cases("xyz_pairs", XYZ_PAIRS)))
@@ -141,16 +148,17 @@ def test_scielab_xyz_pairs(section, pid, entry):
             if constants == "isetcam":  # a dark max pixel feels the constants by 1e-5
                 for k in ("median", "p95", "max"):
                     assert r.details[k] == pytest.approx(entry["value"][k], rel=rel)
+    if entry["primary"]:  # ISETCam's own boundary reproduces its whole map too
+        _check_isetcam_map(_scielab(section, pid, entry["variant"], "isetcam", "isetcam"), entry["value"], 1e-6)
 
 
-PRIMARY_COLOUR_SCIELAB = [p for p in _scielab_cases("colour_pairs", COLOUR_PAIRS)
-                          if p.values[2]["primary"]]
+PRIMARY_COLOUR_SCIELAB = [p for p in _scielab_cases("colour_pairs", COLOUR_PAIRS) if p.values[2]["primary"]]
 
 
 @pytest.mark.parametrize("section,pid,entry", PRIMARY_COLOUR_SCIELAB)
-def test_scielab_colour_pairs_interior(section, pid, entry):
-    r = _scielab(section, pid, entry["variant"], "isetcam")
-    assert r.details["mean_interior"] == pytest.approx(entry["value"]["mean_interior"], rel=1e-6)
+def test_scielab_colour_pairs_isetcam(section, pid, entry):
+    r = _scielab(section, pid, entry["variant"], "isetcam", "isetcam")
+    _check_isetcam_map(r, entry["value"], 1e-6)
 
 
 # -- MTF (sfrmat3 primary, sfrmat5 second check, analytic sanity check) ------------------------

@@ -84,21 +84,36 @@ def scielab_filters(samples_per_degree: float, *, parameters: str = "distributio
     return kernels
 
 
-def _filter_opponent(xyz: np.ndarray, matrix: np.ndarray, kernels) -> np.ndarray:
-    """XYZ -> opponent, filter each channel (symmetric extension), -> XYZ."""
+def _circular(plane: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Circular convolution with a centred kernel (ISETCam's FFT filtering)."""
+    h, w = plane.shape
+    half = k.shape[0] // 2
+    rows = (np.arange(k.shape[0]) - half) % h
+    cols = (np.arange(k.shape[1]) - half) % w
+    kp = np.zeros((h, w))
+    np.add.at(kp, (rows[:, None], cols[None, :]), k)
+    return np.fft.irfft2(np.fft.rfft2(plane) * np.fft.rfft2(kp), s=(h, w))
+
+
+def _filter_opponent(xyz: np.ndarray, matrix: np.ndarray, kernels, boundary: str) -> np.ndarray:
+    """XYZ -> opponent, filter each channel, -> XYZ."""
     from scipy import signal  # lazy: keeps `import cfa_mitsuba` fast
 
     opp = xyz @ matrix.T
     half = kernels[0].shape[0] // 2
     out = np.empty_like(opp)
     for c, k in enumerate(kernels):
-        padded = np.pad(opp[..., c], half, mode="symmetric")
-        out[..., c] = signal.fftconvolve(padded, k, mode="valid")
+        if boundary == "symmetric":
+            padded = np.pad(opp[..., c], half, mode="symmetric")
+            out[..., c] = signal.fftconvolve(padded, k, mode="valid")
+        else:  # ISETCam: wrap-around, and the map shifted by one pixel
+            out[..., c] = np.roll(_circular(opp[..., c], k), (-1, -1), axis=(0, 1))
     return out @ np.linalg.inv(matrix).T
 
 
 def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, matrix: str = "xyz2",
-            version: str = "2000", parameters: str = "distribution", lab_constants: str = "cie") -> MetricResult:
+            version: str = "2000", parameters: str = "distribution", lab_constants: str = "cie",
+            boundary: str = "symmetric") -> MetricResult:
     """S-CIELAB colour difference map and its mean.
 
     Parameters
@@ -115,6 +130,12 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
     parameters : the filter set; only ``'distribution'``.
     lab_constants : ``'cie'`` (exact CIE constants, default) or ``'isetcam'``
         (ISETCam's rounded ones), see :func:`~cfa_mitsuba.metrics.colour.xyz_to_lab`.
+    boundary : ``'symmetric'`` (default: symmetric extension, a map of the
+        input's size registered to it) or ``'isetcam'`` (ISETCam's
+        ``scielab.m`` exactly: the last row/column dropped when (size - N) is
+        odd, circular convolution, the map shifted by one pixel; only to
+        reproduce ISETCam's whole-map numbers).  ``mean_interior`` is the same
+        for both.
 
     Returns
     -------
@@ -140,26 +161,33 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
     """
     require(matrix in OPPONENT_MATRICES, f"unknown opponent matrix {matrix!r} (expected 'xyz2' or 'xyz10')")
     require(version in ("2000", "1976"), f"unknown dE version {version!r} (expected '2000' or '1976')")
+    require(boundary in ("symmetric", "isetcam"), f"unknown boundary {boundary!r} (expected 'symmetric' or 'isetcam')")
     ref, test = as_pair(reference_xyz, test_xyz)
     white = as_white(white_xyz)
     kernels = scielab_filters(samples_per_degree, parameters=parameters)
     m = OPPONENT_MATRICES[matrix]
-    lab_r = xyz_to_lab(_filter_opponent(ref, m, kernels), white, constants=lab_constants)
-    lab_t = xyz_to_lab(_filter_opponent(test, m, kernels), white, constants=lab_constants)
+    h_in, w_in = ref.shape[:2]
+    if boundary == "isetcam":
+        n = kernels[0].shape[0]
+        keep_h, keep_w = h_in - (h_in - n) % 2, w_in - (w_in - n) % 2
+        ref, test = ref[:keep_h, :keep_w], test[:keep_h, :keep_w]
+    lab_r = xyz_to_lab(_filter_opponent(ref, m, kernels, boundary), white, constants=lab_constants)
+    lab_t = xyz_to_lab(_filter_opponent(test, m, kernels, boundary), white, constants=lab_constants)
     de_map = delta_e_2000(lab_r, lab_t) if version == "2000" else delta_e_1976(lab_r, lab_t)
 
-    h, w = de_map.shape
     b = int(np.floor(samples_per_degree + 0.5))
-    interior = de_map[b:h - b, b:w - b]
+    # interior: input rows/cols b .. size-b-1; ISETCam's map index = input index - 1
+    o = 1 if boundary == "isetcam" else 0
+    interior = de_map[max(b - o, 0):h_in - b - o, max(b - o, 0):w_in - b - o] if min(h_in, w_in) > 2 * b else de_map[:0]
     stats = summarise_array(de_map)
     details = {
         "map": de_map,
         "mean_interior": float(interior.mean()) if interior.size else None,
-        "interior_rect": [b, b, h - b, w - b] if interior.size else None,
+        "interior_rect": [b, b, h_in - b, w_in - b] if interior.size else None,
         "median": stats["median"], "p95": stats["p95"], "max": stats["max"],
         "samples_per_degree": float(samples_per_degree),
         "support_px": kernels[0].shape[0],
-        "matrix": matrix, "version": version, "boundary": "symmetric",
+        "matrix": matrix, "version": version, "boundary": boundary,
     }
     return MetricResult(stats["mean"], name="scielab", unit="dE00" if version == "2000" else "dE76",
                         details=details)
