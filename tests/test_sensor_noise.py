@@ -1,0 +1,160 @@
+"""Acceptance 2 (noise) and 5 (extreme light): each noise source shows its
+set value on a large field, photon noise is exactly Poisson (scipy.stats),
+seeds reproduce, and 0.01..100000 cd/m^2 gives finite raw data."""
+
+import numpy as np
+import pytest
+from scipy import stats
+
+import cfa_mitsuba as cm
+from cfa_mitsuba.optics import OpticsParams, compute_optics
+from cfa_mitsuba.sensor import SensorParams, capture, collect_electrons
+from cfa_mitsuba.sensor.noise import temporal_rng
+from cfa_mitsuba.values import SpectralImage
+
+WL = cm.spectra.DEFAULT_WAVELENGTHS
+FLAT = OpticsParams(relative_illumination=False)
+MONO = cm.sensor.make_cfa("mono", "W", {"W": (np.array([300.0, 800.0]), np.array([0.5, 0.5]))})
+N = 512  # 262 144 pixels: a variance is then known to 0.3 %
+
+
+def _oi(luminance=100.0, n=N):
+    d65 = cm.spectra.illuminant("D65")
+    rad = d65 * luminance / cm.spectra.luminance_cd_m2(d65)
+    return compute_optics(SpectralImage(np.broadcast_to(rad, (n, n, 31)).copy(), WL, {"fov_deg": 10.0}), FLAT)
+
+
+@pytest.fixture(scope="module")
+def bright():
+    return _oi(100.0)
+
+
+@pytest.fixture(scope="module")
+def dark():
+    return compute_optics(SpectralImage(np.zeros((N, N, 31)), WL, {"fov_deg": 10.0}), FLAT)
+
+
+def _electrons(raw):
+    return (raw.raw - raw.black_level_dn) / raw.dn_per_electron
+
+
+def test_shot_noise_variance_equals_the_mean(bright):
+    for t in (2e-4, 2e-3):  # about 26 and 260 electrons
+        r = capture(bright, MONO, exposure_s=t, noise="shot", seed=3)
+        e = _electrons(r)
+        ratio = e.var() / e.mean()
+        print(f"shot: mean {e.mean():.2f} e-, variance / mean {ratio:.4f}")
+        assert ratio == pytest.approx(1.0, abs=0.03)
+        assert np.allclose(e, np.round(e))  # whole electrons
+
+
+def test_photon_noise_is_exactly_poisson(bright):
+    # a mean of 2.5 e-, where the Gaussian approximation would be plainly wrong
+    t = 2.5 * 1e-4 / _electrons(capture(bright, MONO, exposure_s=1e-4, noise="off")).mean()
+    e = _electrons(capture(bright, MONO, exposure_s=t, noise="shot", seed=4)).round().astype(int).ravel()
+    k = np.arange(12)
+    observed = np.array([np.count_nonzero(e == v) for v in k[:-1]] + [np.count_nonzero(e >= k[-1])])
+    pmf = stats.poisson.pmf(k[:-1], 2.5)
+    expected = np.append(pmf, 1 - pmf.sum()) * e.size
+    p = stats.chisquare(observed, expected).pvalue
+    print(f"chi-square against Poisson(2.5): p = {p:.3f}")
+    assert p > 1e-3
+
+
+def test_read_noise_shows_its_set_value(dark):
+    # gain 8: 0.19 e- per code; a black level of 32 sigmas keeps the tail off 0
+    s = SensorParams(read_noise_e=6.2, dark_current_e_s=0.0, analog_gain=8.0, black_level_dn=1024)
+    e = _electrons(capture(dark, MONO, exposure_s=0.01, noise="all", seed=5, sensor=s))
+    std = np.sqrt(e.var() - (1 / s.dn_per_electron) ** 2 / 12)  # less the quantisation (Sheppard)
+    print(f"read noise: set 6.2 e-, measured {std:.3f} e-")
+    assert std == pytest.approx(6.2, rel=0.03)
+    assert e.mean() == pytest.approx(0.0, abs=0.05)
+
+
+def test_dark_current_shows_its_set_value_with_its_own_shot_noise(dark):
+    s = SensorParams(read_noise_e=0.0, dark_current_e_s=6.2)
+    e = _electrons(capture(dark, MONO, exposure_s=50.0, noise="all", seed=6, sensor=s))  # 310 e-
+    print(f"dark current: set 6.2 e-/s, measured {e.mean() / 50:.4f} e-/s, variance / mean {e.var() / e.mean():.4f}")
+    assert e.mean() / 50.0 == pytest.approx(6.2, rel=0.03)
+    assert e.var() / e.mean() == pytest.approx(1.0, abs=0.03)
+
+
+def test_dsnu_shows_its_set_value_and_is_fixed(dark):
+    s = SensorParams(read_noise_e=0.0, dark_current_e_s=0.0, dsnu_e=2.0, analog_gain=8.0, black_level_dn=512,
+                     sensor_seed=11)
+    a = _electrons(capture(dark, MONO, exposure_s=0.01, seed=1, sensor=s))
+    b = _electrons(capture(dark, MONO, exposure_s=0.01, seed=2, sensor=s))
+    std = np.sqrt(a.var() - (1 / s.dn_per_electron) ** 2 / 12)
+    print(f"DSNU: set 2 e-, measured {std:.4f} e-")
+    assert std == pytest.approx(2.0, rel=0.03)
+    np.testing.assert_array_equal(a, b)  # fixed pattern: another frame, the same offsets
+    c = _electrons(capture(dark, MONO, exposure_s=0.01, seed=1, sensor=s.with_(sensor_seed=12)))
+    assert not np.array_equal(a, c)  # another sensor, another pattern
+
+
+def test_prnu_shows_its_set_value(bright):
+    # EMVA 1288's method: the covariance of two frames of one sensor is the
+    # fixed pattern alone (temporal noise is independent between frames).
+    s = SensorParams(prnu_percent=1.5, read_noise_e=0.0, dark_current_e_s=0.0, sensor_seed=7)
+    t = 4000.0 * 1e-4 / _electrons(capture(bright, MONO, exposure_s=1e-4, noise="off")).mean()
+    a = _electrons(capture(bright, MONO, exposure_s=t, seed=1, sensor=s))
+    b = _electrons(capture(bright, MONO, exposure_s=t, seed=2, sensor=s))
+    prnu = np.sqrt(np.mean((a - a.mean()) * (b - b.mean()))) / a.mean() * 100
+    print(f"PRNU: set 1.5 %, measured {prnu:.4f} %")
+    assert prnu == pytest.approx(1.5, rel=0.03)
+
+
+def test_same_seed_same_raw_other_seed_other_raw():
+    oi = _oi(50.0, n=64)
+    s = SensorParams(dsnu_e=1.0, prnu_percent=1.0)
+    a = capture(oi, "rgbw2", seed=42, sensor=s)
+    b = capture(oi, "rgbw2", seed=42, sensor=s)
+    c = capture(oi, "rgbw2", seed=43, sensor=s)
+    np.testing.assert_array_equal(a.raw, b.raw)
+    assert not np.array_equal(a.raw, c.raw)
+    assert a.seed == 42 and a.settings["sensor"]["sensor_seed"] == 0
+
+
+def test_noise_all_gives_integer_codes_with_black_level():
+    oi = _oi(100.0, n=64)
+    r = capture(oi, "bayer", noise="all", seed=1)
+    assert np.array_equal(r.raw, np.round(r.raw)) and r.raw.min() >= 0 and r.raw.max() <= 4095
+    assert r.black_level_dn == 64
+    off = capture(oi, "bayer", noise="off")
+    assert off.black_level_dn == 0 and not np.array_equal(off.raw, np.round(off.raw))
+    # the mean of many noisy pixels is the noise-free signal (plus dark current)
+    e_all = _electrons(r).mean()
+    e_off = _electrons(off).mean()
+    dark = SensorParams().dark_current_e_s * r.exposure_s
+    assert e_all == pytest.approx(e_off + dark, rel=0.01)
+
+
+@pytest.mark.parametrize("luminance", [0.01, 1.0, 100.0, 1e4, 1e5])
+def test_extreme_light_gives_finite_raw_data(luminance):
+    oi = _oi(1.0, n=64)  # auto exposure chosen at 100 cd/m^2 and kept
+    r = capture(oi, "bayer", luminance_cd_m2=luminance, noise="all", seed=9)
+    assert np.all(np.isfinite(r.raw)) and r.raw.min() >= 0 and r.raw.max() <= 4095
+    e = _electrons(r)
+    mean, std = e.mean(), e.std()
+    shot = capture(oi, "bayer", luminance_cd_m2=luminance, noise="shot", seed=9)
+    assert shot.raw.min() >= 0  # no negative electrons before read noise
+    print(f"{luminance:g} cd/m^2: mean {mean:.3f} e-, std {std:.3f} e-, "
+          f"{100 * np.mean(r.raw == 4095):.1f} % at full scale")
+    if luminance == 0.01:
+        assert std > 3 * abs(mean)  # noise-dominated: read noise 6.2 e- against ~0.6 e- of signal
+    well = SensorParams().well_capacity_e
+    assert np.all(shot.raw / shot.dn_per_electron <= well * (1 + 1e-12))
+    if luminance >= 1e4:
+        # every well is full; read noise then spreads the codes just below the top one
+        np.testing.assert_allclose(shot.raw / shot.dn_per_electron, well, rtol=1e-12)
+        assert mean > well - 0.5 * SensorParams().read_noise_e and np.mean(r.raw == 4095) > 0.45
+
+
+def test_collect_electrons_at_absurd_means():
+    rng = temporal_rng(0)
+    s = SensorParams()
+    photo = np.array([[0.0, 1e-9, 3.0, 1e6, 1e30]])
+    for noise in ("off", "shot", "all"):
+        e = collect_electrons(photo, exposure_s=1e6, sensor=s, noise=noise, rng=rng)
+        assert np.all(np.isfinite(e)) and e.min() >= 0 and e.max() <= s.well_capacity_e
+        assert e[0, -1] == s.well_capacity_e
