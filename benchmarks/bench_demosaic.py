@@ -1,0 +1,138 @@
+"""Demosaicing benchmark: PSNR and time of every method on every CFA, and
+speed against colour-demosaicing on a 636 x 720 Bayer mosaic.
+
+    python benchmarks/bench_demosaic.py [--quick] [--repeat N]
+
+Images: scikit-image's bundled photographs (astronaut, coffee, chelsea,
+rocket), 8-bit sRGB values / 255 taken as the scene, as the demosaicing
+literature does with Kodak; an 8-pixel border is excluded from PSNR.
+RGB CFAs are scored on R, G, B; the CMY and RGBW CFAs on their own
+white-balanced channels (``cm.isp.channels_from_rgb``).  Times are the
+minimum over ``--repeat`` runs (wall clock, one process): compare ratios
+within one run, since other processes share the machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+import warnings
+
+import numpy as np
+
+warnings.simplefilter("ignore")
+
+import cfa_mitsuba as cm  # noqa: E402
+
+METHODS = ("bilinear", "laplacian", "adaptive-laplacian", "pocs")
+PHOTOS = ("astronaut", "coffee", "chelsea", "rocket")
+RGB_CFAS = ("bayer", "rgb1", "rgb2", "rgb3", "rgb4", "rgb5")
+OTHER_CFAS = ("cmy1", "cmy2", "cmy3", "rgbw1", "rgbw2", "rgbw3")
+BORDER = 8
+
+
+def best_time(fn, repeat):
+    fn()  # warm caches (stencils, colour data)
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return min(times)
+
+
+def psnr(truth, out):
+    from skimage.metrics import peak_signal_noise_ratio
+
+    b = BORDER
+    return peak_signal_noise_ratio(truth[b:-b, b:-b], out[b:-b, b:-b], data_range=1.0)
+
+
+def photos(quick):
+    import skimage.data
+
+    imgs = {n: getattr(skimage.data, n)() / 255.0 for n in PHOTOS}
+    if quick:
+        imgs = {n: im[:192, :192] for n, im in imgs.items()}
+    return imgs
+
+
+def quality_table(cfas, imgs, repeat, rgb: bool):
+    print(f"| CFA | method | {' | '.join(imgs)} | mean PSNR (dB) | time per image (s) |")
+    print("|---|---|" + "---|" * len(imgs) + "---|---|")
+    for name in cfas:
+        cfa = cm.sensor.get_cfa(name)
+        truths = {n: (im if rgb else cm.isp.channels_from_rgb(im, cfa)) for n, im in imgs.items()}
+        raws = {n: cm.isp.mosaic_image(t, cfa) for n, t in truths.items()}
+        for method in METHODS:
+            vals, times = [], []
+            for n in imgs:
+                out = cm.isp.demosaic(raws[n], cfa, method)
+                vals.append(psnr(truths[n], out))
+                times.append(best_time(lambda: cm.isp.demosaic(raws[n], cfa, method), repeat))
+            print(f"| {name} | {method} | " + " | ".join(f"{v:.2f}" for v in vals)
+                  + f" | {np.mean(vals):.2f} | {np.mean(times):.3f} |")
+        if name == "bayer" and rgb:
+            import colour_demosaicing as cdm
+
+            for label, fn in (("colour-demosaicing Malvar2004", cdm.demosaicing_CFA_Bayer_Malvar2004),
+                              ("colour-demosaicing Menon2007", cdm.demosaicing_CFA_Bayer_Menon2007)):
+                vals = [psnr(im, fn(raws[n], "GRBG")) for n, im in imgs.items()]
+                print(f"| {name} | *{label}* | " + " | ".join(f"{v:.2f}" for v in vals) + f" | {np.mean(vals):.2f} | |")
+
+
+def speed_table(repeat):
+    import colour_demosaicing as cdm
+    import skimage.data
+    from skimage.transform import resize
+
+    img = resize(skimage.data.coffee() / 255.0, (636, 720), order=1, anti_aliasing=False)
+    raw = cm.isp.mosaic_image(img, "bayer")
+    rows = {
+        "bilinear": lambda: cm.isp.demosaic(raw, "bayer", "bilinear"),
+        "colour-demosaicing bilinear": lambda: cdm.demosaicing_CFA_Bayer_bilinear(raw, "GRBG"),
+        "laplacian": lambda: cm.isp.demosaic(raw, "bayer", "laplacian"),
+        "colour-demosaicing Malvar2004": lambda: cdm.demosaicing_CFA_Bayer_Malvar2004(raw, "GRBG"),
+        "adaptive-laplacian": lambda: cm.isp.demosaic(raw, "bayer", "adaptive-laplacian"),
+        "pocs": lambda: cm.isp.demosaic(raw, "bayer", "pocs"),
+        "pocs, 10 iterations (tolerance 0)": lambda: cm.isp.demosaic(raw, "bayer", "pocs", tolerance=0.0),
+        "colour-demosaicing Menon2007": lambda: cdm.demosaicing_CFA_Bayer_Menon2007(raw, "GRBG"),
+    }
+    t = {k: best_time(f, repeat) for k, f in rows.items()}
+    info = {}
+    cm.isp.demosaic(raw, "bayer", "pocs", info=info)
+    print("| 636 x 720 Bayer mosaic | time (s) | ratio |")
+    print("|---|---|---|")
+    pairs = {"bilinear": "colour-demosaicing bilinear", "laplacian": "colour-demosaicing Malvar2004"}
+    for k, v in t.items():
+        ratio = f"{t[pairs[k]] / v:.1f}x faster than {pairs[k]}" if k in pairs else ""
+        if k == "pocs":
+            ratio = f"{info['iterations']} iterations to tolerance 1e-3"
+        print(f"| {k} | {v:.4f} | {ratio} |")
+    return t
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="192 x 192 crops, one repeat")
+    ap.add_argument("--repeat", type=int, default=3)
+    args = ap.parse_args()
+    repeat = 1 if args.quick else args.repeat
+    load = os.getloadavg() if hasattr(os, "getloadavg") else ("?",)
+    print(f"# bench_demosaic: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"load average {load[0]:.2f} at start; numpy {np.__version__}\n")
+    imgs = photos(args.quick)
+    print("## Speed (Bayer)\n")
+    speed_table(repeat)
+    print("\n## RGB CFAs: PSNR on R, G, B\n")
+    quality_table(RGB_CFAS, imgs, repeat, rgb=True)
+    print("\n## CMY and RGBW CFAs: PSNR on the CFA's own white-balanced channels\n")
+    quality_table(OTHER_CFAS, imgs, repeat, rgb=False)
+    load = os.getloadavg() if hasattr(os, "getloadavg") else ("?",)
+    print(f"\nload average {load[0]:.2f} at the end")
+
+
+if __name__ == "__main__":
+    main()
