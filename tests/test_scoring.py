@@ -61,13 +61,16 @@ def test_eq8_scores_means_and_ranks():
     assert set(s.loc[(s.cfa == "good"), "metric_rank"]) == {1}
 
 
-def test_hand_computed_score_and_no_clipping_by_default():
+def test_hand_computed_score_clipped_by_default_with_raw_score_kept():
     t = table()
     t.loc[(t.cfa == "good") & (t.metric == "delta-e"), "value"] = 1.44  # better than the range's best
     s = normalise(t)
-    v = s.loc[(s.cfa == "good") & (s.metric == "delta-e"), "score"].iloc[0]
-    assert v == pytest.approx((6.0 - 1.44) / (6.0 - 2.2)) and v > 1.0
-    assert normalise(t, clip=True)["score"].max() == 1.0
+    row = s[(s.cfa == "good") & (s.metric == "delta-e")].iloc[0]
+    assert row["raw_score"] == pytest.approx((6.0 - 1.44) / (6.0 - 2.2)) and row["raw_score"] > 1.0
+    assert row["score"] == 1.0 and row["out_of_range"]
+    assert s["out_of_range"].sum() == 2  # the same row for both demosaics
+    unclipped = normalise(t, clip=False)
+    assert unclipped["score"].max() == pytest.approx((6.0 - 1.44) / (6.0 - 2.2))
 
 
 def test_ranges_are_configurable_and_units_checked():

@@ -11,11 +11,15 @@ MSP, HaarPSI).  A CFA's score for a demosaic is the mean of its normalised
 metrics; CFAs are ranked per demosaic (Table 3 rows, Fig 17 a-d) and over
 all demosaics by the mean of those means (Table 3 "Total", Fig 17e).
 
-Scores are **not clipped** by default: a value outside the range gives a
-score below 0 or above 1, which shows that the range no longer spans the
-CFAs compared (the paper chose its ranges "by considering the distribution
-of the measured values").  ``clip=True`` clips to [0, 1] as a radar plot
-needs.
+Scores are **clipped to [0, 1]** by default, as the paper normalises "with
+the dynamic range of [0, 1]": otherwise one value far outside a range (a
+camera whose chirp never shows moire reports the chirp's top frequency, many
+times the MSP range) would outweigh the other seven metrics in the mean.
+The unclipped eq. 8 value is kept as ``raw_score`` and ``out_of_range``
+flags the rows where clipping acted, which shows that a range no longer
+spans the CFAs compared (the paper chose its ranges "by considering the
+distribution of the measured values").  ``clip=False`` ranks on the raw
+scores.
 
 Default ranges: the paper's, except the MSP (see :func:`default_ranges`).
 """
@@ -151,8 +155,9 @@ def _check_table(metrics):
     require(not dup.any(), f"{int(dup.sum())} duplicate (scene, cfa, demosaic, luminance, metric) row(s)")
 
 
-def normalise(metrics, ranges=None, *, clip: bool = False):
-    """Add ``worst``, ``best`` and ``score`` (eq. 8) to a tidy metrics table.
+def normalise(metrics, ranges=None, *, clip: bool = True):
+    """Add ``worst``, ``best``, ``raw_score`` (eq. 8), ``out_of_range`` and
+    ``score`` (clipped to [0, 1] unless ``clip=False``) to a tidy metrics table.
 
     Parameters
     ----------
@@ -162,11 +167,12 @@ def normalise(metrics, ranges=None, *, clip: bool = False):
         :data:`DEFAULT_RANGES` (see :func:`default_ranges` for a study's
         own chirp sampling and pixel pitch); a ``ScoreRange`` with units is checked
         against each row's ``unit``.
-    clip : clip scores to [0, 1] (default False: see the module docstring).
+    clip : clip ``score`` to [0, 1] (default True: see the module docstring).
 
     Returns
     -------
-    DataFrame: a copy with ``worst``, ``best``, ``score``.
+    DataFrame: a copy with ``worst``, ``best``, ``raw_score``,
+    ``out_of_range``, ``score``.
 
     Examples
     --------
@@ -191,14 +197,17 @@ def normalise(metrics, ranges=None, *, clip: bool = False):
         worst[i], best[i] = r.worst, r.best
     out["worst"], out["best"] = worst, best
     s = (out["value"].to_numpy() - worst) / (best - worst)
+    out["raw_score"] = s
+    out["out_of_range"] = (s < 0.0) | (s > 1.0)
     out["score"] = np.clip(s, 0.0, 1.0) if clip else s
     return out
 
 
-def score(metrics, ranges=None, *, clip: bool = False):
+def score(metrics, ranges=None, *, clip: bool = True):
     """Normalised scores and ranks, as one tidy table (scores.csv).
 
-    Each input row gets ``worst``, ``best``, ``score`` and:
+    Each input row gets ``worst``, ``best``, ``raw_score``, ``out_of_range``,
+    ``score`` (see :func:`normalise`) and:
 
     - ``metric_rank``: the CFA's rank on this metric among the CFAs with the
       same demosaic and luminance (1 = best; the paper's red boxes, Table 2);
