@@ -183,7 +183,7 @@ def fit_colour_matrix(electrons_per_radiance, white_radiance, wavelengths=spectr
     >>> wl = spectra.DEFAULT_WAVELENGTHS
     >>> epr = (spectra.cmfs_xyz(wl) * spectra.band_widths(wl)[:, None] * 683).T
     >>> fit = fit_colour_matrix(epr, spectra.illuminant("D65", wl) / 100)
-    >>> (fit.matrix / fit.white_xyz).round(9).tolist()
+    >>> ((fit.matrix / fit.white_xyz).round(9) + 0.0).tolist()
     [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
     """
     epr = np.asarray(electrons_per_radiance, dtype=np.float64)

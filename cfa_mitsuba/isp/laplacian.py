@@ -24,15 +24,17 @@ s. 3.2, 3.3):
    that correction, weighted by its w_c.
 
    'adaptive-laplacian' instead interpolates the reference along each of the
-   directions H, V, and the two diagonals in which both the reference and
-   the centre channel have samples on both sides, as
-   ``lin_ref + a_d (y(p) - lin_k)`` (linear interpolation along the line,
-   a_d = 4 alpha t+ |t-| / (s+ |s-|) from the sample distances), and keeps
-   the direction of least cost ``|ref(t+) - ref(t-)| + 2 |y(p) - lin_k|``
-   (gradient plus second difference; ties averaged).  On Bayer that is
-   Hamilton-Adams' green exactly.  Where fewer than two directions exist it
-   is the non-adaptive estimate.  With a luminance reference the reference
-   is the non-adaptive one and only step 2 adapts.
+   directions H, V and the two diagonals in which it has samples on both
+   sides (t+ > 0 > t-), as ``lin_ref + a_d (y(p) - lin_k)`` (linear
+   interpolation along the line, a_d = 4 alpha t+ |t-| / (s+ |s-|) from the
+   sample distances; where the centre's own samples along d are farther
+   than twice the reference's, the non-directional correction above), and
+   weighs the directions by the cost ``|ref(t+) - ref(t-)| + 2 |y(p) -
+   lin_k|`` (gradient plus second difference): 'hard' keeps the least (ties
+   averaged), which on Bayer is Hamilton-Adams' green exactly; 'soft'
+   (default) weights each by 1 / (cost + eps).  Where fewer than two
+   directions exist it is the non-adaptive estimate.  With a luminance
+   reference the reference is the non-adaptive one and only step 2 adapts.
 
 2. **Colour differences.**  Every other channel c at its gaps::
 
@@ -41,8 +43,8 @@ s. 3.2, 3.3):
    (bilinear of c plus g times the reference's detail that the bilinear
    stencil misses; g = 1 is the constant-colour-difference assumption,
    ISETCam's Laplacian.m uses 1/2).  'adaptive-laplacian' interpolates
-   along the direction (with c samples on both sides) of least cost
-   ``|c(t+) - c(t-)| + 2 |ref(p) - lin_ref|``; with one direction or none
+   along the directions with c samples on both sides, weighed by the cost
+   ``|c(t+) - c(t-)| + 2 |ref(p) - lin_ref|`` as above; with one or none
    it is the non-adaptive step (so Bayer's R at G is as in 'laplacian', R
    at B chooses a diagonal as in Hamilton-Adams).
 
@@ -381,9 +383,9 @@ def laplacian(raw, cfa, *, alpha: float = MHC_ALPHA, chroma_gain: float = 1.0, r
 
     >>> import numpy as np
     >>> from cfa_mitsuba.isp import demosaic
-    >>> ramp = np.add.outer(np.arange(8.0), np.arange(8.0))
+    >>> ramp = np.add.outer(np.arange(12.0), 2 * np.arange(12.0))
     >>> out = demosaic(ramp, "bayer", "laplacian")
-    >>> float(np.abs(out[2:-2, 2:-2] - ramp[2:-2, 2:-2, None]).max())
+    >>> float(np.abs(out[3:-3, 3:-3] - ramp[3:-3, 3:-3, None]).max())
     0.0
     """
     _check_gains(alpha, chroma_gain)
@@ -411,9 +413,12 @@ def adaptive_laplacian(raw, cfa, *, alpha: float = MHC_ALPHA, chroma_gain: float
     >>> import numpy as np
     >>> from cfa_mitsuba.isp import demosaic
     >>> edge = np.where(np.arange(10)[None, :] < 5, 0.2, 0.8) * np.ones((10, 1))
-    >>> out = demosaic(edge, "bayer", "adaptive-laplacian")
-    >>> float(np.abs(out[2:-2, 2:-2] - edge[2:-2, 2:-2, None]).max())  # a vertical edge, kept sharp
+    >>> hard = demosaic(edge, "bayer", "adaptive-laplacian", weighting="hard")
+    >>> float(np.abs(hard[2:-2, 2:-2] - edge[2:-2, 2:-2, None]).max())  # a vertical edge, kept sharp
     0.0
+    >>> soft = demosaic(edge, "bayer", "adaptive-laplacian")
+    >>> round(float(np.abs(soft[2:-2, 2:-2] - edge[2:-2, 2:-2, None]).max()), 4)
+    0.0002
     """
     _check_gains(alpha, chroma_gain)
     _check_weighting(weighting)
