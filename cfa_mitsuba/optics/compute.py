@@ -225,10 +225,12 @@ def compute_optics(scene: SpectralImage, params: OpticsParams | None = None, *,
     # (B, H, W) float64 working copy: bands contiguous for the transforms.
     cube = np.empty((nb, h, w), dtype=np.float64)
     np.copyto(cube, np.moveaxis(data, 2, 0))
-    if not np.isfinite(cube).all():
-        raise CfaMitsubaError("scene radiance contains NaN or infinite values")
-    if (cube < 0).any():
-        raise CfaMitsubaError(f"scene radiance has negative values (min {cube.min():.3g} W/(m^2 sr nm))")
+    lowest = float(cube.min())  # NaN if any is NaN; one pass instead of elementwise masks
+    if not np.isfinite(lowest) or not np.isfinite(float(cube.max())):
+        bad = int(cube.size - np.count_nonzero(np.isfinite(cube)))
+        raise CfaMitsubaError(f"scene radiance contains {bad} NaN or infinite value(s)")
+    if lowest < 0:
+        raise CfaMitsubaError(f"scene radiance has negative values (min {lowest:.3g} W/(m^2 sr nm))")
 
     meta = dict(scene.meta or {})
     geo_in = scene_geometry_inputs(scene, params, oversample)
@@ -245,15 +247,18 @@ def compute_optics(scene: SpectralImage, params: OpticsParams | None = None, *,
     white, white_source = _white_radiance(meta, wl, lum)
 
     sample_pitch_um = float(pixel_pitch_um) / k
-    cube *= factor[:, None, None]
     if params.relative_illumination:
         cube *= relative_illumination((h, w), sample_pitch_um * 1e-6, geom.image_distance_m,
                                       geom.working_f_number)[None]
     if params.diffraction:
-        cube = apply_diffraction(cube, wl, sample_pitch_um, geom.working_f_number, workers=workers)
+        # the on-axis factor rides on the OTF (the transform is linear)
+        cube = apply_diffraction(cube, wl, sample_pitch_um, geom.working_f_number, workers=workers,
+                                 band_gain=factor)
         # The OTF truncated at the sampling's Nyquist rings slightly around
         # hard edges; irradiance cannot be negative (ISETCam takes abs()).
         np.maximum(cube, 0.0, out=cube)
+    else:
+        cube *= factor[:, None, None]
     irradiance = np.ascontiguousarray(np.moveaxis(cube, 0, 2))
     del cube
     pixel = integrate_pixels(irradiance, k, fill_factor, workers=workers)

@@ -26,11 +26,25 @@ __all__ = ["diffraction_mtf", "apply_diffraction"]
 import numpy as np
 import scipy.fft
 
-#: Table of H(v) on [0, 1], interpolated linearly: H's worst interpolation
-#: error on this grid is below 2e-7 (near v = 1, where H ~ (1 - v)^1.5), far
-#: faster than acos/sqrt on every frequency of every band.
-_V_TABLE = np.linspace(0.0, 1.0, 16385)
-_H_TABLE = (2.0 / np.pi) * (np.arccos(_V_TABLE) - _V_TABLE * np.sqrt(1.0 - _V_TABLE**2))
+#: Table of H(v) on [0, 1] (then zeros), interpolated linearly by direct
+#: indexing: the worst interpolation error is below 1e-7 (near v = 1, where
+#: H ~ (1 - v)^1.5), and it is several times faster than acos/sqrt, or
+#: np.interp's binary search, on every frequency of every band.
+_TABLE_STEPS = 16384
+_V_TABLE = np.linspace(0.0, 1.0, _TABLE_STEPS + 1)
+_H_TABLE = np.concatenate([(2.0 / np.pi) * (np.arccos(_V_TABLE) - _V_TABLE * np.sqrt(1.0 - _V_TABLE**2)), [0.0, 0.0]])
+_H_SLOPE = np.diff(_H_TABLE)
+
+
+def _otf_lookup(rho: np.ndarray, scale: float) -> np.ndarray:
+    """H(rho * scale) by linear interpolation in the table (0 beyond v = 1)."""
+    x = rho * (scale * _TABLE_STEPS)
+    np.minimum(x, _TABLE_STEPS + 1.0, out=x)
+    i = x.astype(np.intp)
+    x -= i
+    x *= _H_SLOPE[i]
+    x += _H_TABLE[i]
+    return x
 
 
 def diffraction_mtf(frequency_cy_mm, wavelength_nm, f_number):
@@ -60,7 +74,7 @@ def diffraction_mtf(frequency_cy_mm, wavelength_nm, f_number):
 
 
 def apply_diffraction(cube_bhw: np.ndarray, wavelengths_nm, sample_pitch_um: float, working_f_number: float,
-                      workers: int | None = None) -> np.ndarray:
+                      workers: int | None = None, band_gain=None) -> np.ndarray:
     """Convolve every band with its diffraction PSF.
 
     Parameters
@@ -71,6 +85,8 @@ def apply_diffraction(cube_bhw: np.ndarray, wavelengths_nm, sample_pitch_um: flo
     sample_pitch_um : spacing of the samples on the sensor plane (um).
     working_f_number : N_w.
     workers : threads for scipy.fft (default: all cores).
+    band_gain : optional (B,) factor per band, folded into the OTF (saves a
+        pass over the cube when the optics factor is applied here).
 
     Returns
     -------
@@ -83,7 +99,10 @@ def apply_diffraction(cube_bhw: np.ndarray, wavelengths_nm, sample_pitch_um: flo
     rho = np.sqrt(fy[:, None] ** 2 + fx[None, :] ** 2)  # cy/mm
     workers = workers or -1
     coeffs = scipy.fft.dctn(cube_bhw, type=2, axes=(1, 2), norm="ortho", workers=workers, overwrite_x=True)
+    gains = np.ones(b) if band_gain is None else np.asarray(band_gain, dtype=np.float64)
     for i, lam in enumerate(np.asarray(wavelengths_nm, dtype=np.float64)):
-        v = rho * (lam * 1e-6 * working_f_number)
-        coeffs[i] *= np.interp(v, _V_TABLE, _H_TABLE, right=0.0)
+        otf = _otf_lookup(rho, lam * 1e-6 * working_f_number)
+        if gains[i] != 1.0:
+            otf *= gains[i]
+        coeffs[i] *= otf
     return scipy.fft.idctn(coeffs, type=2, axes=(1, 2), norm="ortho", workers=workers, overwrite_x=True)
