@@ -41,12 +41,12 @@ def _write_npz(path, image) -> None:
     import numpy as np
 
     from ..io.atomic import atomic_output
-    from ..io.images import _json_default
+    from ..io.sidecar import json_default
 
     with atomic_output(path) as tmp:
         with open(tmp, "wb") as fh:
             np.savez_compressed(fh, xyz=image.xyz, srgb=image.srgb, white_xyz=image.white_xyz,
-                                meta=np.array(json.dumps(image.meta, default=_json_default)))
+                                meta=np.array(json.dumps(image.meta, default=json_default)))
 
 
 def run(args) -> int:
