@@ -148,6 +148,9 @@ def test_extreme_light_gives_finite_raw_data(luminance):
         # every well is full; read noise then spreads the codes just below the top one
         np.testing.assert_allclose(shot.raw / shot.dn_per_electron, well, rtol=1e-12)
         assert mean > well - 0.5 * SensorParams().read_noise_e and np.mean(r.raw == 4095) > 0.45
+        assert r.meta["saturated_fraction"] == 1.0
+    else:
+        assert r.meta["saturated_fraction"] == 0.0
 
 
 def test_collect_electrons_at_absurd_means():

@@ -155,8 +155,6 @@ def run(args) -> int:
     import warnings
     from pathlib import Path
 
-    import numpy as np
-
     from ..errors import CfaMitsubaError
     from ..io.raw_npz import save_raw_npz
     from ..optics import OpticsParams, compute_optics
@@ -207,11 +205,10 @@ def run(args) -> int:
     else:
         mode = (f"auto at {st['reference_luminance_cd_m2']:g} cd/m^2" if st["exposure_mode"] == "auto"
                 else "fixed")
-        full = sensor.max_dn if args.noise == "all" else sensor.well_capacity_e * raw.dn_per_electron
-        clipped = float(np.mean(raw.raw >= full - 1e-9)) * 100
+        clipped = 100.0 * meta["saturated_fraction"]
         lines.append(f"  luminance {meta['luminance_cd_m2']:.4g} cd/m^2, exposure {raw.exposure_s * 1e3:.4g} ms "
                      f"({mode}), noise {args.noise}, seed {raw.seed}")
         lines.append(f"  raw {raw.raw.min():.6g}..{raw.raw.max():.6g} DN (black level {raw.black_level_dn:g}, "
-                     f"{raw.dn_per_electron:.4g} DN/e-), {clipped:.2f} % at full scale")
+                     f"{raw.dn_per_electron:.4g} DN/e-), {clipped:.2f} % of wells full")
     print("\n".join(lines))
     return 0

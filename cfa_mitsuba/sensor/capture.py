@@ -249,6 +249,8 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     factor = np.asarray(oi.meta["on_axis_factor"], dtype=np.float64)
     epr = qe * (factor * _electrons_per_irradiance(wl, sensor) * exposure)[None, :]
     meta = _scaled_meta(oi, s)
+    # wells that were full before read-out (read noise then spreads their codes)
+    meta["saturated_fraction"] = float(np.count_nonzero(electrons >= sensor.well_capacity_e)) / electrons.size
     settings = {
         "cfa": {"name": cfa.name, "description": cfa.description, "tile": cfa.tile_text()},
         "noise": noise,

@@ -33,6 +33,7 @@ from __future__ import annotations
 __all__ = ["SensorParams", "NOISE_MODES"]
 
 import math
+import numbers
 from dataclasses import asdict, dataclass, fields, replace
 
 from ..errors import CfaMitsubaError
@@ -92,7 +93,7 @@ class SensorParams:
 
     def __post_init__(self):
         def positive(name, v, allow_zero=False):
-            ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            ok = isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v)
             ok = ok and (v >= 0 if allow_zero else v > 0)
             if not ok:
                 raise CfaMitsubaError(f"sensor {name} must be a {'non-negative' if allow_zero else 'positive'} "
@@ -107,13 +108,18 @@ class SensorParams:
         for name in ("read_noise_e", "dark_current_e_s", "dsnu_e", "prnu_percent", "black_level_dn"):
             positive(name, getattr(self, name), allow_zero=True)
         positive("analog_gain", self.analog_gain)
-        if isinstance(self.adc_bits, bool) or not isinstance(self.adc_bits, int) or not 1 <= self.adc_bits <= 32:
+        if isinstance(self.adc_bits, bool) or not isinstance(self.adc_bits, numbers.Integral) \
+                or not 1 <= self.adc_bits <= 32:
             raise CfaMitsubaError(f"sensor adc_bits must be an integer in 1..32, got {self.adc_bits!r}")
         if self.black_level_dn >= 2**self.adc_bits - 1:
             raise CfaMitsubaError(f"black level {self.black_level_dn:g} DN leaves no room in a "
                                   f"{self.adc_bits}-bit ADC")
-        if isinstance(self.sensor_seed, bool) or not isinstance(self.sensor_seed, int) or self.sensor_seed < 0:
+        if isinstance(self.sensor_seed, bool) or not isinstance(self.sensor_seed, numbers.Integral) \
+                or self.sensor_seed < 0:
             raise CfaMitsubaError(f"sensor_seed must be a non-negative integer, got {self.sensor_seed!r}")
+        for f in fields(self):  # plain Python numbers (JSON-able settings), whatever numpy type came in
+            v = getattr(self, f.name)
+            object.__setattr__(self, f.name, int(v) if f.name in ("adc_bits", "sensor_seed") else float(v))
 
     @property
     def conversion_gain_uv_per_e(self) -> float:
