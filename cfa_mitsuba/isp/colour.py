@@ -50,14 +50,6 @@ from .. import spectra
 from ..errors import CfaMitsubaError
 
 
-def _colour():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        import colour
-
-    return colour
-
-
 def white_response(electrons_per_radiance, white_radiance) -> np.ndarray:
     """(C,) electrons each channel collects from the scene white."""
     epr = np.asarray(electrons_per_radiance, dtype=np.float64)
@@ -269,7 +261,7 @@ def xyz_to_srgb(xyz, white_xyz) -> np.ndarray:
     The scene white maps to (1, 1, 1) (to 1e-4: the standard's XYZ -> RGB
     matrix has four decimals).
     """
-    colour = _colour()
+    colour = spectra._colour()
     white = np.asarray(white_xyz, dtype=np.float64)
     if white.shape != (3,) or not np.all(np.isfinite(white)) or white[1] <= 0:
         raise CfaMitsubaError(f"white XYZ must be 3 finite values with Y > 0, got {white.tolist()}")
@@ -284,7 +276,7 @@ def xyz_to_srgb(xyz, white_xyz) -> np.ndarray:
 def delta_e00(xyz_a, xyz_b, white_xyz) -> np.ndarray:
     """CIEDE2000 between two absolute XYZ arrays (..., 3), CIELAB relative
     to ``white_xyz`` (colour-science)."""
-    colour = _colour()
+    colour = spectra._colour()
     white = np.asarray(white_xyz, dtype=np.float64)
     xy = white[:2] / white.sum()
     lab_a = colour.XYZ_to_Lab(np.asarray(xyz_a, float) / white[1], xy)

@@ -76,7 +76,8 @@ def get_demosaic(name: str) -> Callable:
     return _REGISTRY[name].function
 
 
-def _resolve_cfa(cfa):
+def resolve_cfa(cfa):
+    """A CFA object from a CFA or a registered name."""
     if isinstance(cfa, str):
         from ..sensor import get_cfa
 
@@ -144,7 +145,7 @@ def demosaic(raw, cfa, method: str = "bilinear", **options) -> np.ndarray:
     >>> demosaic(np.full((6, 6), 0.5), "rgbw2", "laplacian")[2, 3].round(12).tolist()
     [0.5, 0.5, 0.5, 0.5]
     """
-    cfa = _resolve_cfa(cfa)
+    cfa = resolve_cfa(cfa)
     fn = get_demosaic(method)
     arr = check_mosaic(raw, cfa)
     try:

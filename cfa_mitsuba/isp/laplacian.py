@@ -103,10 +103,6 @@ class Reference:
     channel: int | None
     weights: tuple[float, ...]
 
-    @property
-    def name(self) -> str:
-        return "luminance" if self.channel is None else f"channel {self.channel}"
-
 
 def reference_for(cfa, mosaic: Mosaic, reference=None, luminance_weights=None) -> Reference:
     """Choose the reference: ``reference`` = a channel name, 'luminance',

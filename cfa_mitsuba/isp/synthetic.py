@@ -14,6 +14,7 @@ import numpy as np
 from .. import spectra
 from ..errors import CfaMitsubaError
 from .colour import electrons_per_radiance_of
+from .demosaic import resolve_cfa
 from .mosaic import geometry
 
 
@@ -29,11 +30,7 @@ def mosaic_image(image, cfa) -> np.ndarray:
     >>> mosaic_image(img, "bayer").tolist()   # G R / B G
     [[2.0, 1.0], [3.0, 2.0]]
     """
-    if isinstance(cfa, str):
-        from ..sensor import get_cfa
-
-        cfa = get_cfa(cfa)
-    mosaic = geometry(cfa)
+    mosaic = geometry(resolve_cfa(cfa))
     img = np.asarray(image, dtype=np.float64)
     if img.ndim != 3 or img.shape[2] != len(mosaic.channels):
         raise CfaMitsubaError(f"image of shape {img.shape} does not have the CFA's {len(mosaic.channels)} channels")
@@ -54,10 +51,7 @@ def channels_from_rgb(rgb, cfa, illuminant: str = "D65") -> np.ndarray:
     built-in C, M, Y, W, which are sums of them); rows are normalised so
     that white (1, 1, 1) gives 1 in every channel.
     """
-    if isinstance(cfa, str):
-        from ..sensor import get_cfa
-
-        cfa = get_cfa(cfa)
+    cfa = resolve_cfa(cfa)
     wl = spectra.DEFAULT_WAVELENGTHS
     light = spectra.illuminant(illuminant, wl)
     cam = electrons_per_radiance_of(spectra.camera_rgb(wl).T, wl)  # (3, B)
