@@ -138,8 +138,8 @@ def test_extreme_light_gives_finite_raw_data(luminance):
     mean, std = e.mean(), e.std()
     shot = capture(oi, "bayer", luminance_cd_m2=luminance, noise="shot", seed=9)
     assert shot.raw.min() >= 0  # no negative electrons before read noise
-    print(f"{luminance:g} cd/m^2: mean {mean:.3f} e-, std {std:.3f} e-, "
-          f"{100 * np.mean(r.raw == 4095):.1f} % at full scale")
+    print(f"{luminance:g} cd/m^2: mean {mean:.3f} e-, std {std:.3f} e-, wells full "
+          f"{100 * r.meta['saturated_fraction']:.1f} %, codes at 4095 {100 * np.mean(r.raw == 4095):.1f} %")
     if luminance == 0.01:
         assert std > 3 * abs(mean)  # noise-dominated: read noise 6.2 e- against ~0.6 e- of signal
     well = SensorParams().well_capacity_e
