@@ -29,6 +29,7 @@ __all__ = ["capture", "capture_ideal", "capture_many", "auto_exposure", "optical
 
 import copy
 import math
+import numbers
 
 import numpy as np
 
@@ -114,7 +115,7 @@ def _pixel_irradiance(oi: OpticalImage, fill_factor: float) -> np.ndarray:
 def _luminance_scale(oi: OpticalImage, luminance_cd_m2) -> float:
     if luminance_cd_m2 is None:
         return 1.0
-    require(isinstance(luminance_cd_m2, (int, float)) and not isinstance(luminance_cd_m2, bool)
+    require(isinstance(luminance_cd_m2, numbers.Real) and not isinstance(luminance_cd_m2, bool)
             and math.isfinite(luminance_cd_m2) and luminance_cd_m2 > 0,
             f"luminance must be a positive number of cd/m^2, got {luminance_cd_m2!r}")
     scene = float(oi.meta["scene_luminance_cd_m2"])
@@ -145,7 +146,8 @@ def auto_exposure(oi: OpticalImage, spectra_cb: np.ndarray, sensor: SensorParams
     if reference_luminance_cd_m2 is None:
         scale = float(luminance_scale)
     else:
-        require(isinstance(reference_luminance_cd_m2, (int, float)) and reference_luminance_cd_m2 > 0,
+        require(isinstance(reference_luminance_cd_m2, numbers.Real) and not isinstance(reference_luminance_cd_m2, bool)
+                and math.isfinite(reference_luminance_cd_m2) and reference_luminance_cd_m2 > 0,
                 f"reference luminance must be positive, got {reference_luminance_cd_m2!r}")
         scene = float(meta["scene_luminance_cd_m2"])
         require(scene > 0, "auto exposure needs light: the scene is black (give a fixed exposure)")
@@ -162,7 +164,7 @@ def _resolve_exposure(exposure_s, auto) -> tuple[float, str]:
         if exposure_s.strip().lower() != "auto":
             raise CfaMitsubaError(f"exposure must be a time in seconds or 'auto', got {exposure_s!r}")
         return auto(), "auto"
-    ok = isinstance(exposure_s, (int, float)) and not isinstance(exposure_s, bool)
+    ok = isinstance(exposure_s, numbers.Real) and not isinstance(exposure_s, bool)
     ok = ok and math.isfinite(exposure_s) and exposure_s > 0
     require(ok, f"exposure must be a positive number of seconds or 'auto', got {exposure_s!r}")
     return float(exposure_s), "fixed"
@@ -184,7 +186,7 @@ def _scaled_meta(oi: OpticalImage, s: float) -> dict:
 
 
 def _check_seed(seed) -> int:
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or int(seed) < 0:
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or int(seed) < 0:
         raise CfaMitsubaError(f"seed must be a non-negative integer, got {seed!r}")
     return int(seed)
 
