@@ -182,7 +182,15 @@ def test_geometry_sources_and_overrides():
     o = oi.meta["optics"]
     assert (o["fov_deg"], o["fov_source"], o["scene_distance_m"], o["scene_distance_source"]) == \
         (30.0, "option", 1.2, "default")
+    assert (o["f_number"], o["f_number_source"]) == (4.0, "default")
     assert oi.meta["oversample"] == 2
+    # f-number: option, else the sidecar's (top level, else its geometry, as the thin-lens puppy records it)
+    for meta, params, expect in (({"f_number": 2.8}, None, (2.8, "sidecar")),
+                                 ({"geometry": {"f_number": 2.0}}, None, (2.0, "sidecar geometry")),
+                                 ({"f_number": 2.8}, OpticsParams(f_number=5.6), (5.6, "option"))):
+        o = compute_optics(_scene(data, **meta), params).meta["optics"]
+        assert (o["f_number"], o["f_number_source"]) == expect
+        assert o["working_f_number"] == pytest.approx(expect[0] * (1 + o["magnification"]))
 
 
 @pytest.mark.parametrize("k, needle", [(5, "does not divide"), (0, "positive integer"), (1.5, "positive integer"),

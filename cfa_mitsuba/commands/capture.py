@@ -103,7 +103,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--sensor-seed", type=_non_negative_int, default=None,
                         help="fixed-pattern (DSNU/PRNU) seed: one seed is one sensor (default 0)")
     g = parser.add_argument_group("lens (defaults: f/4, T = 1, relative illumination and diffraction on)")
-    g.add_argument("--f-number", type=_positive_float, default=4.0, metavar="N")
+    g.add_argument("--f-number", type=_positive_float, metavar="N",
+                   help="f-number (overrides the sidecar's f_number; default 4)")
     g.add_argument("--lens-transmittance", type=_positive_float, default=1.0, metavar="T", help="in (0, 1]")
     g.add_argument("--no-relative-illumination", action="store_true", help="no off-axis falloff")
     g.add_argument("--no-diffraction", action="store_true", help="no diffraction OTF")
@@ -194,7 +195,8 @@ def run(args) -> int:
     k = meta["oversample"]
     lines = [f"wrote {out}: {st['cfa']['name']} ({st['cfa']['tile']}), {w} x {h} pixels of "
              f"{sensor.pixel_pitch_um:g} um from {w * k} x {h * k} EXR pixels (K = {k}, {meta['oversample_source']})"]
-    lens = (f"lens f/{opt['f_number']:g} (working f/{opt['working_f_number']:.4g}), focal length "
+    lens = (f"lens f/{opt['f_number']:g} ({opt['f_number_source']}; working f/{opt['working_f_number']:.4g}), "
+            f"focal length "
             f"{opt['focal_length_mm']:.4g} mm, FOV {opt['fov_deg']:g} deg ({opt['fov_source']}), "
             f"distance {opt['scene_distance_m']} m ({opt['scene_distance_source']})")
     lines.append("  " + lens)

@@ -4,5 +4,5 @@ integration), computed once per scene and reused by every CFA."""
 
 from .compute import DEFAULT_PIXEL_PITCH_UM, check_oversample, compute_optics, integrate_pixels  # noqa: F401
 from .diffraction import apply_diffraction, diffraction_mtf  # noqa: F401
-from .lens import (DEFAULT_FOV_DEG, DEFAULT_SCENE_DISTANCE_M, LensGeometry, OpticsParams,  # noqa: F401
-                   lens_geometry, on_axis_factor, relative_illumination)
+from .lens import (DEFAULT_F_NUMBER, DEFAULT_FOV_DEG, DEFAULT_SCENE_DISTANCE_M, LensGeometry,  # noqa: F401
+                   OpticsParams, lens_geometry, on_axis_factor, relative_illumination)

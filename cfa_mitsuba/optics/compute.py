@@ -22,8 +22,8 @@ from .. import spectra as _spectra
 from ..errors import CfaMitsubaError, require
 from ..values import OpticalImage, SpectralImage
 from .diffraction import apply_diffraction
-from .lens import (DEFAULT_FOV_DEG, DEFAULT_SCENE_DISTANCE_M, OpticsParams, lens_geometry, on_axis_factor,
-                   relative_illumination)
+from .lens import (DEFAULT_F_NUMBER, DEFAULT_FOV_DEG, DEFAULT_SCENE_DISTANCE_M, OpticsParams, lens_geometry,
+                   on_axis_factor, relative_illumination)
 
 #: Default sensor pixel pitch (um): the paper's Nyquist frequency,
 #: 227.27 cy/mm (Bae 2020, Fig 6), is 1 / (2 x 2.2 um).
@@ -65,9 +65,10 @@ def check_oversample(oversample, height: int, width: int) -> int:
 
 
 def scene_geometry_inputs(scene: SpectralImage, params: OpticsParams, oversample=None) -> dict:
-    """FOV, distance and K for a scene: explicit settings win over the
-    sidecar, the sidecar over the defaults.  Returns a dict with ``fov_deg``,
-    ``scene_distance_m``, ``oversample`` and where each came from."""
+    """FOV, distance, f-number and K for a scene: explicit settings win over
+    the sidecar, the sidecar over the defaults.  Returns a dict with
+    ``fov_deg``, ``scene_distance_m``, ``f_number``, ``oversample`` and where
+    each came from (``<key>_source``: option, sidecar or default)."""
     meta = scene.meta or {}
     h, w = scene.data.shape[:2]
     out = {}
@@ -81,6 +82,17 @@ def scene_geometry_inputs(scene: SpectralImage, params: OpticsParams, oversample
             out[key], out[key + "_source"] = _meta_number(meta, key), "sidecar"
         else:
             out[key], out[key + "_source"] = default, "default"
+    geometry = meta.get("geometry") if isinstance(meta.get("geometry"), dict) else {}
+    if params.f_number is not None:
+        out["f_number"], out["f_number_source"] = float(params.f_number), "option"
+    elif _meta_number(meta, "f_number") is not None:
+        out["f_number"], out["f_number_source"] = _meta_number(meta, "f_number"), "sidecar"
+    elif _meta_number(geometry, "f_number") is not None:
+        out["f_number"], out["f_number_source"] = _meta_number(geometry, "f_number"), "sidecar geometry"
+    else:
+        out["f_number"], out["f_number_source"] = DEFAULT_F_NUMBER, "default"
+    require(out["f_number"] > 0 and math.isfinite(out["f_number"]),
+            f"f-number must be positive, got {out['f_number']!r}")
     require(0 < out["fov_deg"] < 180, f"field of view must lie in (0, 180) degrees, got {out['fov_deg']!r}")
     require(out["scene_distance_m"] > 0, f"scene distance must be positive, got {out['scene_distance_m']!r}")
     if oversample is not None:
@@ -235,8 +247,8 @@ def compute_optics(scene: SpectralImage, params: OpticsParams | None = None, *,
     meta = dict(scene.meta or {})
     geo_in = scene_geometry_inputs(scene, params, oversample)
     k = geo_in["oversample"]
-    geom = lens_geometry(w // k, pixel_pitch_um, geo_in["fov_deg"], geo_in["scene_distance_m"], params.f_number)
-    factor = on_axis_factor(params.f_number, geom.magnification, params.transmittance(nb))
+    geom = lens_geometry(w // k, pixel_pitch_um, geo_in["fov_deg"], geo_in["scene_distance_m"], geo_in["f_number"])
+    factor = on_axis_factor(geom.f_number, geom.magnification, params.transmittance(nb))
 
     # Scene statistics before the lens: luminance for scaling, the brightest
     # pixel for auto exposure (ISETCam's oiExtractBright skips OTF and falloff).
@@ -266,6 +278,7 @@ def compute_optics(scene: SpectralImage, params: OpticsParams | None = None, *,
     meta.update({
         "optics": {**params.to_dict(), **geom.to_dict(), "fov_source": geo_in["fov_deg_source"],
                    "scene_distance_source": geo_in["scene_distance_m_source"],
+                   "f_number_source": geo_in["f_number_source"],
                    "boundary": "mirror (DCT-II)"},
         "oversample": k,
         "oversample_source": geo_in["oversample_source"],

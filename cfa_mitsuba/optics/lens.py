@@ -23,6 +23,7 @@ __all__ = [
     "relative_illumination",
     "DEFAULT_FOV_DEG",
     "DEFAULT_SCENE_DISTANCE_M",
+    "DEFAULT_F_NUMBER",
 ]
 
 import math
@@ -37,6 +38,8 @@ from ..errors import CfaMitsubaError, require
 #: 1.2 m distance), research/isetcam.md s. 2.5.
 DEFAULT_FOV_DEG = 10.0
 DEFAULT_SCENE_DISTANCE_M = 1.2
+#: ISETCam's default optics (``opticsCreate.m``, 'standard (1/4-inch)'): f/4.
+DEFAULT_F_NUMBER = 4.0
 
 
 @dataclass(frozen=True)
@@ -45,8 +48,10 @@ class OpticsParams:
 
     Attributes
     ----------
-    f_number : N = focal length / aperture diameter.  Default 4 (ISETCam's
-        default optics, ``opticsCreate.m`` 'standard (1/4-inch)').
+    f_number : N = focal length / aperture diameter.  None (default): the
+        sidecar's ``f_number`` (top level, else under ``geometry``, as a
+        thin-lens render that modelled defocus at that aperture records
+        it), else :data:`DEFAULT_F_NUMBER`; a number overrides the sidecar.
     lens_transmittance : T, a scalar or one value per band in (0, 1].
         Default 1 (ISETCam: transmittance 1 over 370-730 nm).
     relative_illumination : apply the off-axis falloff of a uniform
@@ -62,7 +67,7 @@ class OpticsParams:
         overrides it; ``math.inf`` focuses at infinity (magnification 0).
     """
 
-    f_number: float = 4.0
+    f_number: float | None = None
     lens_transmittance: float | tuple = 1.0
     relative_illumination: bool = True
     diffraction: bool = True
@@ -71,7 +76,8 @@ class OpticsParams:
 
     def __post_init__(self):
         require(
-            isinstance(self.f_number, (int, float)) and math.isfinite(self.f_number) and self.f_number > 0,
+            self.f_number is None
+            or (isinstance(self.f_number, (int, float)) and math.isfinite(self.f_number) and self.f_number > 0),
             f"f-number must be a positive number, got {self.f_number!r}",
         )
         t = np.asarray(self.lens_transmittance, dtype=np.float64)
@@ -103,7 +109,6 @@ class OpticsParams:
 
     def to_dict(self) -> dict:
         return {
-            "f_number": float(self.f_number),
             "lens_transmittance": (
                 list(self.lens_transmittance)
                 if isinstance(self.lens_transmittance, tuple)
