@@ -20,9 +20,10 @@ through a diffraction-limited lens and a sensor with the given CFA.
 Without --luminance the EXR's radiance is kept.  --exposure auto fills the
 brightest pixel's well to 95 % for the scene at the reference luminance
 (100 cd/m^2), and keeps that exposure at any --luminance, so dim captures
-are noisier.  Geometry (field of view, distance, oversampling) comes from
-the sidecar, else from the options, else from the documented defaults
-(docs/sensor.md).  --oversample must divide the EXR's width and height.
+are noisier.  The lens (field of view, distance, f-number) and the
+oversampling come from the options, else from the sidecar, else from the
+documented defaults (docs/sensor.md).  --oversample must divide the EXR's
+width and height (a remainder is refused, not cropped).
 """
 
 
