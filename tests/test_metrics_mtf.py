@@ -74,3 +74,18 @@ def test_sharp_edge_gives_finite_values():
 def test_edge_that_cannot_be_analysed_is_a_clear_error(img, needle):
     with pytest.raises(CfaMitsubaError, match=needle):
         cm.mtf(img)
+
+
+def test_a_channel_without_an_edge_uses_the_luminance_fit():
+    img = np.stack([blurred_edge(5.0, 1.0), blurred_edge(5.0, 1.0), np.full((128, 96), 0.5)], axis=-1)
+    r = cm.mtf(img)
+    assert r.details["records"]["R"]["mtf50_cy_px"] == pytest.approx(MTF50_TIMES_SIGMA, rel=0.01)
+    assert np.isfinite(float(r))
+    assert r.details["records"]["B"]["mtf50_cy_px"] is None and "error" in r.details["records"]["B"]
+
+
+def test_bad_pitch_and_roi_are_refused():
+    with pytest.raises(CfaMitsubaError, match="pitch"):
+        cm.mtf(blurred_edge(5.0, 1.0), pixel_pitch_um=-1.0)
+    with pytest.raises(CfaMitsubaError, match="outside"):
+        cm.mtf(blurred_edge(5.0, 1.0), roi=(0, 0, 500, 50))
