@@ -137,6 +137,19 @@ def test_bad_cfa_on_the_command_line_exits_2(tmp_path):
     assert not (tmp_path / "o.npz").exists()
 
 
+@pytest.mark.parametrize("case", list(BAD))
+def test_every_bad_cfa_exits_2_in_process(tmp_path, capsys, case):
+    from cfa_mitsuba.cli import main
+
+    text, needle = BAD[case]
+    (tmp_path / "x.csv").write_text("wavelength_nm,qe\n400,0.2\n550,nan\n700,0.1\n")
+    p = _toml(tmp_path, text)
+    rc = main(["capture", str(tmp_path / "none.exr"), "--cfa", str(p), "--out", str(tmp_path / "o.npz")])
+    err = capsys.readouterr().err
+    assert rc == 2 and len(err.strip().splitlines()) == 1 and needle.lower() in err.lower(), err
+    assert not (tmp_path / "o.npz").exists()
+
+
 def test_make_cfa_refusals():
     curve = (np.array([400.0, 700.0]), np.array([0.3, 0.3]))
     with pytest.raises(CfaMitsubaError, match="no spectrum for filter 'B'"):
