@@ -11,7 +11,8 @@ MODULES = [
     "cfa_mitsuba.metrics._result", "cfa_mitsuba.metrics.colour", "cfa_mitsuba.metrics.delta_e",
     "cfa_mitsuba.metrics.scielab", "cfa_mitsuba.metrics.ssim", "cfa_mitsuba.metrics.mtf",
     "cfa_mitsuba.metrics.moire", "cfa_mitsuba.metrics.achromatic", "cfa_mitsuba.metrics.mdsi",
-    "cfa_mitsuba.metrics.haarpsi", "cfa_mitsuba.metrics.preprocess", "cfa_mitsuba.study.scoring",
+    "cfa_mitsuba.metrics.haarpsi", "cfa_mitsuba.metrics.preprocess", "cfa_mitsuba.metrics.geometry",
+    "cfa_mitsuba.study.scoring",
 ]
 
 

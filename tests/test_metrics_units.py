@@ -234,3 +234,24 @@ def test_bad_keywords_are_refused():
 def test_registry_lists_the_eight_metrics():
     names = [n for n, _ in cm.list_metrics()]
     assert names == ["delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi"]
+
+
+# -- sidecar geometry -> metric arguments -------------------------------------------------------
+
+def test_scene_geometry_rescales_by_the_oversampling_factor():
+    side = {"width": 500, "height": 500, "fov_deg": 10.0, "oversample": 4,
+            "geometry": {"row": 250, "roi": [101, 58, 381, 300],
+                         "frequency_cy_per_deg": np.linspace(0, 50, 500).tolist(),
+                         "frequency_cy_per_px": np.linspace(0, 0.25, 500).tolist(),
+                         "steps": [{"x0": 0, "x1": 50}, {"x0": 50, "x1": 101}],
+                         "patches": [{"rect": [0, 0, 40, 40], "interior_rect": [5, 5, 35, 35]}]}}
+    g = cm.scene_geometry(side, (125, 125, 3))
+    assert g["oversample"] == 4 and g["row"] == 62 and g["samples_per_degree"] == 12.5
+    assert g["roi"] == (26, 15, 95, 75)  # rounded inwards
+    assert g["patches"] == [(2, 2, 8, 8)] and g["steps"] == [(0, 12), (13, 25)]
+    assert g["frequency_cy_per_deg"].shape == (125,)
+    assert g["frequency_cy_per_deg"][0] == pytest.approx(np.linspace(0, 50, 500)[:4].mean())
+    assert g["frequency_cy_per_px"][-1] == pytest.approx(4 * np.linspace(0, 0.25, 500)[-4:].mean())
+    assert cm.scene_geometry(side, (500, 500))["oversample"] == 1
+    with pytest.raises(CfaMitsubaError, match="oversampling"):
+        cm.scene_geometry(side, (100, 130))

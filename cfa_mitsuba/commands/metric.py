@@ -173,38 +173,15 @@ def _to_linear(img: _Loaded, white):
 
 def _geometry(path, shape):
     """Scene geometry from a render sidecar, rescaled to an image of ``shape``."""
-    import numpy as np
-
     from ..errors import CfaMitsubaError
+    from ..metrics.geometry import scene_geometry
 
     try:
         with open(path) as fh:
             side = json.load(fh)
     except (OSError, ValueError) as exc:
         raise CfaMitsubaError(f"cannot read the sidecar {path!r}: {exc}") from None
-    geo = side.get("geometry", {}) if isinstance(side, dict) else {}
-    freq = geo.get("frequency_cy_per_deg")
-    exr_w = side.get("width") or (len(freq) if freq else None)
-    # The image may be the EXR's size (K = 1) or the camera's (EXR / K): trust the sizes.
-    k = int(round(exr_w / shape[1])) if exr_w else int(side.get("oversample") or 1)
-    if k < 1 or (exr_w and abs(exr_w / k - shape[1]) > 1):
-        raise CfaMitsubaError(f"the sidecar's scene is {exr_w} px wide; the image ({shape[1]} px) is not "
-                              "that divided by a whole oversampling factor")
-    out = {"oversample": k}
-    if "patches" in geo:
-        out["patches"] = [[int(round(v / k)) for v in (p.get("interior_rect") or p["rect"])] for p in geo["patches"]]
-    if "roi" in geo:
-        out["roi"] = [int(round(v / k)) for v in geo["roi"]]
-    if freq:
-        f = np.asarray(freq, dtype=np.float64)
-        n = (f.size // k) * k
-        out["frequency_cy_per_deg"] = f[:n].reshape(-1, k).mean(axis=1)[: shape[1]]
-    if "row" in geo:
-        out["row"] = int(geo["row"]) // k
-    fov = side.get("fov_deg") or geo.get("fov_deg")
-    if fov:
-        out["fov_deg"] = float(fov)
-    return out
+    return scene_geometry(side, shape)
 
 
 def run(args) -> int:
@@ -253,9 +230,8 @@ def run(args) -> int:
         result = cm.delta_e(xyz_r, xyz_t, white, patches=geo.get("patches"), version=args.version)
     elif name == "scielab":
         spd = args.samples_per_degree
-        fov = args.fov_deg or geo.get("fov_deg")
-        if spd is None and fov:
-            spd = xyz_r.shape[1] / fov
+        if spd is None:
+            spd = xyz_r.shape[1] / args.fov_deg if args.fov_deg else geo.get("samples_per_degree")
         require(spd is not None, "scielab needs the viewing geometry: --samples-per-degree N or --fov-deg DEG "
                                  "(or --geometry with the sidecar's fov_deg)")
         result = cm.scielab(xyz_r, xyz_t, white, samples_per_degree=spd, matrix=args.matrix, version=args.version)
@@ -268,7 +244,7 @@ def run(args) -> int:
         result = cm.moire(xyz_r, xyz_t, white, frequency_cy_per_deg=freq, row=geo.get("row"),
                           block=args.block, threshold=args.threshold)
     elif name == "achromatic":
-        result = cm.achromatic(xyz_r, xyz_t, white, row=geo.get("row"))
+        result = cm.achromatic(xyz_r, xyz_t, white, row=geo.get("row"), steps=geo.get("steps"))
     else:  # pragma: no cover - registry and dispatch out of step
         raise CfaMitsubaError(f"metric {name!r} has no command-line dispatch")
     return _emit(args, result, imgs)

@@ -31,6 +31,7 @@ from . import colour  # noqa: F401
 from ._result import MetricResult
 from .achromatic import achromatic
 from .delta_e import delta_e
+from .geometry import scene_geometry
 from .haarpsi import haarpsi
 from .mdsi import mdsi
 from .moire import moire
@@ -42,7 +43,7 @@ from .ssim import ssim
 __all__ = [
     "MetricResult", "MetricInfo", "METRICS", "get_metric", "list_metrics",
     "delta_e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi",
-    "mean_match", "find_edge_roi", "scielab_filters", "colour",
+    "mean_match", "find_edge_roi", "scielab_filters", "scene_geometry", "colour",
 ]
 
 
