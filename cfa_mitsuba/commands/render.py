@@ -1,15 +1,120 @@
-"""``cfa-mitsuba render``: placeholder until its issue lands (see DESIGN.md)."""
+"""``cfa-mitsuba render SCENE --out DIR``: a scene to a spectral EXR + sidecar."""
 
 from __future__ import annotations
 
-from ..errors import CfaMitsubaError
+import os
+import sys
+from pathlib import Path
 
-HELP = "render (not implemented yet)"
+HELP = "render a scene to a spectral EXR (JCGT layout) and a sidecar JSON"
+
+DESCRIPTION = """\
+Render SCENE with Mitsuba 3 to DIR/<name>.exr (band-mean spectral radiance in
+W/(m^2 sr nm), float32 channels S0.<nm>nm, exactly --width x --height) and
+DIR/<name>.json (the sidecar: units, wavelengths, field of view, settings,
+the scene's geometry).  SCENE is one of slanted-edge, macbeth, chirp,
+gray-bar, puppy (see `cfa-mitsuba list scenes`) or a Mitsuba 3 scene FILE.xml.
+
+Renders are cached (~/.cache/cfa-mitsuba, or $CFA_MITSUBA_CACHE) by a hash of
+everything that determines them; --luminance only rescales, so it reuses the
+cache.  The Mitsuba variant is cuda_ad_spectral > llvm_ad_spectral >
+scalar_spectral, whichever runs here first; $CFA_MITSUBA_THREADS caps the
+render's threads."""
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("rest", nargs="*")
+    parser.add_argument("scene", metavar="SCENE", help="built-in scene name or a Mitsuba 3 scene FILE.xml")
+    parser.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
+    parser.add_argument("--width", type=int, metavar="W", help="EXR width in pixels (default: the scene's)")
+    parser.add_argument("--height", type=int, metavar="H", help="EXR height in pixels (default: the scene's)")
+    parser.add_argument("--spp", type=int, metavar="N",
+                        help="samples per pixel, rounded up to a square (default: the scene's)")
+    parser.add_argument("--luminance", type=float, metavar="CD_M2",
+                        help="mean luminance of the image in cd/m^2 (default 100)")
+    parser.add_argument("--variant", metavar="V",
+                        help="Mitsuba variant: cuda_ad_spectral, llvm_ad_spectral or scalar_spectral (default: best available)")
+    parser.add_argument("--seed", type=int, metavar="S", help="sampler seed (default 0)")
+    parser.add_argument("--bands", metavar="START:STOP:STEP", help="band centres in nm (default 400:700:10)")
+    parser.add_argument("--oversample", type=int, metavar="K",
+                        help="EXR pixels per sensor pixel along each axis (default: the scene's; 4 for slanted-edge and chirp)")
+    parser.add_argument("--fov", type=float, metavar="DEG", help="horizontal field of view of a built-in scene (degrees)")
+    parser.add_argument("--max-depth", type=int, metavar="N", help="path length of a 3D scene (2: direct light only)")
+    parser.add_argument("--preview", action="store_true", help="also write DIR/<name>.png, an sRGB preview")
+    parser.add_argument("--no-cache", action="store_true", help="render even if a cached render exists, and do not store it")
+
+
+def _check_out(out: Path) -> None:
+    """Refuse an output directory that cannot be created or written, before
+    rendering, by really trying (permission bits say little to root);
+    nothing is left behind."""
+    import tempfile
+
+    from ..errors import CfaMitsubaError
+
+    if out.exists() and not out.is_dir():
+        raise CfaMitsubaError(f"output directory {str(out)!r} is a file")
+    probe_in = out if out.exists() else out.absolute().parent
+    while not probe_in.exists():
+        probe_in = probe_in.parent
+    if not probe_in.is_dir():
+        raise CfaMitsubaError(f"cannot create output directory {str(out)!r}: {str(probe_in)!r} is a file")
+    try:
+        tempfile.TemporaryDirectory(dir=probe_in, prefix=".cfa-mitsuba-probe-").cleanup()
+    except OSError as exc:
+        what = "write to" if out.exists() else "create"
+        raise CfaMitsubaError(f"cannot {what} output directory {str(out)!r}: {exc.strerror}") from None
 
 
 def run(args) -> int:
-    raise CfaMitsubaError("'render' is not implemented yet")
+    from ..errors import CfaMitsubaError
+    from ..io import check_writable_dir, write_sidecar, write_spectral_exr
+    from ..render import engine, variant
+
+    settings = dict(width=args.width, height=args.height, spp=args.spp, luminance=args.luminance,
+                    variant=args.variant, seed=args.seed, bands=args.bands, oversample=args.oversample,
+                    fov=args.fov, max_depth=args.max_depth)
+    out = Path(args.out)
+    _check_out(out)
+    sc, cfg = engine.resolve_settings(args.scene, **settings)
+    prog = "cfa-mitsuba render"
+    lib = os.environ.get("DRJIT_LIBLLVM_PATH")
+    where = f" (libLLVM {lib})" if cfg.variant.startswith("llvm") and lib else ""
+    sys.stderr.write(f"{prog}: Mitsuba variant {cfg.variant}{where}\n")
+    if cfg.variant.startswith("scalar") and args.variant is None:
+        notice = variant.llvm_notice()
+        if notice:
+            sys.stderr.write(f"{prog}: {notice}\n")
+    if args.spp is not None and cfg.spp != args.spp:
+        sys.stderr.write(f"{prog}: --spp {args.spp} rounded up to {cfg.spp} (the stratified sampler needs a square)\n")
+
+    if args.no_cache:
+        image = engine.render(sc, **settings)
+        sys.stderr.write(f"{prog}: rendered {sc.name} in {image.meta['render_time_s']:.1f} s (cache not used)\n")
+    else:
+        image = engine.render_cached(sc, **settings)
+        key = image.meta["cache_key"]
+        if image.meta.get("cache_hit"):
+            sys.stderr.write(f"{prog}: reused cached render {key} (rendered earlier in {image.meta['render_time_s']:.1f} s)\n")
+        else:
+            sys.stderr.write(f"{prog}: rendered {sc.name} in {image.meta['render_time_s']:.1f} s, cached as {key}\n")
+
+    check_writable_dir(out, create=True)
+    exr = out / f"{sc.name}.exr"
+    side = exr.with_suffix(".json")
+    write_spectral_exr(exr, image)
+    try:
+        write_sidecar(side, image.meta)
+        written = [exr, side]
+        if args.preview:
+            from ..render.preview import write_preview
+
+            written.append(write_preview(exr.with_suffix(".png"), image))
+    except BaseException:
+        exr.unlink(missing_ok=True)
+        side.unlink(missing_ok=True)
+        raise
+    for p in written:
+        print(p)
+    if not exr.exists():  # pragma: no cover
+        raise CfaMitsubaError(f"failed to write {str(exr)!r}")
+    return 0

@@ -218,11 +218,34 @@ def _xml_element(tag: str, d: dict, name: str | None = None) -> str:
     return f"<{tag}{attrs}>" + "".join(parts) + f"</{tag}>"
 
 
-def _load(mi, built: Built, film: dict, sampler: dict, integrator: dict, sensor: dict | None = None,
-          extra: dict | None = None):
-    """A Mitsuba scene of ``built`` with our film, sampler and integrator."""
+def _probe_parts(mi, probe: dict, as_xml: bool):
+    """The white probe's radiance-meter sensor and white square (dict or XML)."""
+    c, o, h = (list(map(float, probe["center"])), list(map(float, probe["camera"])), float(probe["half_size"]))
+    d = np.subtract(c, o)
+    up = [0.0, 1.0, 0.0] if abs(d[1]) < 0.9 * np.linalg.norm(d) else [1.0, 0.0, 0.0]
+    if as_xml:
+        def v(x):
+            return ",".join(repr(float(t)) for t in x)
+        sensor = (f'<sensor type="radiancemeter"><transform name="to_world"><lookat origin="{v(o)}" target="{v(c)}" '
+                  f'up="{v(up)}"/></transform><!--cfa:film--><!--cfa:sampler--></sensor>')
+        shape = (f'<shape type="rectangle"><transform name="to_world"><scale value="{h!r}"/><lookat origin="{v(c)}" '
+                 f'target="{v(o)}" up="{v(up)}"/></transform><bsdf type="diffuse"><float name="reflectance" value="1"/>'
+                 f'</bsdf></shape>')
+        return sensor + shape
+    T = mi.ScalarTransform4f
+    sensor = {"type": "radiancemeter", "to_world": T().look_at(origin=o, target=c, up=up)}
+    shape = {"type": "rectangle", "to_world": T().look_at(origin=c, target=o, up=up).scale(h),
+             "bsdf": {"type": "diffuse", "reflectance": {"type": "uniform", "value": 1.0}}}
+    return sensor, {"cfa_white_probe": shape}
+
+
+def _load(mi, built: Built, film: dict, sampler: dict, integrator: dict, probe: dict | None = None):
+    """A Mitsuba scene of ``built`` with our film, sampler and integrator;
+    with ``probe``, the white probe's radiance meter replaces the camera."""
     if built.xml is not None:
-        xml = (built.xml.replace("<!--cfa:film-->", _xml_element("film", film))
+        sensor = _probe_parts(mi, probe, True) if probe is not None else built.xml_sensor
+        xml = (built.xml.replace("<!--cfa:sensor-->", sensor)
+               .replace("<!--cfa:film-->", _xml_element("film", film))
                .replace("<!--cfa:sampler-->", _xml_element("sampler", sampler))
                .replace("<!--cfa:integrator-->", _xml_element("integrator", integrator)))
         resolver = mi.Thread.thread().file_resolver()
@@ -232,9 +255,18 @@ def _load(mi, built: Built, film: dict, sampler: dict, integrator: dict, sensor:
             return mi.load_string(xml)
         except Exception as exc:  # Mitsuba reports parse/plugin errors as RuntimeError
             raise CfaMitsubaError(f"Mitsuba cannot load the scene: {_first_line(exc)}") from None
-    d = {"type": "scene", **built.objects, **(extra or {}), "integrator": integrator,
-         "sensor": {**(sensor or built.sensor), "film": film, "sampler": sampler}}
+    sensor, extra = _probe_parts(mi, probe, False) if probe is not None else (built.sensor, {})
+    d = {"type": "scene", **built.objects, **extra, "integrator": integrator,
+         "sensor": {**sensor, "film": film, "sampler": sampler}}
     return mi.load_dict(d)
+
+
+def _probe_load_settings(width: int, height: int) -> tuple[dict, dict, dict]:
+    """Film, sampler and integrator for loading a scene only to inspect it
+    (field of view, first hits): stock plugins, valid in every variant."""
+    return ({"type": "hdrfilm", "width": int(width), "height": int(height), "rfilter": {"type": "box"}},
+            {"type": "independent", "sample_count": 1},
+            {"type": "path", "max_depth": 2})
 
 
 def _first_line(exc: Exception) -> str:
@@ -250,7 +282,7 @@ def _band_boxes(cfg: RenderConfig, achromatic: bool) -> list[tuple[float, float]
 
 
 def _render_boxes(mi, built: Built, cfg: RenderConfig, sc: Scene, boxes, *, width, height, spp,
-                  sensor: dict | None = None, extra: dict | None = None) -> np.ndarray:
+                  probe: dict | None = None) -> np.ndarray:
     """Render band means over ``boxes`` ((lo, hi) nm each): (height, width, len(boxes)) float32."""
     sampler = {"type": sc.sampler, "sample_count": int(spp), "seed": int(cfg.seed), "jitter": bool(sc.jitter)}
     if cfg.variant.startswith("scalar"):
@@ -262,7 +294,7 @@ def _render_boxes(mi, built: Built, cfg: RenderConfig, sc: Scene, boxes, *, widt
                     "component_format": "float32",
                     "band": {"type": "regular", "wavelength_min": lo, "wavelength_max": hi,
                              "values": f"{1 / (hi - lo)!r}, {1 / (hi - lo)!r}"}}
-            scene = _load(mi, built, film, sampler, {"type": "path", "max_depth": cfg.max_depth}, sensor, extra)
+            scene = _load(mi, built, film, sampler, {"type": "path", "max_depth": cfg.max_depth}, probe)
             img = np.array(mi.render(scene, seed=cfg.seed), dtype=np.float32)
             planes.append(img.reshape(height, width, -1)[..., 0])
         return np.stack(planes, axis=-1)
@@ -273,7 +305,7 @@ def _render_boxes(mi, built: Built, cfg: RenderConfig, sc: Scene, boxes, *, widt
             "pixel_format": "luminance", "component_format": "float32"}
     integrator = {"type": PLUGIN_NAME, "band_edges": ",".join(repr(float(e)) for e in edges),
                   "band_inset": BAND_INSET, "max_depth": cfg.max_depth}
-    scene = _load(mi, built, film, sampler, integrator, sensor, extra)
+    scene = _load(mi, built, film, sampler, integrator, probe)
     img = np.array(mi.render(scene, seed=cfg.seed), dtype=np.float32)
     n = len(boxes)
     if img.ndim != 3 or img.shape[2] < n:
@@ -282,13 +314,17 @@ def _render_boxes(mi, built: Built, cfg: RenderConfig, sc: Scene, boxes, *, widt
 
 
 def _measure_white(mi, built: Built, cfg: RenderConfig, sc: Scene) -> np.ndarray:
-    """Radiance of the white probe patch (3D scenes), (B,) W/(m^2 sr nm)."""
-    probe = built.white_probe
-    sensor = {"type": "radiancemeter",
-              "to_world": mi.ScalarTransform4f().look_at(origin=probe["origin"], target=probe["target"], up=[0, 1, 0])}
+    """Radiance of the white probe patch (3D scenes), (B,) W/(m^2 sr nm).
+
+    Direct light only (a path depth of 2): the reference white is the
+    scene's lights as they reach the subject, not tinted by what nearby
+    surfaces reflect (that is the scene's content, which the camera must
+    reproduce, not balance away)."""
+    import dataclasses
+
     boxes = _band_boxes(cfg, achromatic=False)
-    out = _render_boxes(mi, built, cfg, sc, boxes, width=1, height=1, spp=WHITE_PROBE_SPP,
-                        sensor=sensor, extra=probe["shapes"])
+    direct = dataclasses.replace(cfg, max_depth=2)
+    out = _render_boxes(mi, built, direct, sc, boxes, width=1, height=1, spp=WHITE_PROBE_SPP, probe=built.white_probe)
     return out.reshape(-1).astype(np.float64)
 
 

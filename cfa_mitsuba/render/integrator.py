@@ -124,6 +124,7 @@ def _make_class(mi):
         def _path(self, scene, sampler, ray, active, wls):
             ctx = mi.BSDFContext()
             n_groups = len(wls)
+            has_delta = any(mi.has_flag(e.flags(), mi.EmitterFlags.Delta) for e in scene.emitters())
             max_depth = self.max_depth
 
             def cond(sampler, ray, depth, active, thr, rad, si_prev, pdf_prev, delta_prev, valid):
@@ -148,34 +149,33 @@ def _make_class(mi):
                 active_next = active & (depth + 1 < max_depth) & si.is_valid()
                 bsdf = si.bsdf(ray)
 
-                # Emitter sampling: one position for all bands, the emitter's
-                # value evaluated per band group.
+                # Emitter sampling: one emitter position and one BSDF
+                # direction for all bands; emitter and BSDF evaluated per band
+                # group (one eval_pdf_sample call gives the BSDF's value
+                # towards the emitter, its pdf, and the sampled continuation).
                 active_em = active_next & mi.has_flag(bsdf.flags(), mi.BSDFFlags.Smooth)
                 s_em = sampler.next_2d(active_next)
                 ds_em, _ = scene.sample_emitter_direction(si, s_em, False, active_em)
                 active_em &= ds_em.pdf != 0.0
                 active_em &= ~scene.ray_test(si.spawn_ray_to(ds_em.p), active_em)
-                wo = si.to_local(ds_em.d)
-                bsdf_pdf_em = bsdf.pdf(ctx, si, wo, active_em)
-                mis_em = dr.select(ds_em.delta, 1.0, mis_weight(ds_em.pdf, bsdf_pdf_em))
-                for g in range(n_groups):
-                    si.wavelengths = wls[g]
-                    _, em_weight = scene.sample_emitter_direction(si, s_em, False, active_em)
-                    bsdf_val = bsdf.eval(ctx, si, wo, active_em)
-                    rad[g] = rad[g] + dr.select(active_em, thr[g] * mis_em * bsdf_val * em_weight, 0.0)
-
-                # BSDF sampling: one direction (from the first group), the
-                # weight per group with the same random numbers.
+                wo_em = si.to_local(ds_em.d)
+                inv_pdf_em = dr.select(ds_em.pdf > 0.0, dr.rcp(ds_em.pdf), 0.0)
                 s1 = sampler.next_1d(active_next)
                 s2 = sampler.next_2d(active_next)
                 thr = list(thr)
-                bs0 = None
+                bs0 = mis_em = None
                 for g in range(n_groups):
                     si.wavelengths = wls[g]
-                    bs, weight = bsdf.sample(ctx, si, s1, s2, active_next)
-                    thr[g] = dr.select(active_next, thr[g] * weight, 0.0)
+                    if has_delta:  # point/spot lights have no eval_direction: resample (same numbers, same point)
+                        _, em_weight = scene.sample_emitter_direction(si, s_em, False, active_em)
+                    else:
+                        em_weight = scene.eval_emitter_direction(si, ds_em, active_em) * inv_pdf_em
+                    bsdf_val, bsdf_pdf, bs, weight = bsdf.eval_pdf_sample(ctx, si, wo_em, s1, s2, active_next)
                     if bs0 is None:
                         bs0 = bs
+                        mis_em = dr.select(ds_em.delta, 1.0, mis_weight(ds_em.pdf, bsdf_pdf))
+                    rad[g] = rad[g] + dr.select(active_em, thr[g] * mis_em * bsdf_val * em_weight, 0.0)
+                    thr[g] = dr.select(active_next, thr[g] * weight, 0.0)
                 nonzero = mi.Bool(False)
                 for g in range(n_groups):
                     nonzero |= dr.max(thr[g]) > 0.0

@@ -65,13 +65,20 @@ class Built:
 
     ``white_radiance``: (B,) radiance of a perfect white diffuser under the
     scene's light, W/(m^2 sr nm), at the render's canonical scale; None means
-    measure it with ``white_probe`` (origin, target, extra shape dicts).
+    measure it: ``white_probe`` = {"center", "camera", "half_size"} places a
+    perfect white Lambertian square at ``center`` facing ``camera`` (scene
+    units), whose radiance a radiance meter at ``camera`` measures.
+
+    ``xml_sensor``: for XML scenes, the user's sensor element (with the film
+    and sampler placeholders); ``xml`` holds ``<!--cfa:sensor-->`` in its
+    place, so that the white probe can swap in a radiance meter.
     """
 
     meta: dict[str, Any]
     objects: dict[str, Any] | None = None
     sensor: dict[str, Any] | None = None
     xml: str | None = None
+    xml_sensor: str | None = None
     xml_dir: Path | None = None
     pattern_spectrum: np.ndarray | None = None
     white_radiance: np.ndarray | None = None
@@ -133,8 +140,7 @@ def register_scene(scene: Scene) -> Scene:
 
 
 def _load_builtins() -> None:
-    if not _REGISTRY:
-        from . import charts, puppy  # noqa: F401  (they register themselves)
+    from . import charts, puppy  # noqa: F401  (they register themselves on import)
 
 
 def list_scenes() -> list[tuple[str, str]]:

@@ -1,0 +1,42 @@
+"""sRGB previews of spectral renders (for people, not for metrics).
+
+The radiance is converted to CIE 1931 XYZ (spectra.xyz_from_radiance),
+scaled so that the scene's white diffuser (``meta['white_luminance_cd_m2']``)
+has Y = 1, and encoded as display sRGB (IEC 61966-2-1, D65 white, which is
+also our scenes' illuminant, so no adaptation is needed) with
+colour-science; values outside the gamut are clipped.
+"""
+
+from __future__ import annotations
+
+__all__ = ["srgb_preview", "write_preview"]
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from .. import spectra
+from ..values import SpectralImage
+
+
+def srgb_preview(image: SpectralImage, exposure: float = 1.0) -> np.ndarray:
+    """(H, W, 3) display sRGB in 0..1 of ``image``; ``exposure`` multiplies
+    the linear values before encoding (1: white diffuser at 1.0)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        import colour
+
+    xyz = spectra.xyz_from_radiance(image.data, image.wavelengths)
+    white = float(image.meta.get("white_luminance_cd_m2") or 0.0)
+    if not white > 0:
+        white = max(float(np.percentile(xyz[..., 1], 99)), 1e-12)
+    rgb = colour.XYZ_to_sRGB(xyz / white * exposure)
+    return np.clip(rgb, 0.0, 1.0)
+
+
+def write_preview(path, image: SpectralImage, exposure: float = 1.0) -> Path:
+    """Write :func:`srgb_preview` of ``image`` as an 8-bit PNG, atomically."""
+    from ..io.images import write_image
+
+    return write_image(Path(path), srgb_preview(image, exposure))
