@@ -1,0 +1,402 @@
+"""Study configs: TOML files, validated before any work starts.
+
+A config names the scenes, CFAs, demosaicing methods and luminances to run,
+the optics, sensor and image-processing settings, the render quality, the
+normalisation ranges and the outputs.  Every key is checked: an unknown key,
+a wrong type or an impossible value is refused with the key's dotted path and
+the reason, e.g. ``quick.toml: sensor.pixel_pitch_um: must be a positive
+number (got -1)``.  ``configs/quick.toml`` and ``configs/paper.toml`` are
+complete, commented examples; docs/study.md lists every key.
+
+Paths inside a config (custom CFA TOML files, user scene XML files) are
+relative to the config file.
+"""
+
+from __future__ import annotations
+
+__all__ = ["StudyConfig", "SceneSpec", "SweepSpec", "load_config", "parse_config"]
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import CfaMitsubaError
+
+#: Metrics a user scene feeds (the image metrics of DESIGN.md).
+IMAGE_METRICS = ("scielab", "ssim", "mdsi", "haarpsi")
+
+
+@dataclass(frozen=True)
+class SceneSpec:
+    """One scene of a study: a built-in name or a user's Mitsuba XML.
+
+    ``render`` holds the render settings that differ from the scene's
+    defaults (width, height, spp, oversample, seed, ...), passed to the
+    render stage as keywords.
+    """
+
+    name: str
+    file: str | None = None
+    render: dict = field(default_factory=dict)
+    metrics: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """Extra luminances for some metrics of one scene (paper: S-CIELAB and
+    SSIM on PUPPY at 3 ... 400 cd/m^2)."""
+
+    scene: str
+    metrics: tuple[str, ...]
+    luminances: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class StudyConfig:
+    """A validated study (see :func:`load_config`)."""
+
+    name: str
+    description: str
+    path: str | None
+    seed: int
+    scenes: tuple[SceneSpec, ...]
+    cfas: tuple[str, ...]
+    demosaics: tuple[str, ...]
+    luminances: tuple[float, ...]
+    sweeps: tuple[SweepSpec, ...]
+    render: dict
+    optics: dict
+    sensor: dict
+    capture: dict
+    isp: dict
+    mean_match: bool
+    ranges: dict
+    clip_scores: bool
+    output: dict
+    workers: int | None
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+class _Checker:
+    """Collects the config's file name so every error names file and key."""
+
+    def __init__(self, where: str):
+        self.where = where
+
+    def fail(self, key: str, reason: str):
+        raise CfaMitsubaError(f"{self.where}: {key}: {reason}")
+
+    def table(self, data, key: str, allowed: dict) -> dict:
+        if not isinstance(data, dict):
+            self.fail(key, f"must be a table, got {_typename(data)}")
+        for k in data:
+            if k not in allowed:
+                path = f"{key}.{k}" if key else k
+                known = ", ".join(sorted(allowed))
+                self.fail(path, f"unknown key (known here: {known})")
+        return data
+
+    def string(self, value, key: str, choices=None) -> str:
+        if not isinstance(value, str) or not value:
+            self.fail(key, f"must be a non-empty string, got {_typename(value)} {value!r}")
+        if choices is not None and value not in choices:
+            self.fail(key, f"must be one of {', '.join(choices)} (got {value!r})")
+        return value
+
+    def boolean(self, value, key: str) -> bool:
+        if not isinstance(value, bool):
+            self.fail(key, f"must be true or false, got {_typename(value)} {value!r}")
+        return value
+
+    def integer(self, value, key: str, minimum: int | None = None) -> int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            self.fail(key, f"must be an integer, got {_typename(value)} {value!r}")
+        if minimum is not None and value < minimum:
+            self.fail(key, f"must be at least {minimum} (got {value})")
+        return value
+
+    def number(self, value, key: str, *, positive=False, nonneg=False, maximum=None) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            self.fail(key, f"must be a finite number, got {_typename(value)} {value!r}")
+        if positive and not value > 0:
+            self.fail(key, f"must be a positive number (got {value})")
+        if nonneg and value < 0:
+            self.fail(key, f"must not be negative (got {value})")
+        if maximum is not None and value > maximum:
+            self.fail(key, f"must be at most {maximum} (got {value})")
+        return float(value)
+
+    def string_list(self, value, key: str, *, allow_empty=False) -> tuple[str, ...]:
+        if not isinstance(value, list):
+            self.fail(key, f"must be a list of strings, got {_typename(value)}")
+        if not value and not allow_empty:
+            self.fail(key, "must not be empty")
+        out = []
+        for i, v in enumerate(value):
+            out.append(self.string(v, f"{key}[{i}]"))
+        if len(set(out)) != len(out):
+            dup = next(v for v in out if out.count(v) > 1)
+            self.fail(key, f"lists {dup!r} twice")
+        return tuple(out)
+
+    def number_list(self, value, key: str) -> tuple[float, ...]:
+        if not isinstance(value, list) or not value:
+            self.fail(key, f"must be a non-empty list of numbers, got {_typename(value)}")
+        out = tuple(self.number(v, f"{key}[{i}]", positive=True) for i, v in enumerate(value))
+        if len(set(out)) != len(out):
+            self.fail(key, "lists a value twice")
+        return out
+
+
+def _typename(v) -> str:
+    return {bool: "boolean", int: "integer", float: "number", str: "string", list: "list",
+            dict: "table"}.get(type(v), type(v).__name__)
+
+
+# Render settings a config may override per scene, with their checks.
+_RENDER_KEYS = {
+    "width": ("integer", 1), "height": ("integer", 1), "spp": ("integer", 1),
+    "oversample": ("integer", 1), "seed": ("integer", 0), "fov": ("number", None), "max_depth": ("integer", 1),
+}
+
+
+def _render_overrides(ck: _Checker, data, key: str) -> dict:
+    ck.table(data, key, _RENDER_KEYS)
+    out = {}
+    for k, v in data.items():
+        kind, lo = _RENDER_KEYS[k]
+        if kind == "integer":
+            out[k] = ck.integer(v, f"{key}.{k}", lo)
+        else:
+            out[k] = ck.number(v, f"{key}.{k}", positive=True, maximum=179.0)
+    return out
+
+
+def _dataclass_table(ck: _Checker, data, key: str, cls, extra: dict) -> dict:
+    """Check a table against a params dataclass's fields (type by default
+    value) plus ``extra`` {name: checker}; the dataclass's own validation
+    then runs on the whole set so impossible combinations are caught too."""
+    names = {f.name: f for f in dataclasses.fields(cls)}
+    allowed = {**names, **extra}
+    ck.table(data, key, allowed)
+    params, rest = {}, {}
+    for k, v in data.items():
+        path = f"{key}.{k}"
+        if k in extra:
+            rest[k] = extra[k](v, path)
+            continue
+        default = names[k].default
+        if isinstance(default, bool):
+            params[k] = ck.boolean(v, path)
+        elif isinstance(default, int):
+            params[k] = ck.integer(v, path, 0)
+        elif isinstance(default, float):
+            params[k] = ck.number(v, path)
+        elif isinstance(v, list):  # per-band values
+            params[k] = tuple(ck.number(x, f"{path}[{i}]") for i, x in enumerate(v))
+        else:
+            params[k] = v if isinstance(v, (int, float, str)) and not isinstance(v, bool) else ck.fail(
+                path, f"must be a number, got {_typename(v)}")
+    try:
+        cls(**params)
+    except CfaMitsubaError as exc:
+        ck.fail(key, str(exc))
+    except TypeError as exc:  # a field the dataclass rejects
+        ck.fail(key, str(exc))
+    return {**params, **rest}
+
+
+def parse_config(data: dict, *, where: str = "config", base: Path | None = None) -> StudyConfig:
+    """Validate a config already parsed from TOML; see :func:`load_config`."""
+    from .. import isp, render, sensor
+    from ..optics import OpticsParams
+    from ..sensor.params import NOISE_MODES, SensorParams
+    from .scoring import DEFAULT_RANGES
+
+    ck = _Checker(where)
+    base = base or Path(".")
+    top = {
+        "name": None, "description": None, "seed": None, "scenes": None, "custom_scenes": None, "cfas": None,
+        "demosaics": None, "luminances": None, "sweep": None, "render": None, "optics": None, "sensor": None,
+        "isp": None, "mean_match": None, "normalisation": None, "output": None, "workers": None,
+    }
+    ck.table(data, "", top)
+    for required in ("scenes", "cfas", "demosaics"):
+        if required not in data and not (required == "scenes" and "custom_scenes" in data):
+            ck.fail(required, "missing (required)")
+
+    name = ck.string(data.get("name", Path(where).stem), "name")
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        ck.fail("description", "must be a string")
+    seed = ck.integer(data.get("seed", 0), "seed", 0)
+    workers = data.get("workers")
+    if workers is not None:
+        workers = ck.integer(workers, "workers", 1)
+
+    # --- render ---------------------------------------------------------
+    known_scenes = [n for n, _ in render.list_scenes()]
+    render_cfg = data.get("render", {})
+    render_allowed = {"variant": None, "bands": None, **{s: None for s in known_scenes}}
+    ck.table(render_cfg, "render", render_allowed)
+    render_common = {}
+    if "variant" in render_cfg:
+        render_common["variant"] = ck.string(render_cfg["variant"], "render.variant",
+                                             ("auto", "cuda_ad_spectral", "llvm_ad_spectral", "scalar_spectral"))
+        if render_common["variant"] == "auto":
+            del render_common["variant"]
+    if "bands" in render_cfg:
+        from ..spectra import parse_band_grid
+
+        try:
+            render_common["bands"] = ck.string(render_cfg["bands"], "render.bands")
+            parse_band_grid(render_common["bands"])
+        except CfaMitsubaError as exc:
+            ck.fail("render.bands", str(exc))
+
+    # --- scenes ---------------------------------------------------------
+    scenes = []
+    for i, s in enumerate(ck.string_list(data.get("scenes", []), "scenes", allow_empty=True)):
+        if s not in known_scenes:
+            ck.fail(f"scenes[{i}]", f"unknown scene {s!r} (known: {', '.join(known_scenes)}; "
+                                    "user XML scenes go under [[custom_scenes]])")
+        over = _render_overrides(ck, render_cfg.get(s, {}), f"render.{s}")
+        scenes.append(SceneSpec(s, None, over, tuple(render.get_scene(s).metrics)))
+    custom = data.get("custom_scenes", [])
+    if not isinstance(custom, list):
+        ck.fail("custom_scenes", "must be an array of tables ([[custom_scenes]])")
+    for i, c in enumerate(custom):
+        key = f"custom_scenes[{i}]"
+        ck.table(c, key, {"name": None, "file": None, **_RENDER_KEYS})
+        cname = ck.string(c.get("name"), f"{key}.name")
+        if "file" not in c:
+            ck.fail(f"{key}.file", "missing (the scene's Mitsuba XML file)")
+        f = base / ck.string(c["file"], f"{key}.file")
+        if not f.is_file():
+            ck.fail(f"{key}.file", f"no such file {str(f)!r}")
+        if cname in known_scenes or any(s.name == cname for s in scenes):
+            ck.fail(f"{key}.name", f"{cname!r} is already a scene name")
+        over = _render_overrides(ck, {k: v for k, v in c.items() if k not in ("name", "file")}, key)
+        scenes.append(SceneSpec(cname, str(f.resolve()), over, IMAGE_METRICS))
+    if not scenes:
+        ck.fail("scenes", "no scenes to run")
+
+    # --- CFAs, demosaics, luminances -----------------------------------
+    cfas = []
+    for i, c in enumerate(ck.string_list(data["cfas"], "cfas")):
+        if c.lower().endswith(".toml"):
+            p = base / c
+            try:
+                sensor.load_cfa_toml(p)
+            except CfaMitsubaError as exc:
+                ck.fail(f"cfas[{i}]", str(exc))
+            cfas.append(str(p.resolve()))
+        else:
+            if c not in sensor.list_cfas():
+                ck.fail(f"cfas[{i}]", f"unknown CFA {c!r} (known: {', '.join(sensor.list_cfas())}; or a .toml file)")
+            cfas.append(c)
+    known_demosaics = [n for n, _ in isp.list_demosaics()]
+    demosaics = ck.string_list(data["demosaics"], "demosaics")
+    for i, d in enumerate(demosaics):
+        if d not in known_demosaics:
+            ck.fail(f"demosaics[{i}]", f"unknown demosaicing method {d!r} (known: {', '.join(known_demosaics)})")
+    luminances = ck.number_list(data.get("luminances", [100.0]), "luminances")
+
+    sweeps = []
+    sweep_data = data.get("sweep", [])
+    if not isinstance(sweep_data, list):
+        ck.fail("sweep", "must be an array of tables ([[sweep]])")
+    for i, sw in enumerate(sweep_data):
+        key = f"sweep[{i}]"
+        ck.table(sw, key, {"scene": None, "metrics": None, "luminances": None})
+        sname = ck.string(sw.get("scene"), f"{key}.scene")
+        spec = next((s for s in scenes if s.name == sname), None)
+        if spec is None:
+            ck.fail(f"{key}.scene", f"{sname!r} is not one of this study's scenes")
+        ms = ck.string_list(sw.get("metrics", list(spec.metrics)), f"{key}.metrics")
+        for j, m in enumerate(ms):
+            if m not in spec.metrics:
+                ck.fail(f"{key}.metrics[{j}]", f"scene {sname!r} does not feed metric {m!r} "
+                                               f"(it feeds {', '.join(spec.metrics)})")
+        if "luminances" not in sw:
+            ck.fail(f"{key}.luminances", "missing (required)")
+        sweeps.append(SweepSpec(sname, ms, ck.number_list(sw["luminances"], f"{key}.luminances")))
+
+    # --- optics / sensor / isp -----------------------------------------
+    optics = _dataclass_table(ck, data.get("optics", {}), "optics", OpticsParams, {})
+    capture_extra = {
+        "noise": lambda v, k: ck.string(v, k, NOISE_MODES),
+        "exposure": lambda v, k: v if v == "auto" else ck.number(v, k, positive=True),
+        "reference_luminance_cd_m2": lambda v, k: ck.number(v, k, positive=True),
+    }
+    sensor_all = _dataclass_table(ck, data.get("sensor", {}), "sensor", SensorParams, capture_extra)
+    capture = {k: sensor_all.pop(k) for k in list(sensor_all) if k in capture_extra}
+    isp_cfg = data.get("isp", {})
+    ck.table(isp_cfg, "isp", {"white_balance": None, "white_preserving": None, "pocs_iterations": None})
+    isp_opts = {}
+    if "white_balance" in isp_cfg:
+        isp_opts["white_balance"] = ck.string(isp_cfg["white_balance"], "isp.white_balance",
+                                              ("illuminant", "gray-world"))
+    if "white_preserving" in isp_cfg:
+        isp_opts["white_preserving"] = ck.boolean(isp_cfg["white_preserving"], "isp.white_preserving")
+    if "pocs_iterations" in isp_cfg:
+        isp_opts["pocs_iterations"] = ck.integer(isp_cfg["pocs_iterations"], "isp.pocs_iterations", 1)
+    mean_match = ck.boolean(data.get("mean_match", True), "mean_match")
+
+    # --- normalisation --------------------------------------------------
+    norm = data.get("normalisation", {})
+    ck.table(norm, "normalisation", {"clip": None, "ranges": None})
+    clip = ck.boolean(norm.get("clip", False), "normalisation.clip")
+    ranges_in = norm.get("ranges", {})
+    ck.table(ranges_in, "normalisation.ranges", {m: None for m in DEFAULT_RANGES})
+    ranges = {}
+    for m, v in ranges_in.items():
+        key = f"normalisation.ranges.{m}"
+        if not isinstance(v, list) or len(v) != 2:
+            ck.fail(key, "must be [worst, best], the values that score 0 and 1")
+        worst, best = ck.number(v[0], f"{key}[0]"), ck.number(v[1], f"{key}[1]")
+        if worst == best:
+            ck.fail(key, "worst and best must differ")
+        ranges[m] = (worst, best)
+    # --- output ---------------------------------------------------------
+    out_cfg = data.get("output", {})
+    ck.table(out_cfg, "output", {"figures": None, "thumbnails": None, "report": None})
+    figures = ck.string_list(out_cfg.get("figures", ["png", "svg"]), "output.figures", allow_empty=True)
+    for i, f in enumerate(figures):
+        if f not in ("png", "svg"):
+            ck.fail(f"output.figures[{i}]", f"must be png or svg (got {f!r})")
+    output = {
+        "figures": figures,
+        "thumbnails": ck.boolean(out_cfg.get("thumbnails", True), "output.thumbnails"),
+        "report": ck.boolean(out_cfg.get("report", True), "output.report"),
+    }
+
+    return StudyConfig(
+        name=name, description=description, path=None, seed=seed, scenes=tuple(scenes), cfas=tuple(cfas),
+        demosaics=demosaics, luminances=luminances, sweeps=tuple(sweeps), render=render_common,
+        optics=optics, sensor=sensor_all, capture=capture, isp=isp_opts, mean_match=mean_match,
+        ranges=ranges, clip_scores=clip, output=output, workers=workers,
+    )
+
+
+def load_config(path) -> StudyConfig:
+    """Read and validate a study config (TOML).
+
+    Raises :class:`~cfa_mitsuba.errors.CfaMitsubaError` naming the file and
+    the offending key for any problem, before any work starts.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise CfaMitsubaError(f"no such config file: {str(p)!r}")
+    try:
+        data = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise CfaMitsubaError(f"{p.name}: invalid TOML: {exc}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CfaMitsubaError(f"cannot read config {str(p)!r}: {exc}") from None
+    cfg = parse_config(data, where=p.name, base=p.parent)
+    return dataclasses.replace(cfg, path=str(p.resolve()))

@@ -1,0 +1,187 @@
+"""Where a study's tasks run: local processes (default) or a Dask cluster.
+
+Both are ``concurrent.futures``-style (DESIGN.md, scale-out): the runner
+submits plain functions with plain arguments and collects results as they
+complete.
+
+* :class:`LocalExecutor`: a process pool of ``workers`` processes started
+  with 'spawn' (a forked copy of a process that has initialised Dr.Jit's
+  LLVM back end is not safe), each capped to its share of the cores; with
+  one worker the tasks run in this process (no pool, easiest to debug).
+* :class:`DaskExecutor`: a ``dask.distributed`` client on a scheduler
+  address; plain ``dask worker`` processes started with no options work,
+  because every task caps Dr.Jit's threads itself (:func:`thread_budget`).
+  Failed tasks (a worker killed mid-task) are retried elsewhere.
+
+Dr.Jit ignores OMP_NUM_THREADS, so the cap travels as the environment
+variable ``CFA_MITSUBA_THREADS``, which the render stage applies with
+``drjit.set_thread_count`` before rendering.
+"""
+
+from __future__ import annotations
+
+__all__ = ["LocalExecutor", "DaskExecutor", "make_executor", "thread_budget"]
+
+import concurrent.futures as cf
+import multiprocessing
+import os
+from typing import Callable, Iterable, Iterator
+
+from ..errors import CfaMitsubaError
+
+#: Environment variables that cap the thread pools of numeric libraries in a
+#: worker; set for the pool's lifetime only.
+_THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def _cpu_count() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def thread_budget(workers_on_node: int) -> int:
+    """Threads one of ``workers_on_node`` workers may use on this machine."""
+    return max(1, _cpu_count() // max(1, int(workers_on_node)))
+
+
+def _init_worker(threads: int) -> None:
+    os.environ["CFA_MITSUBA_THREADS"] = str(threads)
+
+
+class LocalExecutor:
+    """Local processes.  ``map_unordered(fn, items)`` yields ``(item, result)``
+    as tasks finish; an exception in a task propagates (with its item)."""
+
+    description: str
+
+    def __init__(self, workers: int | None = None):
+        n = int(workers) if workers else min(2, _cpu_count())
+        if n < 1:
+            raise CfaMitsubaError(f"--workers must be at least 1, got {workers}")
+        self.workers = n
+        self.threads = thread_budget(n)
+        self._pool = None
+        self._saved_env: dict = {}
+        self.description = f"{n} local process{'es' if n > 1 else ''}, {self.threads} thread(s) each"
+
+    def __enter__(self):
+        if self.workers > 1:
+            for var in _THREAD_ENV + ("CFA_MITSUBA_THREADS",):
+                self._saved_env[var] = os.environ.get(var)
+                os.environ[var] = str(self.threads)
+            self._pool = cf.ProcessPoolExecutor(
+                max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
+                initializer=_init_worker, initargs=(self.threads,),
+            )
+        else:
+            self._saved_env["CFA_MITSUBA_THREADS"] = os.environ.get("CFA_MITSUBA_THREADS")
+            os.environ["CFA_MITSUBA_THREADS"] = str(self.threads)
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if self._pool is not None:
+            # On Ctrl-C, do not wait for queued work: what finished is saved.
+            self._pool.shutdown(wait=exc_type is None, cancel_futures=exc_type is not None)
+            self._pool = None
+        for var, val in self._saved_env.items():
+            if val is None:
+                os.environ.pop(var, None)
+            else:
+                os.environ[var] = val
+        return False
+
+    def map_unordered(self, fn: Callable, items: Iterable) -> Iterator:
+        items = list(items)
+        if self._pool is None:
+            for item in items:
+                yield item, fn(item)
+            return
+        futures = {self._pool.submit(fn, item): item for item in items}
+        try:
+            for fut in cf.as_completed(futures):
+                yield futures[fut], fut.result()
+        finally:
+            for fut in futures:
+                fut.cancel()
+
+
+def _dask_call(fn: Callable, item, slots_per_host: dict):
+    """Run ``fn(item)`` on a Dask worker with Dr.Jit capped to this task's
+    share of the node: the node's cores divided by the task slots (worker
+    threads) of every worker on that node, so renders never oversubscribe."""
+    try:
+        from distributed import get_worker
+
+        host = get_worker().address.rsplit(":", 1)[0]
+        slots = slots_per_host.get(host, 1)
+    except (ImportError, ValueError):
+        slots = 1
+    os.environ["CFA_MITSUBA_THREADS"] = str(max(1, _cpu_count() // max(1, slots)))
+    return fn(item)
+
+
+class DaskExecutor:
+    """A Dask cluster reached at ``address`` (``tcp://HOST:PORT``)."""
+
+    description: str
+
+    def __init__(self, address: str, *, retries: int = 3, timeout_s: float = 30.0):
+        try:
+            from distributed import Client
+        except ImportError:  # pragma: no cover - installed by the dask/test extras
+            raise CfaMitsubaError("--scheduler needs dask.distributed: pip install 'cfa-mitsuba[dask]'") from None
+        self.address = address
+        self.retries = retries
+        self.timeout_s = timeout_s
+        self._Client = Client
+        self.client = None
+        self.description = f"Dask cluster at {address}"
+
+    def __enter__(self):
+        try:
+            self.client = self._Client(self.address, timeout=self.timeout_s)
+        except (OSError, TimeoutError) as exc:
+            raise CfaMitsubaError(f"cannot reach the Dask scheduler at {self.address}: {exc}") from None
+        info = self.client.scheduler_info()
+        workers = info.get("workers", {})
+        if not workers:
+            self.client.wait_for_workers(1, timeout=self.timeout_s)
+            workers = self.client.scheduler_info().get("workers", {})
+        # Task slots per host (a worker runs 'nthreads' tasks at once).
+        self._slots: dict[str, int] = {}
+        for addr, w in workers.items():
+            host = addr.rsplit(":", 1)[0]
+            self._slots[host] = self._slots.get(host, 0) + int(w.get("nthreads", 1))
+        n = len(workers)
+        self.description = f"Dask cluster at {self.address} ({n} worker{'s' if n != 1 else ''})"
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if self.client is not None:
+            self.client.close()
+            self.client = None
+        return False
+
+    def map_unordered(self, fn: Callable, items: Iterable) -> Iterator:
+        from distributed import as_completed
+
+        items = list(items)
+        futures = {}
+        for item in items:
+            fut = self.client.submit(_dask_call, fn, item, self._slots, pure=False, retries=self.retries)
+            futures[fut] = item
+        try:
+            for fut in as_completed(futures):
+                yield futures[fut], fut.result()
+        finally:
+            for fut in futures:
+                fut.cancel()
+
+
+def make_executor(*, workers: int | None = None, scheduler: str | None = None):
+    """A Dask executor for a scheduler address, else local processes."""
+    if scheduler:
+        return DaskExecutor(scheduler)
+    return LocalExecutor(workers)

@@ -1,0 +1,345 @@
+"""The study runner: render each scene once, evaluate every (scene,
+luminance, CFA, demosaic), write the tables and the report.
+
+    results/
+      metrics.csv     tidy: scene, cfa, demosaic, luminance, metric, value, unit
+      scores.csv      the scored rows with normalised scores and ranks
+      timing.json     where the time went
+      config.json     the validated config, as run
+      details/        per evaluation: curves and tables (JSON), reduced
+                      S-CIELAB maps (.npy), thumbnails (.png)
+      figures/, report.html   (cfa_mitsuba.report)
+
+Renders go through the shared render cache (outside the results), so a
+second study reuses them.  Each finished evaluation task is saved at once
+under ``results/.work/`` (atomically), so a study that was interrupted
+(Ctrl-C, a killed process or worker) redoes only the missing tasks when run
+again and ends with the same ``metrics.csv`` as an uninterrupted run.
+"""
+
+from __future__ import annotations
+
+__all__ = ["StudyResult", "run_study", "plan_study", "evaluate_renders", "write_tables"]
+
+import hashlib
+import json
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .. import __version__
+from ..errors import CfaMitsubaError
+from ..io import atomic_output, check_writable_dir
+from .config import StudyConfig
+from .tasks import evaluate_task, render_task
+
+#: Metrics that enter the scores (the paper's eight); other rows in
+#: metrics.csv (delta-l, delta-e76, scielab-interior) are reported only.
+SCORED_METRICS = ("delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi")
+
+
+@dataclass
+class StudyResult:
+    """What a finished study produced (the tables are pandas DataFrames)."""
+
+    out_dir: Path
+    metrics: object
+    scores: object
+    timing: dict = field(default_factory=dict)
+    tasks_total: int = 0
+    tasks_reused: int = 0
+
+
+def _source(scene, render_common: dict) -> dict:
+    settings = {**render_common, **scene.render}
+    src = {"kind": "cache", "scene": scene.name, "settings": settings}
+    if scene.file:
+        src["file"] = scene.file
+    return src
+
+
+def _cfa_label(cfa: str) -> str:
+    if cfa.lower().endswith(".toml"):
+        from ..sensor import load_cfa_toml
+
+        return load_cfa_toml(cfa).name
+    return cfa
+
+
+def plan_study(config: StudyConfig, details_dir: str | None) -> tuple[list[dict], list[dict]]:
+    """The render sources and the evaluation tasks of a study, in a fixed order."""
+    render_common = dict(config.render)
+    sources = [_source(s, render_common) for s in config.scenes]
+    labels = [_cfa_label(c) for c in config.cfas]
+    if len(set(labels)) != len(labels):
+        dup = next(lab for lab in labels if labels.count(lab) > 1)
+        raise CfaMitsubaError(f"two CFAs of this study are both named {dup!r}")
+    tasks = []
+    for scene, src in zip(config.scenes, sources):
+        # luminance -> metrics evaluated there (the base set, plus sweeps)
+        plan: dict[float, list[str]] = {}
+        for lum in config.luminances:
+            plan[lum] = list(scene.metrics)
+        for sw in config.sweeps:
+            if sw.scene != scene.name:
+                continue
+            for lum in sw.luminances:
+                have = plan.setdefault(lum, [])
+                have.extend(m for m in sw.metrics if m not in have)
+        for lum in sorted(plan):
+            metrics = [m for m in scene.metrics if m in plan[lum]]
+            for cfa, label in zip(config.cfas, labels):
+                tasks.append({
+                    "source": src, "scene": scene.name, "luminance": float(lum), "cfa": cfa, "cfa_label": label,
+                    "demosaics": list(config.demosaics), "metrics": metrics, "optics": dict(config.optics),
+                    "sensor": dict(config.sensor), "capture": dict(config.capture), "isp": dict(config.isp),
+                    "mean_match": config.mean_match, "seed": config.seed, "details_dir": details_dir,
+                })
+    return sources, tasks
+
+
+def _task_id(task: dict) -> str:
+    ident = {k: v for k, v in task.items() if k != "details_dir"}
+    ident["code"] = __version__
+    text = json.dumps(ident, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def _progress(total: int, desc: str, enabled: bool):
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit="task", file=sys.stderr, disable=not enabled, dynamic_ncols=True,
+                smoothing=0.1)
+
+
+def _order_rows(rows: list[dict], config_order: dict):
+    import pandas as pd
+
+    df = pd.DataFrame(rows, columns=["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit"])
+    if df.empty:
+        return df
+    for col in ("scene", "cfa", "demosaic", "metric"):
+        order = config_order.get(col)
+        if order:
+            extra = [v for v in df[col].unique() if v not in order]
+            df[col] = pd.Categorical(df[col], categories=list(order) + sorted(extra), ordered=True)
+    df = df.sort_values(["scene", "luminance", "cfa", "demosaic", "metric"], kind="stable")
+    for col in ("scene", "cfa", "demosaic", "metric"):
+        df[col] = df[col].astype(str)
+    return df.reset_index(drop=True)
+
+
+def _scored_rows(metrics, base_luminances, builtin_scenes):
+    """The rows that enter the scores: the eight metrics at the base
+    luminances, each from one scene (the built-in scene that feeds it, else
+    the first other scene)."""
+    df = metrics[metrics["metric"].isin(SCORED_METRICS) & metrics["luminance"].isin(base_luminances)]
+    keep = []
+    for name, group in df.groupby("metric", sort=False):
+        scenes = list(dict.fromkeys(group["scene"]))
+        pick = next((s for s in scenes if s in builtin_scenes), scenes[0])
+        keep.append(group[group["scene"] == pick])
+    import pandas as pd
+
+    return pd.concat(keep).reset_index(drop=True) if keep else df
+
+
+def write_tables(out_dir: Path, metrics, *, ranges: dict, clip: bool, base_luminances, builtin_scenes):
+    """Write metrics.csv and scores.csv atomically; returns the scores."""
+    from .scoring import score
+
+    with atomic_output(out_dir / "metrics.csv") as tmp:
+        metrics.to_csv(tmp, index=False, float_format="%.10g")
+    scored = _scored_rows(metrics, base_luminances, builtin_scenes)
+    scores = score(scored, ranges, clip=clip) if len(scored) else scored
+    with atomic_output(out_dir / "scores.csv") as tmp:
+        scores.to_csv(tmp, index=False, float_format="%.10g")
+    return scores
+
+
+def _study_ranges(config: StudyConfig, render_info: dict) -> dict:
+    """Score ranges: the paper's (scoring.default_ranges) with the MSP range
+    for this study's chirp sampling and pixel pitch, then the config's."""
+    from .scoring import default_ranges
+
+    pitch = float(config.sensor.get("pixel_pitch_um", 2.2))
+    kwargs = {"pixel_pitch_um": pitch}
+    chirp = render_info.get("chirp")
+    if chirp and chirp.get("width") and chirp.get("fov_deg"):
+        k = int(chirp.get("oversample") or 1)
+        kwargs["chirp_samples_per_degree"] = float(chirp["width"]) / k / float(chirp["fov_deg"])
+    ranges = dict(default_ranges(**kwargs))
+    ranges.update(config.ranges)
+    return ranges
+
+
+def _run_tasks(executor, fn, items, desc, progress, on_result):
+    bar = _progress(len(items), desc, progress)
+    try:
+        for item, result in executor.map_unordered(fn, items):
+            on_result(item, result)
+            bar.update(1)
+    finally:
+        bar.close()
+
+
+def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, scheduler: str | None = None,
+              progress: bool = True, report: bool | None = None, log=None) -> StudyResult:
+    """Run a study end to end (see the module docstring for the outputs).
+
+    ``workers``: local processes (default: the config's, else 2);
+    ``scheduler``: a Dask scheduler address instead; ``report``: build the
+    HTML report (default: the config's ``output.report``).
+    """
+    from .executors import make_executor
+
+    log = log or (lambda msg: print(msg, file=sys.stderr))
+    out = check_writable_dir(out_dir)
+    work = out / ".work"
+    work.mkdir(exist_ok=True)
+    details = out / "details"
+    with atomic_output(out / "config.json") as tmp:
+        tmp.write_text(json.dumps(config.to_dict(), indent=1, default=str))
+
+    sources, tasks = plan_study(config, str(details))
+    timing: dict = {"phases": {}, "tasks": {"optics_s": 0.0, "capture_s": 0.0, "process_s": 0.0, "metrics_s": 0.0}}
+    t_start = time.perf_counter()
+
+    done: dict[str, dict] = {}
+    for task in tasks:
+        tid = _task_id(task)
+        f = work / f"{tid}.json"
+        if f.exists():
+            try:
+                done[tid] = json.loads(f.read_text())
+            except ValueError:  # pragma: no cover - atomic writes make this unlikely
+                f.unlink()
+    todo = [t for t in tasks if _task_id(t) not in done]
+    reused = len(tasks) - len(todo)
+
+    executor = make_executor(workers=workers or config.workers, scheduler=scheduler)
+    render_info: dict = {}
+    with executor:
+        log(f"study {config.name!r}: {len(config.scenes)} scene(s), {len(config.cfas)} CFA(s), "
+            f"{len(config.demosaics)} demosaic(s); {len(tasks)} evaluation task(s)"
+            + (f", {reused} already done" if reused else "") + f"; running on {executor.description}")
+        t = time.perf_counter()
+
+        def got_render(src, summary):
+            render_info[src["scene"]] = summary
+
+        need_render = sources if todo else []
+        _run_tasks(executor, render_task, need_render, "render", progress, got_render)
+        timing["phases"]["render_s"] = time.perf_counter() - t
+        timing["renders"] = render_info
+        if todo:
+            n_new = sum(1 for s in render_info.values() if not s["reused"])
+            log(f"renders: {len(render_info) - n_new} reused from the cache, {n_new} rendered "
+                f"({sum(s['render_time_s'] for s in render_info.values() if not s['reused']):.1f} s of rendering)")
+
+        t = time.perf_counter()
+
+        def got_eval(task, result):
+            tid = _task_id(task)
+            with atomic_output(work / f"{tid}.json") as tmp:
+                tmp.write_text(json.dumps(result))
+            done[tid] = result
+            for k, v in result["timing"].items():
+                timing["tasks"][k] = timing["tasks"].get(k, 0.0) + v
+
+        _run_tasks(executor, evaluate_task, todo, "evaluate", progress, got_eval)
+        timing["phases"]["evaluate_s"] = time.perf_counter() - t
+
+    rows = [r for task in tasks for r in done[_task_id(task)]["rows"]]
+    order = {
+        "scene": [s.name for s in config.scenes], "cfa": [_cfa_label(c) for c in config.cfas],
+        "demosaic": list(config.demosaics), "metric": list(SCORED_METRICS),
+    }
+    metrics = _order_rows(rows, order)
+    if not render_info:  # everything was reused: the chirp's geometry for the MSP range
+        render_info = {s["scene"]: render_task(s) for s in sources if s["scene"] == "chirp"}
+    ranges = _study_ranges(config, render_info)
+    builtin = {s.name for s in config.scenes if s.file is None}
+    scores = write_tables(out, metrics, ranges=ranges, clip=config.clip_scores,
+                          base_luminances=config.luminances, builtin_scenes=builtin)
+    with atomic_output(out / "ranges.json") as tmp:
+        tmp.write_text(json.dumps({k: _range_pair(v) for k, v in ranges.items()}, indent=1))
+
+    if report if report is not None else config.output.get("report", True):
+        t = time.perf_counter()
+        from ..report import build_report
+
+        build_report(out, formats=config.output.get("figures", ("png", "svg")),
+                     thumbnails=config.output.get("thumbnails", True))
+        timing["phases"]["report_s"] = time.perf_counter() - t
+    timing["phases"]["total_s"] = time.perf_counter() - t_start
+    with atomic_output(out / "timing.json") as tmp:
+        tmp.write_text(json.dumps(timing, indent=1))
+    log(_timing_text(timing, len(tasks), reused))
+    return StudyResult(out, metrics, scores, timing, len(tasks), reused)
+
+
+def _range_pair(r) -> list[float]:
+    """[worst, best] of a ScoreRange or a (worst, best) pair."""
+    return [float(r.worst), float(r.best)] if hasattr(r, "worst") else [float(r[0]), float(r[1])]
+
+
+def _timing_text(timing: dict, n_tasks: int, reused: int) -> str:
+    p, t = timing["phases"], timing["tasks"]
+    parts = [f"render {p.get('render_s', 0):.1f} s", f"evaluate {p.get('evaluate_s', 0):.1f} s"]
+    if "report_s" in p:
+        parts.append(f"report {p['report_s']:.1f} s")
+    inner = ", ".join(f"{k[:-2]} {v:.1f} s" for k, v in t.items())
+    return (f"done in {p.get('total_s', 0):.1f} s ({'; '.join(parts)}); {n_tasks - reused} task(s) run, "
+            f"{reused} reused; worker time: {inner}")
+
+
+def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,), seed: int = 0,
+                     workers: int | None = None, progress: bool = True, log=None):
+    """``cfa-mitsuba evaluate``: every spectral EXR in ``renders_dir`` (as
+    written by ``cfa-mitsuba render``) through the given CFAs and demosaics,
+    with the default optics, sensor and processing.  Each EXR feeds the
+    metrics its sidecar declares (a bare JCGT EXR: the image metrics).
+    ``luminances`` None keeps each render's own luminance.  Writes
+    ``metrics.csv``; returns the table.
+    """
+    from .. import io
+    from .config import IMAGE_METRICS
+    from .executors import make_executor
+
+    log = log or (lambda msg: print(msg, file=sys.stderr))
+    rdir = Path(renders_dir)
+    if not rdir.is_dir():
+        raise CfaMitsubaError(f"--renders: no such directory {str(rdir)!r}")
+    exrs = sorted(rdir.glob("*.exr"))
+    if not exrs:
+        raise CfaMitsubaError(f"--renders: no .exr files in {str(rdir)!r}")
+    out = check_writable_dir(out_dir)
+    tasks = []
+    for exr in exrs:
+        img = io.read_spectral_exr(exr)
+        meta = img.meta
+        scene = str(meta.get("scene") or exr.stem)
+        metrics = list(meta.get("metrics") or IMAGE_METRICS)
+        for lum in luminances:
+            level = float(lum) if lum is not None else float(meta.get("luminance_cd_m2") or 100.0)
+            for cfa in cfas:
+                tasks.append({
+                    "source": {"kind": "exr", "path": str(exr.resolve())}, "scene": scene, "luminance": level,
+                    "cfa": cfa, "cfa_label": _cfa_label(cfa), "demosaics": list(demosaics), "metrics": metrics,
+                    "optics": {}, "sensor": {}, "capture": {}, "isp": {}, "mean_match": True, "seed": seed,
+                    "details_dir": None,
+                })
+    rows = []
+    with make_executor(workers=workers) as executor:
+        log(f"evaluate: {len(exrs)} render(s) x {len(cfas)} CFA(s) x {len(demosaics)} demosaic(s) "
+            f"on {executor.description}")
+        _run_tasks(executor, evaluate_task, tasks, "evaluate", progress,
+                   lambda task, result: rows.extend(result["rows"]))
+    order = {"scene": [], "cfa": [_cfa_label(c) for c in cfas], "demosaic": list(demosaics),
+             "metric": list(SCORED_METRICS)}
+    metrics = _order_rows(rows, order)
+    with atomic_output(out / "metrics.csv") as tmp:
+        metrics.to_csv(tmp, index=False, float_format="%.10g")
+    return metrics
