@@ -116,7 +116,9 @@ def write_spectral_exr(path, image: SpectralImage, *, preview: bool = True) -> P
     """
     p = Path(path)
     data = np.asarray(image.data)
-    wl = spectra.validate_wavelengths(image.wavelengths)
+    wl = np.asarray(image.wavelengths, dtype=np.float64).reshape(-1)
+    if wl.size < 1 or not np.all(np.isfinite(wl)) or np.any(wl <= 0) or np.any(np.diff(wl) <= 0):
+        raise CfaMitsubaError("spectral image wavelengths must be positive and strictly ascending")
     if data.ndim != 3 or data.shape[2] != wl.size:
         raise CfaMitsubaError(f"spectral image of shape {data.shape} does not match its {wl.size} wavelengths")
     bad = int(data.size - np.count_nonzero(np.isfinite(data)))
@@ -135,7 +137,8 @@ def write_spectral_exr(path, image: SpectralImage, *, preview: bool = True) -> P
         _META_ATTRIBUTE: json.dumps(meta, default=json_default),
     }
     channels = {spectral_channel_name(w): np.ascontiguousarray(data[..., b], dtype=np.float32) for b, w in enumerate(wl)}
-    if preview:
+    if preview and wl.size >= 2 and wl[0] - 0.5 * (wl[1] - wl[0]) >= 360 and wl[-1] + 0.5 * (wl[-1] - wl[-2]) <= 830:
+        # (the CIE 1931 functions are defined on 360..830 nm only)
         rgb = _preview_rgb(data, wl, meta)
         for i, c in enumerate("RGB"):
             channels[c] = np.ascontiguousarray(rgb[..., i], dtype=np.float32)
