@@ -1,1 +1,20 @@
-"""report/: plots, tables and the HTML report."""
+"""report/: the study's report, figures and tables (Bae 2020, Tables 1-3 and
+Figs 6-17, re-created for a run).
+
+``build_report(results_dir)`` reads what a study wrote (metrics.csv,
+scores.csv, ranges.json, timing.json, config.json, details/) and writes
+
+    results_dir/report.html   one self-contained page (figures embedded)
+    results_dir/figures/      every figure as PNG and SVG
+
+The modules: :mod:`.results` (reading the directory), :mod:`.style`
+(colours, labels), :mod:`.figures_scores` (radar, ranks, luminance sweep),
+:mod:`.figures_detail` (MTF, moire, patches, S-CIELAB maps, gray bar,
+thumbnails), :mod:`.tables` (Tables 1-3), :mod:`.page` (the HTML) and
+:mod:`.build`.
+"""
+
+from .build import FIGURE_FORMATS, build_report  # noqa: F401
+from .results import Results, load_results  # noqa: F401
+
+__all__ = ["build_report", "load_results", "Results", "FIGURE_FORMATS"]

@@ -1,0 +1,268 @@
+"""Build the report of a results directory: figures, tables, report.html."""
+
+from __future__ import annotations
+
+__all__ = ["build_report", "FIGURE_FORMATS"]
+
+import os
+import sys
+import time
+import warnings
+from pathlib import Path
+
+from ..errors import CfaMitsubaError
+from .figure import RC, Absent, ReportFigure, figure_bytes
+from .results import Results, load_results
+
+#: Figure file formats the report can write (matplotlib's writers).
+FIGURE_FORMATS = ("png", "svg", "pdf")
+_MIME = {"png": "image/png", "svg": "image/svg+xml", "jpeg": "image/jpeg"}
+#: An image sheet whose PNG is larger than this is embedded as JPEG (quality
+#: 90, no chroma subsampling); the PNG in figures/ stays lossless.
+_MAX_EMBED_PNG = 900_000
+
+
+def _figure_functions(res: Results, thumbnails: bool):
+    from . import figures_detail as fd
+    from . import figures_scores as fs
+
+    yield fs.radar_per_demosaic
+    yield fs.radar_per_cfa
+    yield fs.rank_chart
+    yield fd.patch_ab
+    yield fd.patch_xy
+    yield fd.scielab_maps
+    yield fd.mtf_curves
+    yield fd.moire_curves
+    yield fd.gray_bar_profiles
+    yield fs.luminance_sweep
+    if thumbnails and res.primary_luminance is not None:
+        for scene in res.scenes:
+            def sheet(r, scene=scene):
+                return fd.thumbnail_sheet(r, scene, r.primary_luminance)
+            sheet.__name__ = f"thumbnail_sheet[{scene}]"
+            yield sheet
+
+
+def _draw(res: Results, thumbnails: bool, log) -> tuple[list, list]:
+    figures, absents = [], []
+    for fn in _figure_functions(res, thumbnails):
+        t = time.perf_counter()
+        try:
+            out = fn(res)
+        except Exception as exc:  # a bug must not lose a finished study's report
+            name = getattr(fn, "__name__", "figure")
+            msg = f"{name} failed: {type(exc).__name__}: {exc}"
+            warnings.warn(f"cfa-mitsuba report: {msg}", RuntimeWarning, stacklevel=2)
+            absents.append(Absent(_section_of(name), name, f"could not be drawn ({msg}); this is a bug, "
+                                  "please report it with the results directory"))
+            continue
+        for item in out if isinstance(out, list) else [out]:
+            (figures if isinstance(item, ReportFigure) else absents).append(item)
+        log(f"  {getattr(fn, '__name__', 'figure')}: {time.perf_counter() - t:.2f} s")
+    if not thumbnails:
+        absents.append(Absent("outputs", "Camera outputs", "thumbnails are turned off (output.thumbnails = false)"))
+    return figures, absents
+
+
+def _section_of(name: str) -> str:
+    for key, sec in (("radar", "scores"), ("rank", "scores"), ("patch", "colour"), ("scielab", "scielab"),
+                     ("mtf", "mtf"), ("moire", "moire"), ("gray", "achromatic"), ("sweep", "sweep"),
+                     ("thumb", "outputs")):
+        if key in name:
+            return sec
+    return "scores"
+
+
+def _encode(fig: ReportFigure, formats) -> tuple[dict, tuple[bytes, str]]:
+    """The figure's files {fmt: bytes} and (bytes, mime) embedded in the page.
+
+    A matplotlib figure is written in each format and embedded as SVG when
+    one was made (sharp at any zoom), else PNG; an image sheet is PNG only,
+    embedded as JPEG when its PNG is large (photographic noise does not
+    compress)."""
+    if fig.image is not None:
+        png = _png_of(fig.image)
+        files = {"png": png} if formats else {}
+        if len(png) > _MAX_EMBED_PNG:
+            return files, (_jpeg(fig.image), _MIME["jpeg"])
+        return files, (png, _MIME["png"])
+    files = {fmt: figure_bytes(fig.figure, fmt) for fmt in formats}
+    if not fig.raster and "svg" in files:
+        return files, (files["svg"], _MIME["svg"])
+    png = files.get("png") or figure_bytes(fig.figure, "png")
+    return files, (png, _MIME["png"])
+
+
+def _png_of(image) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    image.save(buf, format="PNG", compress_level=6)
+    return buf.getvalue()
+
+
+def _jpeg(image) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    image.convert("RGB").save(buf, format="JPEG", quality=90, subsampling=0, optimize=True)
+    return buf.getvalue()
+
+
+def _write(path: Path, data) -> None:
+    from ..io import atomic_output
+
+    with atomic_output(path) as tmp:
+        if isinstance(data, bytes):
+            tmp.write_bytes(data)
+        else:
+            tmp.write_text(data, encoding="utf-8")
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(path, 0o666 & ~mask)  # readable like any other file, not mkstemp's 0600
+
+
+def _facts(res: Results) -> dict:
+    facts: dict = {}
+    s = res.scores
+    lum = res.primary_luminance
+    if s is not None and lum is not None and len(s):
+        sl = s[s["luminance"] == lum]
+        per = sl.drop_duplicates(["cfa", "demosaic"])
+        if "total_score" in per.columns and len(per):
+            tot = per.drop_duplicates("cfa").set_index("cfa")["total_score"].astype(float)
+            best = tot.idxmax()
+            facts["best_total"] = (best, float(tot[best]))
+        if len(res.demosaics) > 1:
+            bpd = {}
+            for d in res.demosaics:
+                g = per[per["demosaic"] == d]
+                if len(g):
+                    r = g.loc[g["mean_score"].astype(float).idxmax()]
+                    bpd[d] = (str(r["cfa"]), float(r["mean_score"]))
+            facts["best_per_demosaic"] = bpd
+        if "out_of_range" in s.columns:
+            lines = []
+            from .style import fmt_value, metric_info
+
+            for m, g in s[s["out_of_range"]].groupby("metric", sort=False):
+                worst, best = float(g["worst"].iloc[0]), float(g["best"].iloc[0])
+                info = metric_info(m)
+                beyond_best = ((g["raw_score"] > 1.0) if "raw_score" in g.columns else g["value"] == g["value"])
+                n_b = int(beyond_best.sum())
+                n_w = len(g) - n_b
+                side = []
+                if n_b:
+                    side.append(f"{n_b} beyond the best end")
+                if n_w:
+                    side.append(f"{n_w} beyond the worst end")
+                note = ""
+                if m == "moire":
+                    n_lb = sum(1 for r in g.itertuples(index=False)
+                               if (res.metric_detail("moire", r.scene, r.cfa, r.demosaic, r.luminance) or {})
+                               .get("passed") is False)
+                    if n_lb:
+                        note = (f"; {n_lb} of them found no moiré up to the chirp's top frequency, so their MSP is "
+                                "a lower bound (≥ in Table 2)")
+                lines.append(f"{info.short}: {len(g)} value(s) outside {fmt_value(m, worst)} … "
+                             f"{fmt_value(m, best)} {info.unit} ({', '.join(side)}; measured "
+                             f"{fmt_value(m, g['value'].min())} … {fmt_value(m, g['value'].max())}{note}).")
+            facts["oor_lines"] = lines
+    t = res.timing
+    if isinstance(t, dict):
+        p = t.get("phases") or {}
+        if p:
+            parts = [f"{k[:-2]} {float(v):.1f} s" for k, v in p.items() if k.endswith("_s") and k != "total_s"]
+            total = p.get("total_s")
+            text = (f"{float(total):.1f} s in all" if total is not None else "") + (
+                f" ({', '.join(parts)})" if parts else "")
+            renders = t.get("renders") or {}
+            if renders:
+                reused = sum(1 for r in renders.values() if isinstance(r, dict) and r.get("reused"))
+                text += f"; {len(renders) - reused} scene(s) rendered, {reused} reused from the cache"
+            if t.get("stale"):
+                text += " (from an earlier run: see the note below)"
+            facts["timing"] = text.strip()
+    return facts
+
+
+def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, log=None) -> Path:
+    """Build ``out_dir/report.html`` and ``out_dir/figures/*`` from a study's
+    results directory (see :mod:`cfa_mitsuba.report`).
+
+    Parameters
+    ----------
+    out_dir : a results directory: ``metrics.csv`` at least; ``scores.csv``,
+        ``ranges.json``, ``timing.json``, ``config.json`` and ``details/``
+        are used when present, and the report says what is absent.
+    formats : figure files to write under ``figures/`` ('png', 'svg',
+        'pdf'; empty: none; the page embeds its figures either way).
+    thumbnails : draw the sheets of camera outputs (they are the largest
+        part of the page).
+    log : callable taking one line (default: silent); gets per-figure times.
+
+    Returns
+    -------
+    Path of ``report.html``.
+
+    Raises
+    ------
+    CfaMitsubaError
+        ``out_dir`` is missing or holds no ``metrics.csv``, or a format is unknown.
+    """
+    import matplotlib
+
+    log = log or (lambda msg: None)
+    if isinstance(formats, str):
+        formats = (formats,)
+    formats = tuple(dict.fromkeys(str(f).lower().lstrip(".") for f in (formats or ())))
+    bad = [f for f in formats if f not in FIGURE_FORMATS]
+    if bad:
+        raise CfaMitsubaError(f"unknown figure format(s) {', '.join(map(repr, bad))} "
+                              f"(known: {', '.join(FIGURE_FORMATS)})")
+    t0 = time.perf_counter()
+    res = load_results(out_dir)
+    root = res.root
+    fig_dir = root / "figures"
+    with matplotlib.rc_context(RC):
+        figures, absents = _draw(res, thumbnails, log)
+        embeds = {}
+        files = {}
+        t = time.perf_counter()
+        for f in figures:
+            files[f.key], embeds[f.key] = _encode(f, formats)
+            if f.figure is not None:
+                f.figure.clear()
+        log(f"  encoding: {time.perf_counter() - t:.2f} s")
+    from . import page, tables
+
+    tabs = {
+        "table1": tables.table1(res),
+        "table2": [(L, tables.table2(res, L)) for L in res.base_luminances if tables.table2(res, L)],
+        "table3": [(L, tables.table3(res, L)) for L in res.base_luminances if tables.table3(res, L)],
+        "other": tables.other_table(res),
+        "sweep": tables.sweep_table(res),
+        "ranges": tables.ranges_table(res),
+    }
+    text = page.render_page(res, figures=figures, absents=absents, embeds=embeds, tables=tabs, facts=_facts(res))
+    # figures/: this build's files only (a rebuild must not leave figures of CFAs no longer in the results)
+    if formats:
+        fig_dir.mkdir(exist_ok=True)
+    if fig_dir.is_dir():
+        keep = {f"{k}.{fmt}" for k, by in files.items() for fmt in by}
+        for old in fig_dir.iterdir():
+            if old.is_file() and old.suffix.lstrip(".") in FIGURE_FORMATS and old.name not in keep:
+                old.unlink()
+    for key, by in files.items():
+        for fmt, data in by.items():
+            _write(fig_dir / f"{key}.{fmt}", data)
+    path = root / "report.html"
+    _write(path, text)
+    log(f"report: {len(figures)} figure(s), {len(absents)} absent, {len(text) / 1e6:.1f} MB, "
+        f"{time.perf_counter() - t0:.1f} s")
+    return path
+
+
+def _stderr_log(msg: str) -> None:  # pragma: no cover - used by the CLI's --verbose
+    print(msg, file=sys.stderr)

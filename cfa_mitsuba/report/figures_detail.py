@@ -1,0 +1,515 @@
+"""Figures drawn from the per-evaluation details (``details/``): the curves,
+patch tables and maps behind each metric, camera against the ideal sensor.
+
+- :func:`mtf_curves`: MTF per channel with Nyquist and MTF50 (Figs 6, 11);
+- :func:`moire_curves`: the chirp's block-mean chroma with the threshold
+  and the MSP (Fig 13);
+- :func:`patch_ab`, :func:`patch_xy`: the 24 patches in a*b* and in xy
+  (Figs 8, 9);
+- :func:`scielab_maps`: S-CIELAB dE maps on one colour scale (Fig 10);
+- :func:`gray_bar_profiles`: the gray bar's L* profile and error (Fig 14);
+- :func:`thumbnail_sheet`: every camera output next to the ideal.
+"""
+
+from __future__ import annotations
+
+__all__ = ["mtf_curves", "moire_curves", "patch_ab", "patch_xy", "scielab_maps", "gray_bar_profiles",
+           "thumbnail_sheet"]
+
+import numpy as np
+
+from .figure import Absent, ReportFigure, cfa_legend, grid_shape, legend_rows, panel_grid
+from .results import Results
+from .style import CHANNEL_STYLES, cfa_styles, fmt_value
+
+#: The ideal sensor: a broad grey line under the cameras' (unlike any CFA's line).
+_IDEAL = dict(color="#000000", alpha=0.35, linestyle="-", linewidth=3.2, solid_capstyle="butt")
+
+
+def _ideal_handle(label="ideal sensor"):
+    from matplotlib.lines import Line2D
+
+    return Line2D([], [], **_IDEAL), label
+
+
+def _arr(values) -> np.ndarray:
+    """A JSON list (None for NaN) as a float array."""
+    return np.array([np.nan if v is None else v for v in values], dtype=float)
+
+
+def _pairs(res: Results, metric: str, lum: float):
+    """[(cfa, demosaic, detail record)] of ``metric`` at ``lum`` in study order."""
+    scene = res.scene_for(metric)
+    out = []
+    if scene is None:
+        return scene, out
+    for d in res.demosaics:
+        for c in res.cfas:
+            rec = res.metric_detail(metric, scene, c, d, lum)
+            if rec is not None:
+                out.append((c, d, rec))
+    return scene, out
+
+
+def _no_details(section, title, res, metric, what):
+    scene = res.scene_for(metric)
+    if scene is None:
+        return Absent(section, title, f"no {what} in this study (no scene fed '{metric}')")
+    return Absent(section, title, f"'{metric}' was measured on {scene!r} but its details "
+                  f"(details/{scene}/<cfa>/<demosaic>/L*.json) are missing: rerun the study to rebuild them")
+
+
+# -- MTF (Figs 6, 11) ---------------------------------------------------------------------------
+
+def mtf_curves(res: Results):
+    """MTF of the slanted edge per channel (R, G, B, luminance), one curve per
+    CFA and the ideal sensor dashed, one row per demosaic; the vertical line
+    is the Nyquist frequency and each CFA's marker sits at its MTF50 on the
+    0.5 line (the paper's Fig 6 b and Fig 11)."""
+    title = "Slanted edge: MTF per channel (paper Figs 6, 11)"
+    lum = res.primary_luminance
+    scene, pairs = _pairs(res, "mtf", lum) if lum is not None else (None, [])
+    if not pairs:
+        return _no_details("mtf", title, res, "mtf", "slanted-edge MTF")
+    ideal = res.metric_detail("mtf", scene, None, None, lum)
+    channels = ["R", "G", "B", "lum"]
+    dems = [d for d in res.demosaics if any(p[1] == d for p in pairs)]
+    cst = cfa_styles(res.cfas)
+    n_leg = len({p[0] for p in pairs}) + 2
+    ncol = min(n_leg, 7)
+    fig, axes = panel_grid(len(dems), len(channels), 2.55, 1.85, left=0.95, right=0.15,
+                           top=0.55 + 0.2 * legend_rows(n_leg, ncol), bottom=0.5, wspace=0.12, hspace=0.12,
+                           sharex=True, sharey=True)
+    first = pairs[0][2]
+    nyq_mm = float(first.get("nyquist_cy_mm") or np.nan)
+    nyq_px = float(first.get("nyquist_cy_px") or 0.5)
+    to_mm = nyq_mm / nyq_px if np.isfinite(nyq_mm) else np.nan
+    unit = "cy/mm" if np.isfinite(to_mm) else "cy/px"
+    k = to_mm if np.isfinite(to_mm) else 1.0
+    xmax = 2.0 * nyq_px * k
+    drawn = []
+    for r, d in enumerate(dems):
+        for ci, ch in enumerate(channels):
+            ax = axes[r * len(channels) + ci]
+            if ideal is not None:
+                rec = (ideal.get("records") or {}).get(ch) or {}
+                if rec.get("mtf") is not None:
+                    ax.plot(_arr(rec["freq_cy_px"]) * k, _arr(rec["mtf"]), **_IDEAL, zorder=1.5)
+            for c, dd, det in pairs:
+                if dd != d:
+                    continue
+                rec = (det.get("records") or {}).get(ch) or {}
+                if rec.get("mtf") is None:
+                    continue
+                st = cst[c]
+                ax.plot(_arr(rec["freq_cy_px"]) * k, _arr(rec["mtf"]), color=st["color"],
+                        linestyle=st["linestyle"], linewidth=1.1)
+                m50 = rec.get("mtf50_cy_px")
+                if rec.get("mtf50_found", True) and m50 is not None:
+                    ax.plot([float(m50) * k], [0.5], marker=st["marker"], color=st["color"], markersize=5,
+                            markeredgecolor="white", markeredgewidth=0.5, linestyle="none", zorder=4)
+                if c not in drawn:
+                    drawn.append(c)
+            ax.axvline(nyq_px * k, color="#CC3311", linewidth=1.0, linestyle="-.")
+            ax.axhline(0.5, color="#888888", linewidth=0.7, linestyle=":")
+            ax.set_xlim(0, xmax)
+            ax.set_ylim(-0.02, 1.05)
+            if r == 0:
+                ax.set_title({"lum": "luminance (0.3R+0.6G+0.1B)"}.get(ch, f"{ch} channel"))
+            if r == len(dems) - 1:
+                ax.set_xlabel(f"spatial frequency ({unit} on sensor)")
+            else:
+                ax.tick_params(labelbottom=False)
+            if ci == 0:
+                ax.set_ylabel(f"{d}\nMTF (SFR, 0-1)")
+            else:
+                ax.tick_params(labelleft=False)
+    from matplotlib.lines import Line2D
+
+    nyq = Line2D([], [], color="#CC3311", linewidth=1.0, linestyle="-.")
+    cfa_legend(fig, cst, drawn, extra=[_ideal_handle(), (nyq, f"Nyquist ({nyq_px * k:.1f} {unit})")],
+               ncol=ncol)
+    alias = first.get("percent_alias")
+    cap = (f"Spatial frequency response of the slanted edge ({scene}, {lum:g} cd/m²) for each colour channel "
+           f"of the camera's output and for luminance, against the ideal sensor (broad grey line: same optics and "
+           f"pixel, no mosaic or noise). The dash-dot line is the sensor's Nyquist frequency; each marker on "
+           f"the dotted 0.5 line is that CFA's MTF50 for the channel (the luminance MTF50 is the scored "
+           f"metric, Table 2).")
+    if alias is not None:
+        cap += (" The percent alias (area of the luminance MTF beyond Nyquist over the area below it) is in "
+                "the details JSON.")
+    return ReportFigure("mtf", "mtf", title, cap, fig)
+
+
+# -- moire (Fig 13) -------------------------------------------------------------------------------
+
+def moire_curves(res: Results):
+    """Block-mean chroma C*ab along the chirp's central row against the
+    chirp's local frequency, one panel per demosaic, a line per CFA and the
+    ideal sensor dashed; the horizontal line is the threshold and each
+    marker the CFA's moire starting point (the paper's Fig 13 b)."""
+    title = "Chirp: chroma along the central row and the moiré starting point (paper Fig 13)"
+    lum = res.primary_luminance
+    scene, pairs = _pairs(res, "moire", lum) if lum is not None else (None, [])
+    if not pairs:
+        return _no_details("moire", title, res, "moire", "chirp (moiré)")
+    dems = [d for d in res.demosaics if any(p[1] == d for p in pairs)]
+    cst = cfa_styles(res.cfas)
+    rows, cols = grid_shape(len(dems), 2)
+    n_leg = len({p[0] for p in pairs}) + 2
+    ncol = min(n_leg, 7)
+    fig, axes = panel_grid(rows, cols, 4.9, 2.6, left=0.75, right=0.15, top=0.35 + 0.2 * legend_rows(n_leg, ncol),
+                           bottom=0.5, wspace=0.2, hspace=0.4, n=len(dems), sharex=True, sharey=True, width=6.0)
+    first = pairs[0][2]
+    thr = float(first.get("threshold", 25.0))
+    block = first.get("block")
+    ymax = thr * 1.6
+    for _, _, det in pairs:
+        bm = _arr(det.get("block_mean_test") or [])
+        if bm.size and np.isfinite(bm).any():
+            ymax = max(ymax, float(np.nanmax(bm)) * 1.05)
+    drawn, lower_bounds = [], []
+    for i, (ax, d) in enumerate(zip(axes, dems)):
+        ref_done = False
+        for c, dd, det in pairs:
+            if dd != d:
+                continue
+            f = _arr(det.get("frequency_cy_per_deg") or [])
+            bm = _arr(det.get("block_mean_test") or [])
+            if not f.size or f.size != bm.size:
+                continue
+            order = np.argsort(f)
+            if not ref_done and det.get("block_mean_reference") is not None:
+                br = _arr(det["block_mean_reference"])
+                if br.size == f.size:
+                    ax.plot(f[order], br[order], **_IDEAL, zorder=1.5)
+                    ref_done = True
+            st = cst[c]
+            ax.plot(f[order], bm[order], color=st["color"], linestyle=st["linestyle"], linewidth=1.1)
+            msp = det.get("value")
+            if msp is not None:
+                passed = bool(det.get("passed", True))
+                ax.plot([float(msp)], [thr], marker=st["marker"] if passed else ">", color=st["color"],
+                        markersize=6, markeredgecolor="black" if not passed else "white", markeredgewidth=0.6,
+                        linestyle="none", zorder=5, clip_on=False)
+                if not passed:
+                    lower_bounds.append(f"{c} ({d})")
+            if c not in drawn:
+                drawn.append(c)
+        ax.axhline(thr, color="#CC3311", linewidth=1.0, linestyle="-.")
+        ax.set_ylim(0, ymax)
+        ax.set_title(d)
+        if i + cols >= len(dems):
+            ax.set_xlabel("chirp frequency (cy/deg)")
+        else:
+            ax.tick_params(labelbottom=False)
+        if i % cols == 0:
+            ax.set_ylabel("block-mean chroma C*ab")
+        else:
+            ax.tick_params(labelleft=False)
+    from matplotlib.lines import Line2D
+
+    thr_h = Line2D([], [], color="#CC3311", linewidth=1.0, linestyle="-.")
+    cfa_legend(fig, cst, drawn, extra=[_ideal_handle("ideal sensor"), (thr_h, f"threshold C*ab = {thr:g}")],
+               ncol=ncol)
+    bl = f"{block} × {block} px" if block else "square"
+    cap = (f"Chroma C*ab = √(a*² + b*²) of the camera image of the black-and-white chirp ({scene}, "
+           f"{lum:g} cd/m²), averaged over {bl} blocks centred on the central row, against the chirp's local "
+           f"frequency; the ideal sensor (broad grey line) stays near 0 as the chart has no colour. The MSP, the "
+           f"scored metric, is the first frequency (from low to high) where the block mean passes the "
+           f"threshold; each CFA's marker sits there on the threshold line.")
+    if lower_bounds:
+        cap += (" A ▷ marker means the camera never passed the threshold: its MSP is the chirp's top frequency, "
+                "a lower bound (" + ", ".join(lower_bounds[:8]) + (" …" if len(lower_bounds) > 8 else "") + ").")
+    return ReportFigure("moire", "moire", title, cap, fig)
+
+
+# -- ColorChecker (Figs 8, 9) ---------------------------------------------------------------------
+
+def _patch_colours(res: Results, scene: str, lum: float, det: dict) -> np.ndarray:
+    """sRGB (0-1) of each patch as the ideal sensor sees it, for the markers."""
+    from ..metrics.colour import xyz_to_srgb8
+
+    xyz = np.asarray(det.get("xyz_reference") or [], dtype=float)
+    ideal = res.detail(scene, None, None, lum) or {}
+    white = (ideal.get("extra") or {}).get("white_xyz")
+    if xyz.ndim != 2 or xyz.shape[1] != 3:
+        return np.full((len(det.get("lab_reference") or []), 3), 0.6)
+    if white is None:  # the brightest patch stands in for the white
+        white = xyz[np.argmax(xyz[:, 1])] / 0.9
+    return np.clip(xyz_to_srgb8(xyz, white, quantize=False) / 255.0, 0, 1)
+
+
+def _patch_figure(res: Results, kind: str):
+    is_ab = kind == "ab"
+    paper = "Fig 8" if is_ab else "Fig 9"
+    title = (f"ColorChecker in a*b*: ideal vs camera (paper {paper})" if is_ab
+             else f"ColorChecker chromaticity xy: ideal vs camera (paper {paper})")
+    lum = res.primary_luminance
+    scene, pairs = _pairs(res, "delta-e", lum) if lum is not None else (None, [])
+    key_ref, key_test = ("lab_reference", "lab_test") if is_ab else ("xy_reference", "xy_test")
+    pairs = [p for p in pairs if p[2].get(key_ref) and p[2].get(key_test)]
+    if not pairs:
+        return [_no_details("colour", title, res, "delta-e", "ColorChecker patches")]
+
+    def pts(det, key):
+        a = np.asarray(det[key], dtype=float)
+        return a[:, 1:3] if is_ab else a[:, :2]
+
+    allp = np.concatenate([np.concatenate([pts(det, key_ref), pts(det, key_test)]) for _, _, det in pairs])
+    lo, hi = np.nanmin(allp, axis=0), np.nanmax(allp, axis=0)
+    half = 0.5 * (hi - lo).max() * 1.08
+    mid = 0.5 * (lo + hi)
+    lo, hi = mid - half, mid + half
+    colours = _patch_colours(res, scene, lum, pairs[0][2])
+    cst = cfa_styles(res.cfas)
+    locus = _spectral_locus() if not is_ab else None
+    white_xy = (0.3127, 0.3290) if not is_ab else None  # D65, the scenes' illuminant
+    dems = [d for d in res.demosaics if any(p[1] == d for p in pairs)]
+    return [_patch_panels(res, kind, title, scene, lum, d, [(c, det) for c, dd, det in pairs if dd == d],
+                          (lo, hi), colours, cst, locus, white_xy, pts, key_ref, key_test) for d in dems]
+
+
+def _patch_panels(res, kind, title, scene, lum, shown, sub, lims, colours, cst, locus, white_xy, pts, key_ref,
+                  key_test):
+    from matplotlib.collections import LineCollection
+
+    is_ab = kind == "ab"
+    lo, hi = lims
+    rows, cols = grid_shape(len(sub), 4)
+    fig, axes = panel_grid(rows, cols, 2.45, 2.45, left=0.6, right=0.15, top=0.3, bottom=0.5, wspace=0.15,
+                           hspace=0.4, n=len(sub), sharex=True, sharey=True, width=6.0)
+    for i, (ax, (c, det)) in enumerate(zip(axes, sub)):
+        ref, test = pts(det, key_ref), pts(det, key_test)
+        if locus is not None:
+            ax.plot(locus[:, 0], locus[:, 1], color="#999999", linewidth=0.8)
+        else:
+            ax.axhline(0, color="#bbbbbb", linewidth=0.6)
+            ax.axvline(0, color="#bbbbbb", linewidth=0.6)
+        ax.add_collection(LineCollection(np.stack([ref, test], axis=1), colors="#222222", linewidths=0.9,
+                                         zorder=3))
+        ax.scatter(ref[:, 0], ref[:, 1], s=30, c=colours[:len(ref)], edgecolors="#222222", linewidths=0.5,
+                   zorder=2, marker="o")
+        ax.scatter(test[:, 0], test[:, 1], s=9, c="#000000", marker="o", edgecolors="white", linewidths=0.3,
+                   zorder=4)
+        if white_xy is not None:
+            ax.plot(*white_xy, marker="+", color="#555555", markersize=7, zorder=1)
+        st = cst[c]
+        ax.plot([0.0], [1.06], transform=ax.transAxes, marker=st["marker"], color=st["color"], markersize=7,
+                clip_on=False, linestyle="none")
+        ax.set_title(f"   {c}  (ΔE00 {fmt_value('delta-e', det.get('value'))})", loc="left", x=0.03)
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(lo[1], hi[1])
+        ax.set_aspect("equal", adjustable="box")
+        last_row = i + cols >= len(sub)
+        if last_row:
+            ax.set_xlabel("a*" if is_ab else "x")
+        else:
+            ax.tick_params(labelbottom=False)
+        if i % cols == 0:
+            ax.set_ylabel("b*" if is_ab else "y")
+        else:
+            ax.tick_params(labelleft=False)
+    what = "a*, b* (CIELAB, relative to the scene white)" if is_ab else "CIE 1931 chromaticity x, y"
+    cap = (f"The 24 ColorChecker patches ({scene}, {lum:g} cd/m², demosaic {shown}) in {what}: large circles "
+           f"filled with the patch's colour are the ideal sensor; the small black dot is the camera "
+           f"(mean-matched to the ideal), joined to its ideal by a line whose length is the error (true scale). "
+           f"All panels share one scale; the marker before each title is the CFA's in the other figures.")
+    if not is_ab:
+        cap += " The grey curve is the spectral locus, + the D65 white."
+    return ReportFigure(f"{kind}-{shown}", "colour", title, cap, fig, group=shown)
+
+
+def _spectral_locus():
+    try:
+        from ..spectra import cmfs_xyz
+    except ImportError:  # pragma: no cover
+        return None
+    c = np.asarray(cmfs_xyz(), dtype=float)
+    s = c.sum(axis=1, keepdims=True)
+    ok = s[:, 0] > 1e-9
+    xy = c[ok, :2] / s[ok]
+    return np.concatenate([xy, xy[:1]])
+
+
+def patch_ab(res: Results):
+    """The 24 patches in the a*b* plane, ideal vs camera, one figure per
+    demosaic, one panel per CFA (the paper's Fig 8)."""
+    return _patch_figure(res, "ab")
+
+
+def patch_xy(res: Results):
+    """The 24 patches in CIE xy, ideal vs camera, one figure per demosaic,
+    one panel per CFA (the paper's Fig 9)."""
+    return _patch_figure(res, "xy")
+
+
+# -- S-CIELAB maps (Fig 10) -------------------------------------------------------------------------
+
+def _read_png(path) -> np.ndarray | None:
+    from PIL import Image
+
+    try:
+        with Image.open(path) as im:
+            return np.asarray(im.convert("RGB"))
+    except (OSError, ValueError):
+        return None
+
+
+def scielab_maps(res: Results):
+    """S-CIELAB dE00 maps, rows: CFAs, columns: demosaics, the ideal
+    sensor's image apart, all on one colour scale with a colour bar (the
+    paper's Fig 10)."""
+    from .sheets import colourise, compose_sheet
+
+    title = "S-CIELAB ΔE00 maps (paper Fig 10)"
+    lum = res.primary_luminance
+    scene = res.scene_for("scielab")
+    if scene is None or lum is None:
+        return Absent("scielab", title, "no S-CIELAB in this study (no puppy or custom scene)")
+    maps = {}
+    for d in res.demosaics:
+        for c in res.cfas:
+            a = res.scielab_map(scene, c, d, lum)
+            if a is not None:
+                maps[(c, d)] = a
+    if not maps:
+        return Absent("scielab", title, f"S-CIELAB was measured on {scene!r} but no maps were saved "
+                      f"(details/{scene}/<cfa>/<demosaic>/L{lum:g}.scielab.npy)")
+    allv = np.concatenate([a[np.isfinite(a)].ravel() for a in maps.values()])
+    vmax = float(np.percentile(allv, 99.5)) if allv.size else 1.0
+    vmax = max(vmax, 1e-6)
+    ideal_img = None
+    p = res.thumbnail_path(scene, None, None, lum)
+    if p is not None:
+        ideal_img = _read_png(p)
+    cfas = [c for c in res.cfas if any((c, d) in maps for d in res.demosaics)]
+    dems = [d for d in res.demosaics if any((c, d) in maps for c in cfas)]
+    cells = {k: colourise(a, 0.0, vmax) for k, a in maps.items()}
+    caps = {}
+    for (c, d) in maps:
+        v = res.value(scene, c, d, lum, "scielab")
+        s_ = res.value(scene, c, d, lum, "ssim")
+        caps[(c, d)] = f"ΔE {fmt_value('scielab', v)}" + (f" · SSIM {fmt_value('ssim', s_)}" if s_ is not None
+                                                          else "")
+    if ideal_img is not None and ideal_img.shape[:2] != next(iter(cells.values())).shape[:2]:
+        ideal_img = None
+    img = compose_sheet(cfas, dems, cells, corner=("ideal sensor (sRGB)", ideal_img) if ideal_img is not None
+                        else None, captions=caps,
+                        colorbar=dict(cmap="viridis", vmin=0.0, vmax=vmax, label="S-CIELAB ΔE00"),
+                        scale=_sheet_scale(max(next(iter(cells.values())).shape[:2])))
+    cap = (f"Per-pixel S-CIELAB colour difference (CIEDE2000 after the spatial filters of the eye) between the "
+           f"ideal sensor and each camera ({scene}, {lum:g} cd/m²): rows are CFAs, columns demosaicing methods; "
+           f"the ideal sensor's image is at the top left for orientation. One colour scale for every map (0 to "
+           f"{vmax:.1f} ΔE00, the 99.5th percentile of all maps; brighter = larger error). Under each map: its "
+           f"mean ΔE00 (the scored value) and the SSIM of the same image. Maps are block-averaged to at most "
+           f"240 px.")
+    return ReportFigure("scielab-maps", "scielab", title, cap, None, raster=True, image=img)
+
+
+# -- gray bar (Fig 14) -------------------------------------------------------------------------------
+
+def gray_bar_profiles(res: Results):
+    """The gray bar's L* along the central row, ideal and every camera (top
+    row), and the mean |dL*| of each of its steps (bottom row), one column
+    per demosaic (the paper's Fig 14)."""
+    title = "Gray bar: L* along the central row (paper Fig 14)"
+    lum = res.primary_luminance
+    scene, pairs = _pairs(res, "achromatic", lum) if lum is not None else (None, [])
+    pairs = [p for p in pairs if p[2].get("l_reference") and p[2].get("l_test")]
+    if not pairs:
+        return _no_details("achromatic", title, res, "achromatic", "gray-bar (AR error)")
+    dems = [d for d in res.demosaics if any(p[1] == d for p in pairs)]
+    cst = cfa_styles(res.cfas)
+    n = len(dems)
+    n_leg = len({p[0] for p in pairs}) + 1
+    ncol = min(n_leg, 7)
+    fig, axes = panel_grid(2, n, 2.9, 2.0, left=0.75, right=0.15, top=0.55 + 0.2 * legend_rows(n_leg, ncol),
+                           bottom=0.5, wspace=0.15, hspace=0.75, width=6.0)
+    drawn = []
+    for i, d in enumerate(dems):
+        top, bot = axes[i], axes[n + i]
+        if i:
+            top.sharey(axes[0])
+            bot.sharey(axes[n])
+        ref_done = False
+        for c, dd, det in pairs:
+            if dd != d:
+                continue
+            lr, lt = _arr(det["l_reference"]), _arr(det["l_test"])
+            x = np.arange(lr.size)
+            st = cst[c]
+            top.plot(x, lt, color=st["color"], linestyle=st["linestyle"], linewidth=0.8, alpha=0.9)
+            if not ref_done:
+                top.plot(x, lr, **_IDEAL, zorder=1.5)
+                ref_done = True
+                x0, x1 = (det.get("columns") or [0, lr.size])[:2]
+                for ax in (top,):
+                    ax.axvspan(-0.5, x0 - 0.5, color="#eeeeee", zorder=0)
+                    ax.axvspan(x1 - 0.5, lr.size - 0.5, color="#eeeeee", zorder=0)
+            per = det.get("per_step")
+            if per:
+                p = _arr(per)
+                bot.plot(np.arange(1, p.size + 1), p, color=st["color"], marker=st["marker"],
+                         linestyle=st["linestyle"], linewidth=1.0, markersize=3.5)
+                bot.set_xlabel("gray step (1 = white … 10 = black)")
+                bot.set_xticks(np.arange(1, p.size + 1))
+            else:
+                ad = np.abs(lt - lr)
+                bot.plot(x, ad, color=st["color"], linestyle=st["linestyle"], linewidth=0.8)
+                bot.set_xlabel("column (px)")
+            if c not in drawn:
+                drawn.append(c)
+        top.set_title(d)
+        top.set_xlabel("column along the central row (px)")
+        if i == 0:
+            top.set_ylabel("L* (0-100)")
+            bot.set_ylabel("mean |ΔL*| per step")
+        else:
+            top.tick_params(labelleft=False)
+            bot.tick_params(labelleft=False)
+    bottoms = [ln.get_ydata() for ax in axes[n:] for ln in ax.get_lines()]
+    top_y = max((float(np.nanmax(y)) for y in bottoms if np.size(y) and np.isfinite(y).any()), default=1.0)
+    axes[n].set_ylim(0, top_y * 1.05)
+    cfa_legend(fig, cst, drawn, extra=[_ideal_handle()], ncol=ncol)
+    cap = (f"Top: CIE L* along the central row of the gray bar ({scene}, {lum:g} cd/m²), the ideal sensor "
+           f"as a broad grey line and each camera in its CFA's colour; the shaded ends are left out of the AR error "
+           f"(demosaicing border effects). Bottom: the mean |ΔL*| (camera − ideal) within each of the ten "
+           f"steps; the scored AR error is their pixel-weighted mean over the analysed columns (Table 2).")
+    return ReportFigure("gray-bar", "achromatic", title, cap, fig)
+
+
+# -- thumbnails --------------------------------------------------------------------------------------
+
+def _sheet_scale(side: int) -> int:
+    """Integer enlargement of small images in a sheet (to about 200 px)."""
+    return int(max(1, min(3, 200 // max(1, side))))
+
+
+def thumbnail_sheet(res: Results, scene: str, lum: float):
+    """Every camera output of one scene (rows: CFAs, columns: demosaics) next
+    to the ideal sensor, at the thumbnails' own pixels (no resampling)."""
+    from .sheets import compose_sheet
+
+    title = "Camera outputs"
+    cells = {}
+    for c in res.cfas:
+        for d in res.demosaics:
+            p = res.thumbnail_path(scene, c, d, lum)
+            img = _read_png(p) if p is not None else None
+            if img is not None:
+                cells[(c, d)] = img
+    if not cells:
+        return Absent("outputs", f"{title}: {scene}", f"no thumbnails of {scene!r} at {lum:g} cd/m² under details/")
+    ideal_p = res.thumbnail_path(scene, None, None, lum)
+    ideal = _read_png(ideal_p) if ideal_p is not None else None
+    cfas = [c for c in res.cfas if any((c, d) in cells for d in res.demosaics)]
+    dems = [d for d in res.demosaics if any((c, d) in cells for c in cfas)]
+    side = max(max(a.shape[:2]) for a in cells.values())
+    img = compose_sheet(cfas, dems, cells, corner=("ideal sensor", ideal) if ideal is not None else None,
+                        scale=_sheet_scale(side))
+    cap = (f"sRGB renderings of {scene} at {lum:g} cd/m² as each CFA and demosaicing method produce them (rows: "
+           f"CFAs, columns: demosaicing methods), with the ideal sensor at the top left. Thumbnails are "
+           f"block-averaged to at most 240 px, which hides detail finer than a few pixels"
+           + (f" (shown at {_sheet_scale(side)}× here)" if _sheet_scale(side) > 1 else "") + ".")
+    return ReportFigure(f"outputs-{scene}", "outputs", title, cap, None, raster=True, group=scene, image=img)

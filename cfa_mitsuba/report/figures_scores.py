@@ -1,0 +1,297 @@
+"""Figures of the normalised scores: radar plots (the paper's Fig 16), rank
+charts (Fig 17) and the metrics against luminance (the paper's sweep of
+S-CIELAB and SSIM over 3..400 cd/m^2, s. 3)."""
+
+from __future__ import annotations
+
+__all__ = ["radar_per_cfa", "radar_per_demosaic", "rank_chart", "luminance_sweep"]
+
+import math
+
+import numpy as np
+
+from .figure import Absent, ReportFigure, cfa_legend, grid_shape, legend_rows, panel_grid
+from .results import SCORED_METRICS, Results
+from .style import cfa_styles, demosaic_styles, metric_info
+
+
+def _score_grid(res: Results):
+    """(metrics, {(cfa, demosaic): array of scores in metric order}) at the
+    primary luminance, or None."""
+    s = res.scores
+    if s is None or res.primary_luminance is None:
+        return None
+    s = s[s["luminance"] == res.primary_luminance]
+    metrics = [m for m in SCORED_METRICS if m in set(s["metric"])]
+    metrics += [m for m in dict.fromkeys(s["metric"]) if m not in metrics]
+    grid = {}
+    for (cfa, dem), g in s.groupby(["cfa", "demosaic"], sort=False):
+        by = dict(zip(g["metric"], g["score"].astype(float)))
+        grid[(cfa, dem)] = np.array([by.get(m, np.nan) for m in metrics], dtype=float)
+    return metrics, grid
+
+
+def _overflow(grid) -> tuple[bool, bool]:
+    vals = np.concatenate([v for v in grid.values()]) if grid else np.array([0.0])
+    vals = vals[np.isfinite(vals)]
+    return bool((vals > 1.0).any()), bool((vals < 0.0).any())
+
+
+class _Radar:
+    """A radar (spider) chart drawn on plain axes: polygons for the score
+    levels 0.25 ... 1, a spoke per metric, outward = better.  A score above
+    1 is drawn at 1.1 with a hollow marker, one below 0 at the centre.
+    (Matplotlib's polar axes draw several times slower, which matters at
+    12 CFAs.)"""
+
+    OVER = 1.1
+
+    def __init__(self, ax, metrics, title, label_size=7.5):
+        self.ax = ax
+        n = len(metrics)
+        self.theta = np.pi / 2 - 2 * np.pi * np.arange(n) / n
+        ax.set_aspect("equal")
+        ax.set_axis_off()
+        lim = 1.45
+        ax.set_xlim(-lim, lim)
+        ax.set_ylim(-lim * 1.02, lim * 1.02)
+        ct, st = np.cos(self.theta), np.sin(self.theta)
+        half = np.pi / n
+        for t in (0.25, 0.5, 0.75, 1.0):
+            ax.plot(np.append(t * ct, t * ct[0]), np.append(t * st, t * st[0]),
+                    color="#bbbbbb" if t == 1.0 else "#dddddd", linewidth=0.8 if t == 1.0 else 0.6, zorder=0)
+            ax.text(t * np.cos(self.theta[0] - half), t * np.sin(self.theta[0] - half), f"{t:g}", fontsize=6,
+                    color="#888888", ha="center", va="center", zorder=1)
+        for c, s_, m in zip(ct, st, metrics):
+            ax.plot([0, c], [0, s_], color="#dddddd", linewidth=0.6, zorder=0)
+            ha = "left" if c > 0.15 else ("right" if c < -0.15 else "center")
+            va = "bottom" if s_ > 0.15 else ("top" if s_ < -0.15 else "center")
+            ax.text(1.16 * c, 1.16 * s_, metric_info(m).short, fontsize=label_size, ha=ha, va=va)
+        ax.text(0, lim * 1.02, title, ha="center", va="bottom", fontsize=9.5, fontweight="bold")
+
+    def polygon(self, values, *, fill=False, **style):
+        v = np.asarray(values, dtype=float)
+        over, under = v > 1.0, v < 0.0
+        rho = np.where(over, self.OVER, np.clip(v, 0.0, 1.0))
+        x, y = rho * np.cos(self.theta), rho * np.sin(self.theta)
+        marker = style.pop("marker", None)
+        self.ax.plot(np.append(x, x[0]), np.append(y, y[0]), linewidth=1.2, **style)
+        ok = np.isfinite(v) & ~over & ~under
+        if marker:
+            self.ax.plot(x[ok], y[ok], marker=marker, markersize=3, linestyle="none", color=style.get("color"))
+        if (over | under).any():
+            self.ax.plot(x[over | under], y[over | under], marker=marker or "o", markersize=4.5, linestyle="none",
+                         markerfacecolor="white", markeredgecolor=style.get("color"), markeredgewidth=1.0)
+        if fill:
+            f = np.isfinite(x)
+            self.ax.fill(x[f], y[f], color=style.get("color"), alpha=0.10, linewidth=0)
+
+
+def _clip_note(grid) -> str:
+    above, below = _overflow(grid)
+    if above or below:
+        where = " and ".join(w for w, f in (("just outside the outer polygon (above 1)", above),
+                                            ("at the centre (below 0)", below)) if f)
+        return (f" Scores outside [0, 1] (values beyond their score range, which this study did not clip) are "
+                f"drawn {where} with a hollow marker; Tables 2-3 hold their values.")
+    return ""
+
+
+def _legend_top(fig, handles, labels, ncol, title=None):
+    H = fig.get_figheight()
+    fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 1.0 - 0.05 / H), ncol=ncol,
+               title=title, borderaxespad=0.0, handlelength=2.4, columnspacing=1.2)
+
+
+def radar_per_cfa(res: Results):
+    """Radar of the normalised metrics, one panel per CFA, one polygon per
+    demosaic: how a CFA's strengths move with the demosaicing method (the
+    paper's Fig 16 turned around)."""
+    from matplotlib.lines import Line2D
+
+    title = "Normalised metrics per CFA (radar)"
+    got = _score_grid(res)
+    if got is None:
+        return Absent("scores", title, "no scores (scores.csv is absent and nothing could be scored)")
+    metrics, grid = got
+    if len(metrics) < 3:
+        return Absent("scores", title, f"a radar needs at least three metrics; this study scored "
+                      f"{len(metrics)} ({', '.join(metrics)}): see Tables 2-3")
+    cfas = [c for c in res.cfas if any((c, d) in grid for d in res.demosaics)]
+    dems = [d for d in res.demosaics if any((c, d) in grid for c in cfas)]
+    dst = demosaic_styles(res.demosaics)
+    rows, cols = grid_shape(len(cfas), 4)
+    fig, axes = panel_grid(rows, cols, 2.7, 2.7, left=0.15, right=0.15, top=0.55, bottom=0.1, wspace=0.25,
+                           hspace=0.2, n=len(cfas))
+    for ax, cfa in zip(axes, cfas):
+        radar = _Radar(ax, metrics, cfa)
+        for d in dems:
+            v = grid.get((cfa, d))
+            if v is not None:
+                st = dst[d]
+                radar.polygon(v, fill=len(dems) <= 2, color=st["color"], linestyle=st["linestyle"],
+                              marker=st["marker"])
+    handles = [Line2D([], [], color=dst[d]["color"], linestyle=dst[d]["linestyle"], marker=dst[d]["marker"],
+                      markersize=4) for d in dems]
+    _legend_top(fig, handles, dems, len(dems))
+    cap = (f"Each spoke is one metric's score (eq. 8: 0 = the range's worst end at the centre, 1 = its best; "
+           f"outward is better for every metric), at {res.primary_luminance:g} cd/m². One panel per CFA, one "
+           f"polygon per demosaicing method." + _clip_note(grid))
+    return ReportFigure("radar-cfa", "scores", title, cap, fig)
+
+
+def radar_per_demosaic(res: Results):
+    """Radar of the normalised metrics, one panel per demosaic, one polygon
+    per CFA (the paper's Fig 16)."""
+    title = "Normalised metrics per demosaicing method (radar, paper Fig 16)"
+    got = _score_grid(res)
+    if got is None:
+        return Absent("scores", title, "no scores (scores.csv is absent and nothing could be scored)")
+    metrics, grid = got
+    if len(metrics) < 3:
+        return Absent("scores", title, f"a radar needs at least three metrics; this study scored {len(metrics)}")
+    cfas = [c for c in res.cfas if any((c, d) in grid for d in res.demosaics)]
+    dems = [d for d in res.demosaics if any((c, d) in grid for c in cfas)]
+    cst = cfa_styles(res.cfas)
+    rows, cols = grid_shape(len(dems), 4 if len(cfas) <= 4 else 2)
+    size = 4.4 if len(cfas) > 4 else 3.4
+    ncol = min(len(cfas), 6)
+    top = 0.35 + 0.2 * legend_rows(len(cfas), ncol)
+    fig, axes = panel_grid(rows, cols, size, size, left=0.2, right=0.2, top=top, bottom=0.1, wspace=0.3,
+                           hspace=0.25, n=len(dems), width=6.0)
+    for ax, d in zip(axes, dems):
+        radar = _Radar(ax, metrics, d, label_size=8.5)
+        for cfa in cfas:
+            v = grid.get((cfa, d))
+            if v is not None:
+                st = cst[cfa]
+                radar.polygon(v, fill=len(cfas) <= 3, color=st["color"], linestyle=st["linestyle"],
+                              marker=st["marker"])
+    cfa_legend(fig, cst, cfas, ncol=ncol)
+    cap = (f"One panel per demosaicing method, one polygon per CFA, at {res.primary_luminance:g} cd/m²; "
+           "outward is better on every spoke (0 at the centre, 1 at the outer polygon)." + _clip_note(grid))
+    return ReportFigure("radar-demosaic", "scores", title, cap, fig)
+
+
+def rank_chart(res: Results):
+    """Mean normalised score and rank of each CFA, one panel per demosaic and
+    one for the total (the paper's Fig 17 a-e and Table 3)."""
+    title = "CFA ranks per demosaicing method and in total (paper Fig 17)"
+    s = res.scores
+    if s is None or res.primary_luminance is None or not len(s):
+        return Absent("scores", title, "no scores")
+    s = s[s["luminance"] == res.primary_luminance]
+    per = s.drop_duplicates(["cfa", "demosaic"])
+    dems = [d for d in res.demosaics if d in set(per["demosaic"])]
+    panels = [(d, per[per["demosaic"] == d].set_index("cfa")["mean_score"].astype(float)) for d in dems]
+    if "total_score" in per.columns and len(dems) > 1:
+        tot = per.drop_duplicates("cfa").set_index("cfa")["total_score"].astype(float)
+        panels.append(("total (mean over demosaics)", tot))
+    cst = cfa_styles(res.cfas)
+    n_cfa = max(len(p[1]) for p in panels)
+    cols = min(len(panels), 5)
+    rows = math.ceil(len(panels) / cols)
+    fig, axes = panel_grid(rows, cols, 2.3, 0.2 * n_cfa + 0.25, left=0.15, right=0.1, top=0.3, bottom=0.45,
+                           wspace=0.25, hspace=0.75, n=len(panels))
+    vmax = max(1.0, max(float(p[1].max()) for p in panels))
+    vmin = min(0.0, min(float(p[1].min()) for p in panels))
+    for ax, (label, ser) in zip(axes, panels):
+        ser = ser.sort_values(ascending=False, kind="stable")
+        ranks = ser.rank(ascending=False, method="min").astype(int)
+        y = np.arange(len(ser))
+        ax.barh(y, ser.to_numpy(), color=[cst[c]["color"] for c in ser.index], edgecolor="#333333",
+                linewidth=0.4, height=0.72)
+        for yy, (cfa, v) in zip(y, ser.items()):
+            ax.text(vmin + 0.01 * (vmax - vmin), yy, f"{ranks[cfa]}. {cfa}", va="center", ha="left", fontsize=7.5,
+                    color="white" if _dark(cst[cfa]["color"]) and v > 0.35 * vmax else "black",
+                    clip_on=True)
+            ax.text(v + 0.01 * (vmax - vmin), yy, f"{v:.3f}", va="center", ha="left", fontsize=7)
+        ax.set_axisbelow(True)
+        ax.set_yticks([])
+        ax.set_ylim(len(ser) - 0.5, -0.5)
+        ax.set_xlim(vmin, vmax * 1.18)
+        ax.set_xlabel("mean normalised score")
+        ax.set_title(label)
+        ax.grid(axis="y", visible=False)
+    cap = (f"Bars: the mean of a CFA's normalised metric scores for each demosaicing method (Table 3 rows) "
+           f"and their mean over the methods (Table 3 'Total'), at {res.primary_luminance:g} cd/m²; "
+           "sorted, with the rank in front of the name (1 = best; ties share the lower rank).")
+    if "n_metrics" in per.columns and per["n_metrics"].nunique() > 1:
+        cap += " Not every CFA has the same number of metrics here: compare only those that do (Table 3)."
+    return ReportFigure("ranks", "scores", title, cap, fig)
+
+
+def _dark(hex_colour: str) -> bool:
+    """True when white text reads better than black on this colour (WCAG contrast)."""
+    h = hex_colour.lstrip("#")
+    lin = [(c / 12.92) if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
+           for c in (int(h[i:i + 2], 16) / 255 for i in (0, 2, 4))]
+    y = 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2]
+    return (1.05 / (y + 0.05)) > ((y + 0.05) / 0.05)
+
+
+def luminance_sweep(res: Results):
+    """The metrics measured at several luminances (the paper's sweep of
+    S-CIELAB and SSIM on PUPPY, 3..400 cd/m^2) against luminance on a log
+    axis: one row per metric, one column per demosaic, a line per CFA."""
+    title = "Metrics against scene luminance"
+    m = res.metrics
+    pairs = []
+    for (scene, metric), g in m.groupby(["scene", "metric"], sort=False):
+        if g["luminance"].nunique() > 1 and metric in SCORED_METRICS:
+            pairs.append((scene, metric))
+    if not pairs:
+        return Absent("sweep", title, "no luminance sweep in this study (every metric was measured at one "
+                      "luminance); add a [[sweep]] to the config, e.g. the paper's S-CIELAB and SSIM on puppy "
+                      "at 3, 6, 12, 50, 100, 200, 400 cd/m²")
+    pairs.sort(key=lambda p: (SCORED_METRICS.index(p[1]), p[0]))
+    dems = [d for d in res.demosaics if d in set(m["demosaic"])]
+    cst = cfa_styles(res.cfas)
+    rows, cols = len(pairs), len(dems)
+    ncol = min(len(res.cfas), 7)
+    fig, axes = panel_grid(rows, cols, 2.7, 2.0, left=0.95, right=0.15, top=0.35 + 0.2 * legend_rows(len(res.cfas), ncol),
+                           bottom=0.5, wspace=0.15, hspace=0.35, width=6.0)
+    cfas_drawn = []
+    for r, (scene, metric) in enumerate(pairs):
+        info = metric_info(metric)
+        g = m[(m["scene"] == scene) & (m["metric"] == metric)]
+        lums = sorted(g["luminance"].unique())
+        share = None
+        for c, d in enumerate(dems):
+            ax = axes[r * cols + c]
+            if share is not None:
+                ax.sharey(share)
+            share = share or ax
+            gd = g[g["demosaic"] == d]
+            for cfa in res.cfas:
+                gc = gd[gd["cfa"] == cfa].sort_values("luminance")
+                if not len(gc):
+                    continue
+                st = cst[cfa]
+                ax.plot(gc["luminance"], gc["value"], color=st["color"], marker=st["marker"],
+                        linestyle=st["linestyle"], linewidth=1.2, markersize=3.5)
+                if cfa not in cfas_drawn:
+                    cfas_drawn.append(cfa)
+            ax.set_xscale("log")
+            ax.set_xticks(lums)
+            ax.set_xticklabels([f"{v:g}" for v in lums], fontsize=7)
+            ax.minorticks_off()
+            if res.primary_luminance is not None and min(lums) <= res.primary_luminance <= max(lums):
+                ax.axvline(res.primary_luminance, color="#999999", linewidth=0.8, linestyle=":")
+            if r == 0:
+                ax.set_title(d)
+            if r == rows - 1:
+                ax.set_xlabel("scene luminance (cd/m²)")
+            if c == 0:
+                unit = f" ({info.unit})" if info.unit else ""
+                better = "higher" if info.higher_better else "lower"
+                ax.set_ylabel(f"{info.short}{unit}\n{scene}, {better} is better")
+            else:
+                ax.tick_params(labelleft=False)
+    cfa_legend(fig, cst, [c for c in res.cfas if c in cfas_drawn], ncol=ncol)
+    cap = ("Each metric that was measured at several luminances, against the scene's mean luminance "
+           "(log axis; the dotted line is the luminance the scores use). The exposure is the one chosen at the "
+           "reference luminance (capture.reference_luminance_cd_m2, 100 cd/m² by default) at every level, so "
+           "darker scenes give fewer photons and more visible noise, and scenes brighter than the reference can "
+           "saturate pixels.")
+    return ReportFigure("luminance-sweep", "sweep", title, cap, fig)

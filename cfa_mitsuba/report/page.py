@@ -1,0 +1,359 @@
+"""The HTML page: one self-contained file (CSS inline, figures embedded as
+data URIs, no script, no external fonts or links), so it opens offline and
+can be mailed or archived on its own.
+
+Figures of one section that come per demosaic (or per scene) sit in tabs
+made of radio buttons and CSS alone; printing shows every tab.
+"""
+
+from __future__ import annotations
+
+__all__ = ["render_page"]
+
+import base64
+import html
+
+from .. import __version__
+from .results import Results
+from .style import cfa_styles, metric_info
+
+#: Report sections in page order: (id, heading, paper figures, intro).
+SECTIONS = (
+    ("scores", "Scores and ranks", "Figs 16-17",
+     "The eight metrics normalised to scores (eq. 8) and their means, as radar plots and rank charts."),
+    ("colour", "Colour accuracy: ColorChecker", "Figs 8-9",
+     "Where each patch lands in colour space, camera against the ideal sensor."),
+    ("scielab", "Colour reproduction: S-CIELAB", "Fig 10",
+     "Where in the image the colour errors are, after the eye's spatial filtering."),
+    ("mtf", "Sharpness: slanted-edge MTF", "Figs 6, 11",
+     "How contrast falls with spatial frequency, per colour channel."),
+    ("moire", "Moiré: linear chirp", "Fig 13",
+     "False colour on a black-and-white chirp and the frequency where it starts."),
+    ("achromatic", "Achromatic reproduction: gray bar", "Fig 14",
+     "Lightness along the gray bar and its error per step."),
+    ("sweep", "Low light: metrics against luminance", "s. 3 (S-CIELAB, SSIM at 3-400 cd/m²)",
+     "How the image metrics degrade as the scene gets darker."),
+    ("outputs", "Camera outputs", "Figs 10, 12, 14 (images)",
+     "The rendered sRGB images, every CFA and demosaicing method next to the ideal sensor."),
+)
+
+_CSS = """
+:root{--ink:#1f2328;--muted:#59636e;--rule:#d0d7de;--soft:#f6f8fa;--accent:#4477AA;--best:#CC3311;--warn:#b35900}
+*{box-sizing:border-box}
+body{margin:0;font:14px/1.5 -apple-system,"Segoe UI",Helvetica,Arial,"DejaVu Sans",sans-serif;color:var(--ink);
+background:#fff}
+header{background:#24292f;color:#fff;padding:18px 28px}
+header h1{margin:0;font-size:22px;font-weight:600}
+header p{margin:4px 0 0;color:#d0d7de}
+nav{position:sticky;top:0;z-index:5;background:#fff;border-bottom:1px solid var(--rule);padding:6px 28px;
+font-size:13px;white-space:nowrap;overflow-x:auto}
+nav a{color:var(--accent);text-decoration:none;margin-right:14px}
+nav a:hover{text-decoration:underline}
+main{padding:8px 28px 40px;max-width:1500px}
+h2{font-size:19px;margin:34px 0 6px;padding-bottom:4px;border-bottom:1px solid var(--rule)}
+h3{font-size:15px;margin:22px 0 6px}
+.paper{color:var(--muted);font-weight:normal;font-size:13px}
+p.intro,p.note,.caption{color:var(--muted)}
+.caption{font-size:13px;max-width:1100px;margin:4px 0 16px}
+.cards{display:flex;flex-wrap:wrap;gap:12px;margin:14px 0}
+.card{border:1px solid var(--rule);border-radius:6px;padding:10px 14px;min-width:180px;background:var(--soft)}
+.card .k{font-size:12px;color:var(--muted);text-transform:uppercase;letter-spacing:.03em}
+.card .v{font-size:18px;font-weight:600}
+.card .s{font-size:12px;color:var(--muted)}
+dl.run{display:grid;grid-template-columns:max-content 1fr;gap:2px 14px;margin:8px 0}
+dl.run dt{color:var(--muted)}dl.run dd{margin:0}
+.tablewrap{overflow-x:auto;margin:6px 0 4px}
+table.data{border-collapse:collapse;font-size:12.5px;font-variant-numeric:tabular-nums}
+table.data th,table.data td{border-bottom:1px solid #eaeef2;padding:3px 8px;text-align:right;white-space:nowrap}
+table.data thead th{position:sticky;top:0;background:var(--soft);border-bottom:2px solid var(--rule);
+text-align:center;font-weight:600}
+table.data th.rowgroup,table.data th.metric,table.data td.scene{text-align:left;font-weight:600}
+table.data th.metric,table.data td.scene{font-weight:normal}
+table.data tr.group-start>*{border-top:2px solid var(--rule)}
+table.data tr.total>*{border-top:2px solid #8c959f;font-weight:600}
+table.data td.best{outline:2px solid var(--best);outline-offset:-2px;font-weight:700}
+table.data td.na{color:#aab}
+table.data td.oor{color:var(--warn)}
+table.data td.warn{color:var(--warn);font-weight:600}
+table.data td.lum{text-align:right;color:var(--muted)}
+.unit{color:var(--muted);font-size:11.5px}
+.dir{color:var(--muted)}
+.rank{color:var(--muted);font-size:11.5px}
+.oor-mark{color:var(--warn)}
+.swatch{display:inline-block;width:9px;height:9px;border-radius:2px;margin-right:4px;vertical-align:baseline}
+figure{margin:10px 0 6px}
+figure img{max-width:100%;height:auto;display:block;border:1px solid #eef0f2}
+figure img.raster{image-rendering:auto}
+.absent{border-left:4px solid var(--warn);background:#fff8f0;padding:6px 12px;margin:8px 0;font-size:13px}
+.absent b{color:var(--warn)}
+.tabs{margin:8px 0}
+.tabs>input{position:absolute;opacity:0;pointer-events:none}
+.tabs>label{display:inline-block;padding:4px 12px;margin:0 4px 0 0;border:1px solid var(--rule);
+border-bottom:none;border-radius:6px 6px 0 0;background:var(--soft);cursor:pointer;font-size:13px}
+.tabs>input:checked+label{background:#fff;font-weight:600;border-color:#8c959f;position:relative;top:1px}
+.tabs>input:focus-visible+label{outline:2px solid var(--accent)}
+.tabs>.panel{display:none;border-top:1px solid #8c959f;padding-top:6px}
+/*TAB_RULES*/
+details.more summary{cursor:pointer;color:var(--accent);margin:6px 0}
+footer{color:var(--muted);font-size:12px;border-top:1px solid var(--rule);padding:10px 28px}
+ul.tight{margin:4px 0;padding-left:20px}
+code{background:var(--soft);padding:0 4px;border-radius:4px;font-size:12.5px}
+@media print{nav{display:none}.tabs>.panel{display:block!important}.tabs>label{display:none}}
+"""
+
+
+def _e(text) -> str:
+    return html.escape(str(text), quote=True)
+
+
+def _tab_rules(n: int) -> str:
+    return "\n".join(f".tabs>input:nth-of-type({k}):checked~.panel:nth-of-type({k}){{display:block}}"
+                     for k in range(1, n + 1))
+
+
+#: Display scale of vector figures: CSS px per figure inch (as the PNGs' dpi).
+_SVG_PX_PER_INCH = 125
+
+
+def _img(fig, data: bytes, mime: str) -> str:
+    b64 = base64.b64encode(data).decode("ascii")
+    klass = ' class="raster"' if fig.raster else ""
+    size = ""
+    if fig.figure is not None and mime == "image/svg+xml":
+        w_in, h_in = fig.figure.get_size_inches()
+        size = f' width="{round(w_in * _SVG_PX_PER_INCH)}" height="{round(h_in * _SVG_PX_PER_INCH)}"'
+    elif fig.image is not None:
+        size = f' width="{fig.image.width}" height="{fig.image.height}"'
+    return (f'<img{klass} src="data:{mime};base64,{b64}" alt="{_e(fig.title)}"{size} '
+            f'data-figure="{_e(fig.key)}">')
+
+
+def _figure_html(fig, data: bytes, mime: str, show_title: bool = True) -> str:
+    return (f'<figure id="fig-{_e(fig.key)}">{_img(fig, data, mime)}'
+            f'<figcaption class="caption">{_e(fig.caption)}</figcaption></figure>')
+
+
+def _section_figures(sec: str, items: list, embeds: dict) -> str:
+    """The figures of one section: plain when ungrouped, tabs when grouped."""
+    out = []
+    plain = [f for f in items if f.group is None]
+    grouped = [f for f in items if f.group is not None]
+    for f in plain:
+        out.append(f"<h3>{_e(f.title)}</h3>")
+        out.append(_figure_html(f, *embeds[f.key]))
+    by_title: dict = {}
+    for f in grouped:
+        by_title.setdefault(f.title, []).append(f)
+    for title, figs in by_title.items():
+        out.append(f"<h3>{_e(title)}</h3>")
+        if len(figs) == 1:
+            out.append(f'<p class="note">{_e(figs[0].group)}</p>' if figs[0].section == "outputs" else "")
+            out.append(_figure_html(figs[0], *embeds[figs[0].key]))
+            continue
+        name = f"tabs-{figs[0].key.split('-')[0]}-{sec}"
+        tab = ['<div class="tabs">']
+        for k, f in enumerate(figs):
+            tid = f"{name}-{k}"
+            checked = " checked" if k == 0 else ""
+            tab.append(f'<input type="radio" name="{_e(name)}" id="{_e(tid)}"{checked}>'
+                       f'<label for="{_e(tid)}">{_e(f.group)}</label>')
+        for f in figs:
+            tab.append(f'<div class="panel">{_figure_html(f, *embeds[f.key])}</div>')
+        tab.append("</div>")
+        out.append("".join(tab))
+    return "".join(out)
+
+
+def _summary(res: Results, facts: dict) -> str:
+    cfg = res.config
+    cst = cfa_styles(res.cfas)
+    parts = []
+    cards = []
+    if facts.get("best_total"):
+        c, v = facts["best_total"]
+        sub = "mean of the per-demosaic scores" if len(res.demosaics) > 1 else "mean normalised score"
+        cards.append(("Best CFA overall", c, f"{v:.4f} ({sub})", cst.get(c, {}).get("color")))
+    for d, (c, v) in facts.get("best_per_demosaic", {}).items():
+        cards.append((f"Best with {d}", c, f"score {v:.4f}", cst.get(c, {}).get("color")))
+    if cards:
+        parts.append('<div class="cards">')
+        for k, v, s, colour in cards:
+            sw = f'<span class="swatch" style="background:{colour}"></span>' if colour else ""
+            parts.append(f'<div class="card"><div class="k">{_e(k)}</div><div class="v">{sw}{_e(v)}</div>'
+                         f'<div class="s">{_e(s)}</div></div>')
+        parts.append("</div>")
+    rows = []
+    scenes = []
+    for s in cfg.get("scenes") or []:
+        if isinstance(s, dict):
+            r = s.get("render") or {}
+            size = f" {r['width']}×{r['height']}" if r.get("width") and r.get("height") else ""
+            mets = ", ".join(metric_info(m).short for m in s.get("metrics") or [])
+            src = f", {s['file']}" if s.get("file") else ""
+            scenes.append(f"{s.get('name')}{size}{src} ({mets})" if mets else f"{s.get('name')}{size}{src}")
+    if not scenes:
+        scenes = res.scenes
+    rows.append(("Scenes", "; ".join(scenes) or "none"))
+    rows.append(("CFAs", f"{len(res.cfas)}: " + ", ".join(res.cfas)))
+    rows.append(("Demosaicing", f"{len(res.demosaics)}: " + ", ".join(res.demosaics)))
+    lums = ", ".join(f"{v:g}" for v in res.base_luminances) or "—"
+    rows.append(("Luminance", f"{lums} cd/m² (every metric)"))
+    sweeps = []
+    for sw in cfg.get("sweeps") or []:
+        if isinstance(sw, dict):
+            sweeps.append(f"{', '.join(metric_info(m).short for m in sw.get('metrics') or [])} on "
+                          f"{sw.get('scene')} at {', '.join(f'{float(v):g}' for v in sw.get('luminances') or [])}"
+                          " cd/m²")
+    if sweeps:
+        rows.append(("Sweeps", "; ".join(sweeps)))
+    n_eval = len(res.metrics.drop_duplicates(["scene", "cfa", "demosaic", "luminance"])) if len(res.metrics) else 0
+    rows.append(("Evaluations", f"{n_eval} (scene, CFA, demosaic, luminance) combinations, "
+                 f"{len(res.metrics)} rows in metrics.csv"))
+    if facts.get("timing"):
+        rows.append(("Run time", facts["timing"]))
+    if cfg.get("seed") is not None:
+        rows.append(("Seed", str(cfg.get("seed"))))
+    if cfg.get("clip_scores") is not None:
+        rows.append(("Scores", "clipped to [0, 1]" if cfg.get("clip_scores") else
+                     "not clipped (values outside a range score below 0 or above 1)"))
+    parts.append('<dl class="run">' + "".join(f"<dt>{_e(k)}</dt><dd>{_e(v)}</dd>" for k, v in rows) + "</dl>")
+    if res.notes:
+        parts.append('<ul class="tight">' + "".join(f'<li class="note">{_e(n)}</li>' for n in res.notes) + "</ul>")
+    return "".join(parts)
+
+
+def _conventions(res: Results) -> str:
+    items = [
+        "<b>Ideal sensor</b>: the same optics and pixel with CIE 1931 colour-matching functions at every pixel, "
+        "no mosaic and no noise (ISETCam's 'idealxyz'); every metric compares the camera's output with it. "
+        "The camera output is mean-matched to the ideal before comparison (its scale factor is in the details).",
+        "<b>ΔE00</b>: CIEDE2000; <b>ΔE*ab</b>: CIE 1976; both relative to the scene white. <b>ΔL grey</b>: the "
+        "mean |ΔL*| of the six grey patches (the paper's Table 1 'Mean ΔL').",
+        "<b>S-CIELAB</b>: Zhang-Wandell spatial filtering, then CIEDE2000 per pixel; the table holds the mean "
+        "over the image. <b>SSIM</b>, <b>MDSI</b>, <b>HaarPSI</b>: on the 8-bit sRGB images (MDSI 0 = "
+        "identical, the others 1 = identical).",
+        "<b>MTF50</b>: the frequency where the ISO 12233 luminance MTF (0.3R + 0.6G + 0.1B) falls to 0.5, in "
+        "cycles per millimetre on the sensor (Nyquist = 1 / (2 × pixel pitch)).",
+        "<b>MSP</b>: moiré starting point, the chirp frequency in cycles per degree of visual angle where the "
+        "block-mean chroma C*ab first exceeds the threshold (25). The paper reports a pixel position under "
+        "the name 'cpd'; ours is a true frequency, so its numbers are not the paper's.",
+        "<b>AR error</b>: mean |ΔL*| along the gray bar's central row, ten columns left out at each end.",
+        "<b>Scores</b> (eq. 8): (value − worst) / (best − worst) with the ranges listed above, so 1 is best for "
+        "every metric; a CFA's score for a demosaic is the mean of its metric scores (Table 3), 'total' the "
+        "mean over demosaics; ranks: 1 = best, ties share the lower rank.",
+        "<b>Table marks</b>: a red box marks the best CFA for a metric and demosaic (the paper's red boxes); "
+        "† a value outside its score range; ↑/↓ higher/lower is better. Hover a cell for its score and rank.",
+        "<b>Colours</b>: each CFA keeps one colour and marker in every figure (Paul Tol's colour-blind-safe "
+        "schemes; markers and line styles tell CFAs apart where colours are close).",
+        "<b>Files</b>: every figure is also in <code>figures/</code> next to this report (PNG and SVG); the "
+        "numbers are in <code>metrics.csv</code> and <code>scores.csv</code>, the curves and patch tables in "
+        "<code>details/</code>. Rebuild with <code>cfa-mitsuba report RESULTS_DIR</code>.",
+    ]
+    return '<ul class="tight">' + "".join(f"<li>{i}</li>" for i in items) + "</ul>"
+
+
+def render_page(res: Results, *, figures: list, absents: list, embeds: dict, tables: dict, facts: dict) -> str:
+    """The whole report as one HTML string.
+
+    ``figures``: ReportFigure list; ``embeds``: {key: (bytes, mime)};
+    ``absents``: Absent list; ``tables``: {'table1': html|None, ...};
+    ``facts``: summary numbers (best CFAs, timing text, luminances).
+    """
+    title = f"CFA image-quality report: {res.name}"
+    desc = res.config.get("description") or ""
+    nav = [("summary", "Summary"), ("tables", "Tables 1-3"), ("ranges", "Score ranges")]
+    body = []
+    body.append(f'<section id="summary"><h2>Summary</h2>{_summary(res, facts)}</section>')
+
+    t = ['<section id="tables"><h2>Tables</h2>']
+    lum = res.primary_luminance
+    t.append('<h3 id="table1">Table 1. Mean colour error over the 24 patches and lightness error of the 6 grey '
+             'patches <span class="paper">(paper Table 1)</span></h3>')
+    if tables.get("table1"):
+        t.append(f'<div class="tablewrap">{tables["table1"]}</div>')
+        t.append(f'<p class="note">ColorChecker at {lum:g} cd/m². Boxed: the lowest value in the row.</p>')
+    else:
+        t.append('<div class="absent"><b>Not available:</b> no ColorChecker (macbeth) scene in this study.</div>')
+    for L, tab in tables.get("table2", []):
+        sfx = f" at {L:g} cd/m²" if len(tables.get("table2", [])) > 1 else ""
+        t.append(f'<h3 id="table2">Table 2. Every metric per CFA and demosaicing method{_e(sfx)} '
+                 '<span class="paper">(paper Table 2)</span></h3>')
+        if tab:
+            t.append(f'<div class="tablewrap">{tab}</div>')
+            t.append('<p class="note">Boxed: the best CFA for the metric and demosaic (the paper\'s red boxes). '
+                     "↑ higher / ↓ lower is better; † outside the metric's score range (see below). Hover a cell "
+                     "for its score and rank.</p>")
+    if not tables.get("table2"):
+        t.append('<div class="absent"><b>Not available:</b> nothing was scored.</div>')
+    for L, tab in tables.get("table3", []):
+        sfx = f" at {L:g} cd/m²" if len(tables.get("table3", [])) > 1 else ""
+        t.append(f'<h3 id="table3">Table 3. Mean normalised score and rank{_e(sfx)} '
+                 '<span class="paper">(paper Table 3, Fig 17)</span></h3>')
+        if tab:
+            t.append(f'<div class="tablewrap">{tab}</div>')
+            t.append('<p class="note">Each cell: the mean of the CFA\'s normalised metric scores for that method '
+                     "(rank in brackets, 1 = best); 'Total' is the mean over the methods. Boxed: rank 1. Shading "
+                     "follows the score.</p>")
+    if not tables.get("table3"):
+        t.append('<div class="absent"><b>Not available:</b> nothing was scored.</div>')
+    if tables.get("other"):
+        t.append('<details class="more"><summary>Measurements reported but not scored (ΔE*ab, grey ΔL, '
+                 "interior S-CIELAB)</summary>")
+        t.append(f'<div class="tablewrap">{tables["other"]}</div></details>')
+    if tables.get("sweep"):
+        t.append('<details class="more"><summary>The luminance sweep\'s values</summary>')
+        t.append(f'<div class="tablewrap">{tables["sweep"]}</div></details>')
+    t.append("</section>")
+    body.append("".join(t))
+
+    r = ['<section id="ranges"><h2>Score ranges</h2>',
+         '<p class="intro">Eq. 8 maps each metric linearly from its range\'s worst end (score 0) to its best '
+         "end (score 1). The ranges are the paper's, with the MSP range moved to true cycles per degree for this "
+         "study's chirp and the MTF50 range to its pixel pitch (ranges.json). A value outside its range means "
+         "the range does not span the CFAs compared; such scores are "
+         + ("clipped to [0, 1]" if res.config.get("clip_scores", True) else "left unclipped in this study")
+         + ".</p>"]
+    if tables.get("ranges"):
+        r.append(f'<div class="tablewrap">{tables["ranges"]}</div>')
+    if facts.get("oor_lines"):
+        r.append('<p class="note">Values outside their range:</p><ul class="tight">'
+                 + "".join(f"<li>{_e(x)}</li>" for x in facts["oor_lines"]) + "</ul>")
+    r.append("</section>")
+    body.append("".join(r))
+
+    n_tabs = 1
+    for sec, heading, paper, intro in SECTIONS:
+        items = [f for f in figures if f.section == sec]
+        missing = [a for a in absents if a.section == sec]
+        if not items and not missing:
+            continue
+        nav.append((sec, heading.split(":")[0]))
+        s = [f'<section id="{sec}"><h2>{_e(heading)} <span class="paper">({_e(paper)})</span></h2>',
+             f'<p class="intro">{_e(intro)}</p>']
+        for a in missing:
+            s.append(f'<div class="absent"><b>{_e(a.title)}: not drawn.</b> {_e(a.reason)}</div>')
+        s.append(_section_figures(sec, items, embeds))
+        groups: dict = {}
+        for f in items:
+            if f.group is not None:
+                groups.setdefault(f.title, 0)
+                groups[f.title] += 1
+        n_tabs = max([n_tabs] + list(groups.values()))
+        s.append("</section>")
+        body.append("".join(s))
+    nav.append(("conventions", "Units"))
+    body.append(f'<section id="conventions"><h2>Units and conventions</h2>{_conventions(res)}</section>')
+
+    nav_html = "".join(f'<a href="#{k}">{_e(v)}</a>' for k, v in nav)
+    css = _CSS.replace("/*TAB_RULES*/", _tab_rules(n_tabs))
+    sub = _e(desc) if desc else "Bae 2020 (PLoS ONE 15(5): e0232583) image-quality metric system, re-created"
+    return (
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+        "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
+        f"<title>{_e(title)}</title><style>{css}</style></head><body>"
+        f"<header><h1>{_e(title)}</h1><p>{sub}</p></header>"
+        f"<nav>{nav_html}</nav><main>{''.join(body)}</main>"
+        f"<footer>cfa-mitsuba {_e(__version__)} · built from <code>{_e(res.root.name)}/</code> "
+        "(metrics.csv, scores.csv, details/) · metric system of Bae 2020, PLoS ONE 15(5): e0232583"
+        "</footer></body></html>\n"
+    )

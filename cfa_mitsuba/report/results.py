@@ -1,0 +1,288 @@
+"""Read a study's results directory (the report's only input).
+
+The report reads files, never the runner's objects, so that
+``cfa-mitsuba report RESULTS_DIR`` rebuilds it from what a study left on
+disk, including a partial study, an older one, or the ``metrics.csv`` of
+``cfa-mitsuba evaluate`` alone.  Everything but ``metrics.csv`` may be
+missing; :class:`Results` says what is absent rather than failing.
+
+    metrics.csv   tidy rows: scene, cfa, demosaic, luminance, metric, value, unit
+    scores.csv    the scored rows with normalised scores and ranks (optional)
+    ranges.json   {metric: [worst, best]} (optional)
+    timing.json   where the time went (optional; may predate metrics.csv)
+    config.json   the validated config (optional)
+    details/<scene>/<cfa>/<demosaic>/L<lum>.json|.png|.scielab.npy
+    details/<scene>/ideal/L<lum>.json|.png
+"""
+
+from __future__ import annotations
+
+__all__ = ["Results", "load_results", "SCORED_METRICS", "safe_label", "lum_tag"]
+
+import json
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import CfaMitsubaError
+
+#: The paper's eight metrics in the order of its tables and radar plots.
+SCORED_METRICS = ("delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi")
+#: The built-in scene that feeds each metric (a user scene may feed the image metrics).
+METRIC_SCENES = {"delta-e": "macbeth", "mtf": "slanted-edge", "moire": "chirp", "achromatic": "gray-bar",
+                 "scielab": "puppy", "ssim": "puppy", "mdsi": "puppy", "haarpsi": "puppy"}
+_COLUMNS = ("scene", "cfa", "demosaic", "luminance", "metric", "value", "unit")
+
+
+def safe_label(label: str) -> str:
+    """The folder name the study gives a CFA label under ``details/`` (TOML
+    CFAs are labelled by their name, which may hold any character)."""
+    return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in str(label))
+
+
+def lum_tag(luminance: float) -> str:
+    """``L100`` for 100 cd/m^2: the stem of the detail files."""
+    return f"L{float(luminance):g}"
+
+
+def _read_json(path: Path):
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+
+
+@dataclass
+class Results:
+    """A results directory, loaded.
+
+    ``metrics`` and ``scores`` are pandas DataFrames (``scores`` None when
+    there is nothing to score); ``cfas``, ``demosaics``, ``scenes`` keep the
+    study's order; ``base_luminances`` are the levels every metric was
+    measured at, ``primary_luminance`` the one the figures use.  ``notes``
+    collects what the report should tell the reader about the inputs
+    themselves (a missing file, a stale timing).
+    """
+
+    root: Path
+    metrics: object
+    scores: object
+    ranges: dict
+    timing: dict | None
+    config: dict
+    cfas: list
+    demosaics: list
+    scenes: list
+    base_luminances: list
+    primary_luminance: float | None
+    scored_here: bool = False
+    notes: list = field(default_factory=list)
+
+    # -- what was measured -------------------------------------------------
+    def has_metric(self, metric: str, luminance: float | None = None) -> bool:
+        m = self.metrics
+        sel = m["metric"] == metric
+        if luminance is not None:
+            sel &= m["luminance"] == luminance
+        return bool(sel.any())
+
+    def scene_for(self, metric: str) -> str | None:
+        """The scene whose ``metric`` is scored (as the runner picks it: the
+        built-in scene that feeds it, else the first other scene)."""
+        if self.scores is not None and len(self.scores):
+            s = self.scores[self.scores["metric"] == metric]
+            if len(s):
+                return str(s["scene"].iloc[0])
+        rows = self.metrics[self.metrics["metric"] == metric]
+        if not len(rows):
+            return None
+        scenes = list(dict.fromkeys(rows["scene"]))
+        want = METRIC_SCENES.get(metric)
+        return want if want in scenes else scenes[0]
+
+    def value(self, scene, cfa, demosaic, luminance, metric) -> float | None:
+        m = self._index()
+        v = m.get((scene, cfa, demosaic, float(luminance), metric))
+        return None if v is None else float(v)
+
+    def _index(self) -> dict:
+        if not hasattr(self, "_idx"):
+            m = self.metrics
+            self._idx = {(s, c, d, float(lv), k): v for s, c, d, lv, k, v in
+                         zip(m["scene"], m["cfa"], m["demosaic"], m["luminance"], m["metric"], m["value"])}
+        return self._idx
+
+    # -- per-evaluation details ---------------------------------------------
+    def detail_path(self, scene: str, cfa: str | None, demosaic: str | None, luminance: float,
+                    suffix: str = ".json") -> Path:
+        base = self.root / "details" / safe_label(scene)
+        folder = base / "ideal" if cfa is None else base / safe_label(cfa) / str(demosaic)
+        return folder / f"{lum_tag(luminance)}{suffix}"
+
+    def detail(self, scene: str, cfa: str | None, demosaic: str | None, luminance: float) -> dict | None:
+        """The JSON of one evaluation (``cfa=None``: the ideal sensor), or None."""
+        return _cached_json(str(self.detail_path(scene, cfa, demosaic, luminance)))
+
+    def metric_detail(self, metric: str, scene: str, cfa: str | None, demosaic: str | None,
+                      luminance: float) -> dict | None:
+        d = self.detail(scene, cfa, demosaic, luminance)
+        rec = d.get(metric) if isinstance(d, dict) else None
+        return rec if isinstance(rec, dict) else None
+
+    def scielab_map(self, scene: str, cfa: str, demosaic: str, luminance: float):
+        p = self.detail_path(scene, cfa, demosaic, luminance, ".scielab.npy")
+        try:
+            a = np.load(p)
+        except (OSError, ValueError):
+            return None
+        return a if a.ndim == 2 and a.size else None
+
+    def thumbnail_path(self, scene: str, cfa: str | None, demosaic: str | None, luminance: float) -> Path | None:
+        p = self.detail_path(scene, cfa, demosaic, luminance, ".png")
+        return p if p.is_file() else None
+
+    @property
+    def name(self) -> str:
+        return str(self.config.get("name") or self.root.resolve().name)
+
+
+@lru_cache(maxsize=4096)
+def _cached_json(path: str):
+    return _read_json(Path(path))
+
+
+def _order(values, preferred=()) -> list:
+    seen = list(dict.fromkeys(str(v) for v in values))
+    first = [p for p in preferred if p in seen]
+    return first + [v for v in seen if v not in first]
+
+
+def _read_metrics(path: Path):
+    import pandas as pd
+
+    try:
+        m = pd.read_csv(path, dtype={"scene": str, "cfa": str, "demosaic": str, "metric": str, "unit": str},
+                        keep_default_na=False, na_values={"value": ["", "nan", "NaN"], "luminance": ["", "nan"]})
+    except (OSError, ValueError) as exc:
+        raise CfaMitsubaError(f"cannot read {str(path)!r}: {exc}") from None
+    missing = [c for c in _COLUMNS if c not in m.columns]
+    if missing:
+        raise CfaMitsubaError(f"{str(path)!r} is not a metrics table: no column(s) {', '.join(missing)}")
+    m["value"] = pd.to_numeric(m["value"], errors="coerce")
+    m["luminance"] = pd.to_numeric(m["luminance"], errors="coerce")
+    return m[np.isfinite(m["value"]) & np.isfinite(m["luminance"])].reset_index(drop=True)
+
+
+def _base_luminances(metrics, config: dict, scores) -> list[float]:
+    lums = [float(v) for v in (config.get("luminances") or [])]
+    have = set(float(v) for v in metrics["luminance"].unique())
+    lums = [v for v in lums if v in have]
+    if not lums and scores is not None and len(scores):
+        lums = sorted(float(v) for v in scores["luminance"].unique())
+    if not lums and len(metrics):
+        # the level with the most distinct metrics (sweeps add only a few)
+        counts = metrics.groupby("luminance")["metric"].nunique()
+        lums = [float(counts.idxmax())]
+    return lums
+
+
+def _score_here(metrics, base, ranges):
+    """Scores for a results directory without scores.csv (e.g. the output of
+    ``cfa-mitsuba evaluate``): the eight metrics at the base luminances, one
+    scene per metric, with the given or the default ranges."""
+    import pandas as pd
+
+    from ..study.scoring import score
+
+    df = metrics[metrics["metric"].isin(SCORED_METRICS) & metrics["luminance"].isin(base)]
+    keep = []
+    for name, group in df.groupby("metric", sort=False):
+        scenes = list(dict.fromkeys(group["scene"]))
+        want = METRIC_SCENES.get(name)
+        keep.append(group[group["scene"] == (want if want in scenes else scenes[0])])
+    if not keep:
+        return None
+    return score(pd.concat(keep).reset_index(drop=True), ranges or None)
+
+
+def load_results(out_dir) -> Results:
+    """Load a results directory; :class:`CfaMitsubaError` (one line) when it
+    is missing or holds no ``metrics.csv``."""
+    import pandas as pd
+
+    root = Path(out_dir)
+    if not root.is_dir():
+        raise CfaMitsubaError(f"no such results directory {str(root)!r}")
+    mpath = root / "metrics.csv"
+    if not mpath.is_file():
+        raise CfaMitsubaError(f"{str(root)!r} is not a results directory (no metrics.csv)")
+    _cached_json.cache_clear()
+    notes = []
+    metrics = _read_metrics(mpath)
+    config = _read_json(root / "config.json") or {}
+    if not (root / "config.json").is_file():
+        notes.append("config.json is absent: the study's name, scenes and settings are taken from metrics.csv.")
+    ranges = {}
+    raw_ranges = _read_json(root / "ranges.json")
+    if isinstance(raw_ranges, dict):
+        for k, v in raw_ranges.items():
+            try:
+                ranges[str(k)] = (float(v[0]), float(v[1]))
+            except (TypeError, ValueError, IndexError):
+                pass
+    scores = None
+    scored_here = False
+    spath = root / "scores.csv"
+    if spath.is_file():
+        try:
+            scores = pd.read_csv(spath, dtype={"scene": str, "cfa": str, "demosaic": str, "metric": str,
+                                               "unit": str}, keep_default_na=False,
+                                 na_values={"value": [""], "score": [""], "raw_score": [""]})
+        except (OSError, ValueError) as exc:
+            notes.append(f"scores.csv could not be read ({exc}); scores are recomputed here.")
+            scores = None
+        if scores is not None and len(scores) == 0:
+            scores = None
+    base = _base_luminances(metrics, config, scores)
+    if scores is None and len(metrics):
+        try:
+            scores = _score_here(metrics, base, ranges)
+        except CfaMitsubaError as exc:
+            notes.append(f"no scores: {exc}")
+            scores = None
+        if scores is not None:
+            scored_here = True
+            notes.append("scores.csv is absent: the scores and ranks here were computed by the report with "
+                          + ("the ranges in ranges.json." if ranges else "the default (paper's) ranges."))
+            if not ranges:
+                from ..study.scoring import DEFAULT_RANGES
+
+                ranges = {k: (r.worst, r.best) for k, r in DEFAULT_RANGES.items()}
+    if scores is not None:
+        scores["luminance"] = pd.to_numeric(scores["luminance"], errors="coerce")
+        if "out_of_range" in scores.columns:
+            scores["out_of_range"] = scores["out_of_range"].astype(str).str.lower().isin(("true", "1"))
+    timing = _read_json(root / "timing.json")
+    if timing is not None:
+        try:
+            if (root / "timing.json").stat().st_mtime + 1.0 < mpath.stat().st_mtime:
+                notes.append("timing.json is older than metrics.csv (written by an earlier run of this study); "
+                             "its times may not describe these results.")
+                timing = dict(timing, stale=True)
+        except OSError:
+            pass
+    cfa_labels = []
+    for c in config.get("cfas") or []:
+        c = str(c)
+        cfa_labels.append(Path(c).stem if c.lower().endswith(".toml") else c)
+    cfas = _order(metrics["cfa"], cfa_labels)
+    demosaics = _order(metrics["demosaic"], [str(d) for d in config.get("demosaics") or []])
+    scenes = _order(metrics["scene"], [str(s.get("name")) for s in config.get("scenes") or [] if isinstance(s, dict)])
+    primary = None
+    if base:
+        primary = 100.0 if 100.0 in base else base[0]
+    return Results(root=root, metrics=metrics, scores=scores, ranges=ranges, timing=timing, config=config,
+                   cfas=cfas, demosaics=demosaics, scenes=scenes, base_luminances=base,
+                   primary_luminance=primary, scored_here=scored_here, notes=notes)

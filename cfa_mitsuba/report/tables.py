@@ -1,0 +1,335 @@
+"""The paper's Tables 1-3 for a study's results, as HTML.
+
+- Table 1: mean dE over the 24 patches and mean dL over the 6 grey patches
+  per CFA (the paper gives bilinear only; here one row group per demosaic);
+- Table 2: every scored metric per CFA per demosaic, the best CFA per metric
+  and demosaic boxed (the paper's red boxes, ``metric_rank == 1``);
+- Table 3: mean normalised score per demosaic and their mean ('total'),
+  with ranks (:func:`cfa_mitsuba.study.scoring.rank_table`).
+
+Every value cell carries the full-precision number from the CSV in
+``data-value`` and its score and rank in a tooltip.
+"""
+
+from __future__ import annotations
+
+__all__ = ["table1", "table2", "table3", "other_table", "sweep_table", "ranges_table"]
+
+import html
+
+import numpy as np
+
+from .results import SCORED_METRICS, Results
+from .style import cfa_styles, fmt_value, metric_info
+
+
+def _e(text) -> str:
+    return html.escape(str(text), quote=True)
+
+
+def _num(v) -> str:
+    return f"{float(v):.10g}"
+
+
+def _tr(i: int) -> str:
+    """A table row opening; the first row of a group gets a rule above it."""
+    return '<tr class="group-start">' if i == 0 else "<tr>"
+
+
+def _head(res: Results, cfas, first_cols) -> str:
+    cst = cfa_styles(res.cfas)
+    cells = "".join(f"<th>{_e(c)}</th>" for c in first_cols)
+    cells += "".join(f'<th class="cfa"><span class="swatch" style="background:{cst[c]["color"]}"></span>'
+                     f"{_e(c)}</th>" for c in cfas)
+    return f"<thead><tr>{cells}</tr></thead>"
+
+
+def _direction(metric: str, res: Results) -> bool:
+    """True when higher is better (from the score range, else the metric's nature)."""
+    r = res.ranges.get(metric)
+    if r is not None and r[0] != r[1]:
+        return r[1] > r[0]
+    return metric_info(metric).higher_better
+
+
+def _metric_label(metric: str, res: Results) -> str:
+    info = metric_info(metric)
+    arrow = "↑" if _direction(metric, res) else "↓"
+    unit = f' <span class="unit">({_e(info.unit)})</span>' if info.unit and info.unit not in info.short else ""
+    return f'<span title="{_e(info.long)}">{_e(info.short)}</span>{unit} <span class="dir">{arrow}</span>'
+
+
+def _best(values: dict, higher: bool) -> set:
+    finite = {k: v for k, v in values.items() if v is not None and np.isfinite(v)}
+    if not finite:
+        return set()
+    target = max(finite.values()) if higher else min(finite.values())
+    return {k for k, v in finite.items() if v == target}
+
+
+def table1(res: Results) -> str | None:
+    """Mean dE00 (and dE*ab) over the 24 patches and mean |dL*| of the 6 grey
+    patches, per CFA, one row group per demosaic (the paper's Table 1)."""
+    lum = res.primary_luminance
+    scene = res.scene_for("delta-e")
+    if scene is None or lum is None:
+        return None
+    rows_metrics = [m for m in ("delta-e", "delta-e76", "delta-l") if res.has_metric(m, lum)]
+    cfas = [c for c in res.cfas if any(res.value(scene, c, d, lum, "delta-e") is not None for d in res.demosaics)]
+    out = ['<table class="data">', _head(res, cfas, ["demosaic", "measure"]), "<tbody>"]
+    for d in res.demosaics:
+        present = [m for m in rows_metrics if any(res.value(scene, c, d, lum, m) is not None for c in cfas)]
+        for i, m in enumerate(present):
+            vals = {c: res.value(scene, c, d, lum, m) for c in cfas}
+            best = _best(vals, higher=False)
+            row = [_tr(i)]
+            if i == 0:
+                row.append(f'<th rowspan="{len(present)}" class="rowgroup">{_e(d)}</th>')
+            row.append(f'<th class="metric">{_metric_label(m, res)}</th>')
+            for c in cfas:
+                v = vals[c]
+                if v is None:
+                    row.append('<td class="na">—</td>')
+                    continue
+                klass = "best" if c in best and len(cfas) > 1 else ""
+                row.append(f'<td class="{klass}" data-value="{_num(v)}">{fmt_value(m, v)}</td>')
+            row.append("</tr>")
+            out.append("".join(row))
+    out.append("</tbody></table>")
+    return "".join(out)
+
+
+def table2(res: Results, luminance: float) -> str | None:
+    """Every scored metric per CFA per demosaic at ``luminance``, the best CFA
+    per metric and demosaic boxed (the paper's Table 2)."""
+    s = res.scores
+    if s is None:
+        return _table2_from_metrics(res, luminance)
+    s = s[s["luminance"] == luminance]
+    if not len(s):
+        return None
+    metrics = [m for m in SCORED_METRICS if m in set(s["metric"])]
+    metrics += [m for m in dict.fromkeys(s["metric"]) if m not in metrics]
+    cfas = [c for c in res.cfas if c in set(s["cfa"])]
+    n_cfa = len(cfas)
+    by = {(r.cfa, r.demosaic, r.metric): r for r in s.itertuples(index=False)}
+    out = ['<table class="data">', _head(res, cfas, ["demosaic", "metric"]), "<tbody>"]
+    for d in res.demosaics:
+        present = [m for m in metrics if any((c, d, m) in by for c in cfas)]
+        for i, m in enumerate(present):
+            row = [_tr(i)]
+            if i == 0:
+                row.append(f'<th rowspan="{len(present)}" class="rowgroup">{_e(d)}</th>')
+            row.append(f'<th class="metric">{_metric_label(m, res)}</th>')
+            for c in cfas:
+                r = by.get((c, d, m))
+                if r is None:
+                    row.append('<td class="na">—</td>')
+                    continue
+                klass = []
+                if getattr(r, "metric_rank", None) == 1 and n_cfa > 1:
+                    klass.append("best")
+                oor = bool(getattr(r, "out_of_range", False))
+                if oor:
+                    klass.append("oor")
+                tip = (f"score {float(r.score):.3f}" + (f" (eq. 8 gives {float(r.raw_score):.3f}, outside "
+                       f"[0, 1])" if oor and hasattr(r, "raw_score") else "")
+                       + (f"; rank {int(r.metric_rank)} of {n_cfa}" if hasattr(r, "metric_rank") else ""))
+                mark = '<sup class="oor-mark">†</sup>' if oor else ""
+                ge = ""
+                if m == "moire" and _moire_lower_bound(res, r):
+                    ge = "≥"
+                    tip += "; no moiré up to the chirp's top frequency: a lower bound"
+                row.append(f'<td class="{" ".join(klass)}" data-value="{_num(r.value)}" title="{_e(tip)}">'
+                           f"{ge}{fmt_value(m, r.value)}{mark}</td>")
+            row.append("</tr>")
+            out.append("".join(row))
+    out.append("</tbody></table>")
+    return "".join(out)
+
+
+def _moire_lower_bound(res: Results, row) -> bool:
+    """The camera never passed the moiré threshold: its MSP is the chirp's top frequency."""
+    rec = res.metric_detail("moire", row.scene, row.cfa, row.demosaic, row.luminance)
+    return bool(rec is not None and rec.get("passed") is False)
+
+
+def _table2_from_metrics(res: Results, luminance: float) -> str | None:
+    m = res.metrics
+    m = m[(m["luminance"] == luminance) & m["metric"].isin(SCORED_METRICS)]
+    if not len(m):
+        return None
+    cfas = [c for c in res.cfas if c in set(m["cfa"])]
+    out = ['<table class="data">', _head(res, cfas, ["demosaic", "metric"]), "<tbody>"]
+    for d in res.demosaics:
+        md = m[m["demosaic"] == d]
+        present = [k for k in SCORED_METRICS if k in set(md["metric"])]
+        for i, k in enumerate(present):
+            scene = res.scene_for(k)
+            vals = {c: res.value(scene, c, d, luminance, k) for c in cfas}
+            best = _best(vals, _direction(k, res))
+            row = [_tr(i)]
+            if i == 0:
+                row.append(f'<th rowspan="{len(present)}" class="rowgroup">{_e(d)}</th>')
+            row.append(f'<th class="metric">{_metric_label(k, res)}</th>')
+            for c in cfas:
+                v = vals[c]
+                if v is None:
+                    row.append('<td class="na">—</td>')
+                else:
+                    klass = "best" if c in best and len(cfas) > 1 else ""
+                    row.append(f'<td class="{klass}" data-value="{_num(v)}">{fmt_value(k, v)}</td>')
+            row.append("</tr>")
+            out.append("".join(row))
+    out.append("</tbody></table>")
+    return "".join(out)
+
+
+def _heat(score: float, lo: float, hi: float) -> str:
+    """A light background for a score between the table's lowest and highest
+    (white to Tol blue); dark text stays readable."""
+    t = float(np.clip((score - lo) / (hi - lo), 0.0, 1.0)) * 0.55 if hi > lo else 0.3
+    r, g, b = (int(round(255 + (c - 255) * t)) for c in (0x44, 0x77, 0xAA))
+    return f"background:#{r:02x}{g:02x}{b:02x}"
+
+
+def table3(res: Results, luminance: float) -> str | None:
+    """Mean normalised score per demosaic (rows) and CFA (columns), their mean
+    over demosaics ('total'), each with its rank (the paper's Table 3 and
+    Fig 17)."""
+    from ..study.scoring import rank_table
+
+    s = res.scores
+    if s is None or not len(s[s["luminance"] == luminance]):
+        return None
+    mean = rank_table(s, luminance=luminance, value="mean_score")
+    rank = rank_table(s, luminance=luminance, value="demosaic_rank")
+    per = s[s["luminance"] == luminance].drop_duplicates(["cfa", "demosaic"])
+    nmet = {(r.cfa, r.demosaic): int(r.n_metrics) for r in per.itertuples(index=False)} \
+        if "n_metrics" in per.columns else {}
+    cfas = [c for c in res.cfas if c in mean.columns]
+    rows = [d for d in res.demosaics if d in mean.index] + ["total"]
+    uneven = len(set(nmet.values())) > 1
+    finite = mean.to_numpy(dtype=float)
+    finite = finite[np.isfinite(finite)]
+    lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+    out = ['<table class="data scores">', _head(res, cfas, ["demosaic"]), "<tbody>"]
+    for d in rows:
+        cls = ' class="total"' if d == "total" else ""
+        label = "Total (mean over demosaics)" if d == "total" else d
+        row = [f"<tr{cls}><th class=\"rowgroup\">{_e(label)}</th>"]
+        for c in cfas:
+            v = mean.at[d, c] if c in mean.columns else np.nan
+            k = rank.at[d, c] if c in rank.columns else np.nan
+            if v is None or not np.isfinite(v):
+                row.append('<td class="na">—</td>')
+                continue
+            klass = "best" if np.isfinite(k) and int(k) == 1 and len(cfas) > 1 else ""
+            n = nmet.get((c, d))
+            tip = f"rank {int(k)} of {len(cfas)}" + (f"; mean of {n} metric score(s)" if n is not None else "")
+            flag = '<sup class="oor-mark">*</sup>' if uneven and n is not None and n != max(nmet.values()) else ""
+            row.append(f'<td class="{klass}" style="{_heat(v, lo, hi)}" data-value="{_num(v)}" title="{_e(tip)}">'
+                       f'{v:.4f}{flag} <span class="rank">({int(k)})</span></td>')
+        row.append("</tr>")
+        out.append("".join(row))
+    out.append("</tbody></table>")
+    if uneven:
+        out.append('<p class="note">* averages fewer metrics than the others (a metric is missing for this CFA '
+                   "and demosaic): its mean and rank are not comparable with the rest.</p>")
+    return "".join(out)
+
+
+def other_table(res: Results) -> str | None:
+    """Measurements that are reported but not scored (dE*ab, grey-patch dL,
+    interior S-CIELAB, any further metric) at the primary luminance."""
+    lum = res.primary_luminance
+    m = res.metrics
+    m = m[(m["luminance"] == lum) & ~m["metric"].isin(SCORED_METRICS)]
+    if not len(m):
+        return None
+    metrics = list(dict.fromkeys(m["metric"]))
+    cfas = [c for c in res.cfas if c in set(m["cfa"])]
+    out = ['<table class="data">', _head(res, cfas, ["demosaic", "measure", "scene"]), "<tbody>"]
+    for d in res.demosaics:
+        md = m[m["demosaic"] == d]
+        present = [(k, s) for k in metrics for s in dict.fromkeys(md[md["metric"] == k]["scene"])]
+        for i, (k, scene) in enumerate(present):
+            row = [_tr(i)]
+            if i == 0:
+                row.append(f'<th rowspan="{len(present)}" class="rowgroup">{_e(d)}</th>')
+            row.append(f'<th class="metric">{_metric_label(k, res)}</th><td class="scene">{_e(scene)}</td>')
+            for c in cfas:
+                v = res.value(scene, c, d, lum, k)
+                row.append('<td class="na">—</td>' if v is None else
+                           f'<td data-value="{_num(v)}">{fmt_value(k, v)}</td>')
+            row.append("</tr>")
+            out.append("".join(row))
+    out.append("</tbody></table>")
+    return "".join(out)
+
+
+def sweep_table(res: Results) -> str | None:
+    """The values behind the luminance-sweep figure: one row per (metric,
+    demosaic, luminance), one column per CFA."""
+    m = res.metrics
+    parts = []
+    for (scene, metric), g in m.groupby(["scene", "metric"], sort=False):
+        if g["luminance"].nunique() > 1 and metric in SCORED_METRICS:
+            parts.append((scene, metric, g))
+    if not parts:
+        return None
+    cfas = [c for c in res.cfas if c in set(m["cfa"])]
+    out = ['<table class="data">', _head(res, cfas, ["metric", "demosaic", "cd/m²"]), "<tbody>"]
+    for scene, metric, g in parts:
+        for d in res.demosaics:
+            gd = g[g["demosaic"] == d]
+            lums = sorted(gd["luminance"].unique())
+            for i, lum in enumerate(lums):
+                row = [_tr(i)]
+                if i == 0:
+                    row.append(f'<th rowspan="{len(lums)}" class="metric">{_metric_label(metric, res)}'
+                               f'<br><span class="unit">{_e(scene)}</span></th>'
+                               f'<th rowspan="{len(lums)}" class="rowgroup">{_e(d)}</th>')
+                row.append(f'<td class="lum">{lum:g}</td>')
+                for c in cfas:
+                    v = res.value(scene, c, d, lum, metric)
+                    row.append('<td class="na">—</td>' if v is None else
+                               f'<td data-value="{_num(v)}">{fmt_value(metric, v)}</td>')
+                row.append("</tr>")
+                out.append("".join(row))
+    out.append("</tbody></table>")
+    return "".join(out)
+
+
+def ranges_table(res: Results) -> str | None:
+    """The score ranges (eq. 8's worst and best ends) and how many scored
+    values fell outside each."""
+    s = res.scores
+    if not res.ranges and s is None:
+        return None
+    metrics = [m for m in SCORED_METRICS if m in res.ranges or (s is not None and m in set(s["metric"]))]
+    out = ['<table class="data ranges"><thead><tr><th>metric</th><th>scene</th><th>worst (score 0)</th>'
+           "<th>best (score 1)</th><th>measured (min … max)</th><th>outside the range</th></tr></thead><tbody>"]
+    for m in metrics:
+        r = res.ranges.get(m)
+        if r is None and s is not None and m in set(s["metric"]):
+            g0 = s[s["metric"] == m].iloc[0]
+            r = (float(g0["worst"]), float(g0["best"]))
+        g = s[s["metric"] == m] if s is not None else None
+        n = len(g) if g is not None else 0
+        if g is not None and n:
+            vmin, vmax = float(g["value"].min()), float(g["value"].max())
+            meas = f"{fmt_value(m, vmin)} … {fmt_value(m, vmax)}"
+            n_oor = int(g["out_of_range"].sum()) if "out_of_range" in g.columns else 0
+            oor = f"{n_oor} of {n}" if n_oor else "none"
+            klass = ' class="warn"' if n_oor else ""
+        else:
+            meas, oor, klass = "not measured", "—", ""
+        info = metric_info(m)
+        unit = f" {info.unit}" if info.unit else ""
+        w, b = (fmt_value(m, r[0]) + unit, fmt_value(m, r[1]) + unit) if r else ("—", "—")
+        out.append(f'<tr><th class="metric">{_metric_label(m, res)}</th>'
+                   f'<td class="scene">{_e(res.scene_for(m) or "—")}</td>'
+                   f"<td>{_e(w)}</td><td>{_e(b)}</td><td>{_e(meas)}</td><td{klass}>{_e(oor)}</td></tr>")
+    out.append("</tbody></table>")
+    return "".join(out)
