@@ -51,7 +51,7 @@ import numpy as np
 
 from .. import spectra
 from ..errors import CfaMitsubaError
-from .light import band_step_spectrum, d65_white_radiance, flat_spectrum
+from .light import band_spectrum, d65_white_radiance
 from .registry import Built, RenderConfig, Scene, register_scene
 
 #: Distance (m) from the camera to every chart: ISETCam's sceneInitGeometry default.
@@ -162,7 +162,7 @@ def _build_macbeth(scene: Scene, config: RenderConfig) -> Built:
     frame = _Frame(config)
     white = d65_white_radiance(wl)
     names, refl = spectra.colorchecker(wl)
-    objects = {"surround": frame.background(band_step_spectrum(wl, white * SURROUND_REFLECTANCE))}
+    objects = {"surround": frame.background(band_spectrum(config, white * SURROUND_REFLECTANCE))}
     patches = macbeth_layout(config.width, config.height)
     for i, patch in enumerate(patches):
         patch["name"] = names[i]
@@ -171,7 +171,7 @@ def _build_macbeth(scene: Scene, config: RenderConfig) -> Built:
         objects[f"patch{i:02d}"] = {
             "type": "rectangle",
             "to_world": frame.rect(*patch["rect"], z=1e-5 * frame.distance),
-            "emitter": {"type": "area", "radiance": band_step_spectrum(wl, white * refl[i])},
+            "emitter": {"type": "area", "radiance": band_spectrum(config, white * refl[i])},
         }
     meta = _common_meta(scene, config)
     meta["geometry"] = {
@@ -203,32 +203,6 @@ def _edge_geometry(width: int, height: int, oversample: int) -> dict:
         "high_reflectance": EDGE_REFLECTANCES[1],
         "roi": roi,
     }
-
-
-def _build_edge(scene: Scene, config: RenderConfig) -> Built:
-    import mitsuba as mi
-
-    frame = _Frame(config)
-    lo, hi = EDGE_REFLECTANCES
-    big = 2.0 * (frame.half_width + frame.half_width * config.height / config.width)
-    bright = {
-        "type": "rectangle",
-        # Left edge through the optical axis, tilted clockwise by the angle;
-        # a hair in front of the dark plane, so the edge projects through the
-        # image centre at the same angle.
-        "to_world": mi.ScalarTransform4f()
-        .translate([0.0, 0.0, 1e-5 * frame.distance])
-        .rotate([0, 0, 1], -EDGE_ANGLE_DEG)
-        .translate([big, 0.0, 0.0])
-        .scale([big, big, 1.0]),
-        "emitter": {"type": "area", "radiance": flat_spectrum(hi)},
-    }
-    objects = {"dark": frame.background(flat_spectrum(lo)), "bright": bright}
-    meta = _common_meta(scene, config)
-    meta["geometry"] = _edge_geometry(config.width, config.height, config.oversample)
-    white = d65_white_radiance(config.wl)
-    return Built(meta=meta, objects=objects, sensor=frame.sensor(config.fov_deg),
-                 pattern_spectrum=white, white_radiance=white)
 
 
 def _edge_fraction(height: int, width: int, angle_deg: float, center, cell: float = 1.0,

@@ -47,7 +47,7 @@ from ..errors import CfaMitsubaError
 from ..values import SpectralImage
 from . import variant as _variant
 from .integrator import PLUGIN_NAME
-from .light import BAND_INSET
+from .light import BAND_INSET, CENTRE_INSET
 from .registry import Built, RenderConfig, Scene, get_scene
 
 #: ISETCam's default mean scene luminance (cd/m^2).
@@ -303,8 +303,9 @@ def _render_boxes(mi, built: Built, cfg: RenderConfig, sc: Scene, boxes, *, widt
         raise ValueError("band boxes must be contiguous")
     film = {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"},
             "pixel_format": "luminance", "component_format": "float32"}
+    inset = CENTRE_INSET if built.band_constant else BAND_INSET
     integrator = {"type": PLUGIN_NAME, "band_edges": ",".join(repr(float(e)) for e in edges),
-                  "band_inset": BAND_INSET, "max_depth": cfg.max_depth}
+                  "band_inset": inset, "max_depth": cfg.max_depth}
     scene = _load(mi, built, film, sampler, integrator, probe)
     img = np.array(mi.render(scene, seed=cfg.seed), dtype=np.float32)
     n = len(boxes)
@@ -369,6 +370,7 @@ def _render_canonical(sc: Scene, cfg: RenderConfig) -> SpectralImage:
         "band_edges_nm": spectra.band_edges(wl).tolist(),
         "units": "W/(m^2 sr nm)",
         "band_definition": "box mean over the band's edges of the linearly interpolated spectrum",
+        "band_constant_spectra": built.band_constant,
         "illuminant": "D65",
         "canonical_white_radiance": np.asarray(white, dtype=np.float64).tolist(),
         "spp": cfg.spp,

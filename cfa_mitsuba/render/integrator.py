@@ -23,7 +23,8 @@ index), which :mod:`.userxml` enforces for users' scenes.
 
 Properties: ``band_edges`` (comma-separated box edges in nm, B + 1 values for
 B contiguous bands), ``band_inset`` (fraction of each box left unsampled at
-both ends, default 0; see :mod:`.light`), ``max_depth`` (1: emitters seen directly, the flat
+both ends, default 0; 0.5 evaluates every band at its box centre, for
+band-constant scenes; see :mod:`.light`), ``max_depth`` (1: emitters seen directly, the flat
 charts; 2: direct lighting; larger: multi-bounce).  Only for the JIT variants
 (llvm/cuda): Python integrators are impractically slow in ``scalar_*``.
 """
@@ -76,8 +77,8 @@ def _make_class(mi):
             if len(edges) < 2 or any(b <= a for a, b in zip(edges, edges[1:])):
                 raise ValueError("band_edges must be at least two ascending wavelengths (nm)")
             inset = float(props.get("band_inset", 0.0))
-            if not 0.0 <= inset < 0.5:
-                raise ValueError("band_inset must be in [0, 0.5)")
+            if not 0.0 <= inset <= 0.5:
+                raise ValueError("band_inset must be in [0, 0.5] (0.5: each band at its box centre)")
             # Sample each band uniformly on [lo + inset w, hi - inset w].
             self.lo = [a + inset * (b - a) for a, b in zip(edges, edges[1:])]
             self.width = [(b - a) * (1.0 - 2.0 * inset) for a, b in zip(edges, edges[1:])]
@@ -142,9 +143,10 @@ def _make_class(mi):
                 ds = mi.DirectionSample3f(scene, si=si, ref=si_prev)
                 em_pdf = scene.pdf_emitter_direction(si_prev, ds, ~delta_prev)
                 mis_hit = mis_weight(pdf_prev, em_pdf)
+                hit_em = active & (ds.emitter != None)  # noqa: E711 (a pointer array compared with null)
                 for g in range(n_groups):
                     si.wavelengths = wls[g]
-                    rad[g] = rad[g] + thr[g] * mis_hit * ds.emitter.eval(si, active)
+                    rad[g] = rad[g] + thr[g] * mis_hit * ds.emitter.eval(si, hit_em)
 
                 active_next = active & (depth + 1 < max_depth) & si.is_valid()
                 bsdf = si.bsdf(ray)

@@ -40,3 +40,38 @@ def write_preview(path, image: SpectralImage, exposure: float = 1.0) -> Path:
     from ..io.images import write_image
 
     return write_image(Path(path), srgb_preview(image, exposure))
+
+
+def main(argv=None) -> int:
+    """``python -m cfa_mitsuba.render.preview EXR PNG [--width W]``: an sRGB
+    preview of a spectral EXR (its sidecar gives the white), optionally
+    downsized to W pixels across by box averaging."""
+    import argparse
+
+    from ..io.exr import read_spectral_exr
+
+    parser = argparse.ArgumentParser(prog="python -m cfa_mitsuba.render.preview", description=main.__doc__)
+    parser.add_argument("exr")
+    parser.add_argument("png")
+    parser.add_argument("--width", type=int, default=None, help="downsize to this width (integer factor, box filter)")
+    args = parser.parse_args(argv)
+    image = read_spectral_exr(args.exr)
+    rgb = srgb_preview(image)
+    if args.width and args.width < rgb.shape[1]:
+        # Box-average in linear light, then re-encode: downsizing sRGB codes
+        # directly would darken fine detail such as the chirp.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            import colour
+        f = max(1, rgb.shape[1] // args.width)
+        h, w = (rgb.shape[0] // f) * f, (rgb.shape[1] // f) * f
+        lin = colour.models.eotf_sRGB(rgb[:h, :w]).reshape(h // f, f, w // f, f, 3).mean(axis=(1, 3))
+        rgb = np.clip(colour.models.eotf_inverse_sRGB(lin), 0, 1)
+    from ..io.images import write_image
+
+    write_image(args.png, rgb)
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())

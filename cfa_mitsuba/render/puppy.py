@@ -46,7 +46,7 @@ import math
 import numpy as np
 
 from .. import spectra
-from .light import band_step_spectrum, d65_white_radiance
+from .light import band_spectrum, d65_white_radiance
 from .registry import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene, register_scene
 
 #: Distance (m) from the lens to the plane of focus, through the dog's middle.
@@ -61,9 +61,9 @@ _TABLE_Y = -0.07  # table top height (m); the camera's axis is y = 0
 _DOG_Z = -FOCUS_DISTANCE_M
 
 
-def _lambert(wl, name: str) -> dict:
-    names, refl = spectra.colorchecker(wl)
-    return {"type": "diffuse", "reflectance": band_step_spectrum(wl, refl[names.index(name)])}
+def _lambert(config: RenderConfig, name: str) -> dict:
+    names, refl = spectra.colorchecker(config.wl)
+    return {"type": "diffuse", "reflectance": band_spectrum(config, refl[names.index(name)])}
 
 
 def _unit_sphere(n_lon: int = 48, n_lat: int = 24):
@@ -77,10 +77,11 @@ def _unit_sphere(n_lon: int = 48, n_lat: int = 24):
         for j in range(n_lon):
             a, b = i * n_lon + j, i * n_lon + (j + 1) % n_lon
             c, d = a + n_lon, b + n_lon
+            # Counter-clockwise seen from outside (normal = d phi x d theta).
             if i > 0:
-                faces.append((a, c, b))
+                faces.append((a, b, c))
             if i < n_lat - 1:
-                faces.append((b, c, d))
+                faces.append((b, d, c))
     return v, np.array(faces, dtype=np.uint32)
 
 
@@ -135,7 +136,7 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
     T = mi.ScalarTransform4f
     wl = config.wl
     white = d65_white_radiance(wl)
-    red, brown, black = (_lambert(wl, n) for n in ("red", "dark skin", "black 2 (1.5 D)"))
+    red, brown, black = (_lambert(config, n) for n in ("red", "dark skin", "black 2 (1.5 D)"))
     z = _DOG_Z
     body_y = _TABLE_Y + 0.052
 
@@ -167,23 +168,23 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
         "dog_tail": cyl((0.058, body_y + 0.008, z), (0.078, body_y + 0.040, z), 0.0045, red),
         "dog_tail_tip": sphere((0.078, body_y + 0.040, z), 0.0045, red),
         # The table, the backdrop, panels and props at several depths.
-        "table": {"type": "rectangle", "bsdf": _lambert(wl, "light skin"),
+        "table": {"type": "rectangle", "bsdf": _lambert(config, "light skin"),
                   "to_world": T().translate([0.0, _TABLE_Y, -2.0]).rotate([1, 0, 0], -90).scale([1.0, 1.25, 1.0])},
-        "backdrop": panel((0.0, 0.0, -3.0), (2.0, 0.75), 0.0, _lambert(wl, "neutral 6.5 (.44 D)")),
-        "panel_yellow": panel((-0.115, 0.115, -2.2), (0.075, 0.055), 20.0, _lambert(wl, "yellow")),
-        "panel_orange_yellow": panel((-0.045, 0.165, -2.5), (0.06, 0.045), -10.0, _lambert(wl, "orange yellow")),
-        "panel_blue_green": panel((0.035, 0.13, -2.7), (0.085, 0.055), 0.0, _lambert(wl, "bluish green")),
-        "block_blue": {"type": "cube", "bsdf": _lambert(wl, "blue"),
+        "backdrop": panel((0.0, 0.0, -3.0), (2.0, 0.75), 0.0, _lambert(config, "neutral 6.5 (.44 D)")),
+        "panel_yellow": panel((-0.115, 0.115, -2.2), (0.075, 0.055), 20.0, _lambert(config, "yellow")),
+        "panel_orange_yellow": panel((-0.045, 0.165, -2.5), (0.06, 0.045), -10.0, _lambert(config, "orange yellow")),
+        "panel_blue_green": panel((0.035, 0.13, -2.7), (0.085, 0.055), 0.0, _lambert(config, "bluish green")),
+        "block_blue": {"type": "cube", "bsdf": _lambert(config, "blue"),
                        "to_world": T().translate([0.07, _TABLE_Y + 0.026, -0.88]).rotate([0, 1, 0], 25).scale(0.026)},
-        "ball_yellow_green": sphere((-0.085, _TABLE_Y + 0.021, -1.55), 0.021, _lambert(wl, "yellow green")),
-        "post_magenta": cyl((0.12, _TABLE_Y, -1.8), (0.12, _TABLE_Y + 0.075, -1.8), 0.016, _lambert(wl, "magenta")),
-        "post_magenta_top": {"type": "disk", "bsdf": _lambert(wl, "magenta"),
+        "ball_yellow_green": sphere((-0.085, _TABLE_Y + 0.021, -1.55), 0.021, _lambert(config, "yellow green")),
+        "post_magenta": cyl((0.12, _TABLE_Y, -1.8), (0.12, _TABLE_Y + 0.075, -1.8), 0.016, _lambert(config, "magenta")),
+        "post_magenta_top": {"type": "disk", "bsdf": _lambert(config, "magenta"),
                              "to_world": T().translate([0.12, _TABLE_Y + 0.075, -1.8]).rotate([1, 0, 0], -90).scale(0.016)},
-        "ball_grey": sphere((0.16, _TABLE_Y + 0.035, -2.4), 0.035, _lambert(wl, "neutral 8 (.23 D)")),
+        "ball_grey": sphere((0.16, _TABLE_Y + 0.035, -2.4), 0.035, _lambert(config, "neutral 8 (.23 D)")),
         # The D65 key light (its level is arbitrary: renders are rescaled).
         "key_light": {"type": "rectangle",
                       "to_world": T().look_at(origin=[-0.5, 0.9, -0.4], target=[0.0, -0.02, z], up=[0, 1, 0]).scale(0.3),
-                      "emitter": {"type": "area", "radiance": band_step_spectrum(wl, 15.0 * white)}},
+                      "emitter": {"type": "area", "radiance": band_spectrum(config, 15.0 * white)}},
     }
     aperture = FOCAL_LENGTH_M / (2 * F_NUMBER)
     sensor = {

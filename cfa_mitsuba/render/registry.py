@@ -69,6 +69,10 @@ class Built:
     perfect white Lambertian square at ``center`` facing ``camera`` (scene
     units), whose radiance a radiance meter at ``camera`` measures.
 
+    ``band_constant``: every spectrum is constant inside each band (built-in
+    scenes, :mod:`.light`), so bands are evaluated at their box centres;
+    False for users' scenes, whose bands are jittered across their boxes.
+
     ``xml_sensor``: for XML scenes, the user's sensor element (with the film
     and sampler placeholders); ``xml`` holds ``<!--cfa:sensor-->`` in its
     place, so that the white probe can swap in a radiance meter.
@@ -80,6 +84,7 @@ class Built:
     xml: str | None = None
     xml_sensor: str | None = None
     xml_dir: Path | None = None
+    band_constant: bool = True
     pattern_spectrum: np.ndarray | None = None
     white_radiance: np.ndarray | None = None
     white_probe: dict[str, Any] | None = None

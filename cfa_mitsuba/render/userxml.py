@@ -231,7 +231,8 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
         },
     }
     probe = {"center": center, "camera": origin, "half_size": 0.01 * distance}
-    return Built(meta=meta, xml=xml, xml_sensor=sensor_xml, xml_dir=scene.path.parent, white_probe=probe)
+    return Built(meta=meta, xml=xml, xml_sensor=sensor_xml, xml_dir=scene.path.parent, white_probe=probe,
+                 band_constant=False)
 
 
 def _xyz(v):
