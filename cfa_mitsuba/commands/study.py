@@ -1,15 +1,57 @@
-"""``cfa-mitsuba study``: placeholder until its issue lands (see DESIGN.md)."""
+"""``cfa-mitsuba study CONFIG.toml [--out DIR --scheduler ADDRESS --workers N]``."""
 
 from __future__ import annotations
 
-from ..errors import CfaMitsubaError
+HELP = "run a study from a TOML config: renders, captures, metrics, scores, report"
 
-HELP = "study (not implemented yet)"
+DESCRIPTION = """\
+Run a study: render each scene once (through the shared render cache), then
+capture and process every (CFA, demosaic, luminance) and compute the metrics
+each scene feeds.  Writes DIR/metrics.csv (tidy), DIR/scores.csv (normalised
+scores and ranks), DIR/report.html and DIR/figures/.
+
+An interrupted study (Ctrl-C, a killed process) picks up where it stopped
+when run again with the same --out: finished work is kept.
+
+Examples:
+  cfa-mitsuba study configs/quick.toml
+  cfa-mitsuba study configs/paper.toml --out results/paper --workers 2
+  cfa-mitsuba study configs/paper.toml --scheduler tcp://10.0.0.5:8786
+"""
+
+
+def _positive_int(text: str) -> int:
+    import argparse
+
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {n}")
+    return n
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("rest", nargs="*")
+    parser.add_argument("config", metavar="CONFIG.toml", help="the study config (see configs/)")
+    parser.add_argument("--out", metavar="DIR", help="results directory (default: results/<config name>)")
+    parser.add_argument("--workers", type=_positive_int, metavar="N",
+                        help="local worker processes (default: the config's 'workers', else 2)")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="run on a Dask cluster, e.g. tcp://HOST:8786 (needs the 'dask' extra)")
+    parser.add_argument("--no-report", action="store_true", help="write the tables only, no HTML report")
+    parser.add_argument("--quiet", action="store_true", help="no progress bars")
 
 
 def run(args) -> int:
-    raise CfaMitsubaError("'study' is not implemented yet")
+    from pathlib import Path
+
+    from ..study.config import load_config
+    from ..study.runner import run_study
+
+    config = load_config(args.config)
+    out = Path(args.out) if args.out else Path("results") / config.name
+    result = run_study(config, out, workers=args.workers, scheduler=args.scheduler,
+                       progress=not args.quiet, report=False if args.no_report else None)
+    print(result.out_dir / ("metrics.csv" if args.no_report else "report.html"))
+    return 0

@@ -350,7 +350,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
     # --- normalisation --------------------------------------------------
     norm = data.get("normalisation", {})
     ck.table(norm, "normalisation", {"clip": None, "ranges": None})
-    clip = ck.boolean(norm.get("clip", False), "normalisation.clip")
+    clip = ck.boolean(norm.get("clip", True), "normalisation.clip")
     ranges_in = norm.get("ranges", {})
     ck.table(ranges_in, "normalisation.ranges", {m: None for m in DEFAULT_RANGES})
     ranges = {}

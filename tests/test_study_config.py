@@ -1,0 +1,111 @@
+"""Study configs: the shipped ones load; every kind of bad config is refused
+before any work starts, with exit 2 and the offending key named."""
+
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from cfa_mitsuba.errors import CfaMitsubaError
+from cfa_mitsuba.study.config import load_config
+from conftest import REPO, assert_one_line_error, run_cli
+
+GOOD = """
+name = "t"
+scenes = ["macbeth", "puppy"]
+cfas = ["bayer", "rgbw1"]
+demosaics = ["bilinear"]
+luminances = [100]
+"""
+
+
+def write(tmp_path: Path, text: str, name="c.toml") -> Path:
+    p = tmp_path / name
+    p.write_text(textwrap.dedent(text))
+    return p
+
+
+@pytest.mark.parametrize("name", ["quick.toml", "paper.toml", "examples/custom_cfa.toml",
+                                  "examples/custom_scene.toml"])
+def test_shipped_configs_load(name):
+    cfg = load_config(REPO / "configs" / name)
+    assert cfg.scenes and cfg.cfas and cfg.demosaics
+
+
+def test_paper_config_is_the_papers_study():
+    cfg = load_config(REPO / "configs" / "paper.toml")
+    assert len(cfg.cfas) == 12 and set(cfg.demosaics) == {"bilinear", "laplacian", "adaptive-laplacian", "pocs"}
+    assert {s.name for s in cfg.scenes} == {"macbeth", "slanted-edge", "chirp", "gray-bar", "puppy"}
+    (sweep,) = cfg.sweeps
+    assert sweep.scene == "puppy" and set(sweep.metrics) == {"scielab", "ssim"}
+    assert sweep.luminances == (3, 6, 12, 50, 100, 200, 400)
+
+
+def test_good_config_values(tmp_path):
+    cfg = load_config(write(tmp_path, GOOD + '[sensor]\npixel_pitch_um = 1.4\nnoise = "shot"\n'))
+    assert cfg.sensor == {"pixel_pitch_um": 1.4} and cfg.capture == {"noise": "shot"}
+    assert [s.metrics for s in cfg.scenes] == [("delta-e",), ("scielab", "ssim", "mdsi", "haarpsi")]
+
+
+BAD = [
+    # (extra text, key named in the error, reason fragment)
+    ("colour = 1\n", "colour", "unknown key"),
+    ("[sensor]\npixel_pich_um = 2\n", "sensor.pixel_pich_um", "unknown key"),
+    ("[sensor]\npixel_pitch_um = -1\n", "sensor", "positive"),
+    ("[sensor]\npixel_pitch_um = \"big\"\n", "sensor.pixel_pitch_um", "number"),
+    ("[sensor]\nnoise = \"loud\"\n", "sensor.noise", "one of"),
+    ("[sensor]\nexposure = 0\n", "sensor.exposure", "positive"),
+    ("[optics]\nf_number = 0\n", "optics", "f-number"),
+    ("[render.puppy]\nspp = 0\n", "render.puppy.spp", "at least 1"),
+    ("[render.puppy]\nwidth = 12.5\n", "render.puppy.width", "integer"),
+    ("[render]\nbands = \"700:400:10\"\n", "render.bands", "band grid"),
+    ("[render]\nvariant = \"gpu\"\n", "render.variant", "one of"),
+    ("[normalisation.ranges]\nssim = [1, 1]\n", "normalisation.ranges.ssim", "differ"),
+    ("[normalisation.ranges]\nsharpness = [0, 1]\n", "normalisation.ranges.sharpness", "unknown key"),
+    ("[isp]\nwhite_balance = \"auto\"\n", "isp.white_balance", "one of"),
+    ("[[sweep]]\nscene = \"macbeth\"\nmetrics = [\"ssim\"]\nluminances = [10]\n", "sweep[0].metrics[0]",
+     "does not feed"),
+    ("[[sweep]]\nscene = \"chirp\"\nluminances = [10]\n", "sweep[0].scene", "not one of"),
+    ("[output]\nfigures = [\"jpg\"]\n", "output.figures[0]", "png or svg"),
+]
+
+
+@pytest.mark.parametrize("extra, key, reason", BAD)
+def test_bad_values_are_refused_with_the_key(tmp_path, extra, key, reason):
+    p = write(tmp_path, GOOD + extra)
+    with pytest.raises(CfaMitsubaError) as err:
+        load_config(p)
+    msg = str(err.value)
+    assert f": {key}:" in msg and reason.lower() in msg.lower(), msg
+
+
+@pytest.mark.parametrize("text, key", [
+    (GOOD.replace('"macbeth", ', '"macbeth", "kitchen", '), "scenes[1]"),
+    (GOOD.replace('"rgbw1"', '"rgbw9"'), "cfas[1]"),
+    (GOOD.replace('"rgbw1"', '"nothere.toml"'), "cfas[1]"),
+    (GOOD.replace('["bilinear"]', '["bilinear", "nearest"]'), "demosaics[1]"),
+    (GOOD.replace("[100]", "[100, -3]"), "luminances[1]"),
+    (GOOD.replace("[100]", "[100, 100]"), "luminances"),
+    (GOOD.replace('cfas = ["bayer", "rgbw1"]\n', ""), "cfas"),
+    (GOOD.replace('["bilinear"]', '"bilinear"'), "demosaics"),
+    (GOOD + "[[custom_scenes]]\nname = \"room\"\nfile = \"missing.xml\"\n", "custom_scenes[0].file"),
+])
+def test_bad_lists_and_names(tmp_path, text, key):
+    with pytest.raises(CfaMitsubaError) as err:
+        load_config(write(tmp_path, text))
+    assert f": {key}:" in str(err.value), str(err.value)
+
+
+def test_invalid_toml_and_missing_file(tmp_path):
+    with pytest.raises(CfaMitsubaError, match="invalid TOML"):
+        load_config(write(tmp_path, "scenes = [\n"))
+    with pytest.raises(CfaMitsubaError, match="no such config"):
+        load_config(tmp_path / "none.toml")
+
+
+def test_cli_refuses_before_any_work(tmp_path):
+    p = write(tmp_path, GOOD + "[sensor]\nwell_capacity_e = 0\n")
+    out = tmp_path / "out"
+    proc = run_cli("study", p, "--out", out)
+    assert_one_line_error(proc, "sensor", "well_capacity_e")
+    assert not out.exists()  # nothing was started, no results folder
