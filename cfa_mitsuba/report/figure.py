@@ -29,6 +29,8 @@ RC = {
     "font.family": "DejaVu Sans",
     # a fixed title position skips matplotlib's per-draw search for overlapping ticks (no top ticks here)
     "axes.titley": 1.0, "axes.titlepad": 5.0,
+    # labels are users' CFA and scene names: a '$' in one must stay a dollar sign, not start mathtext
+    "text.parse_math": False,
 }
 
 
@@ -56,11 +58,18 @@ class ReportFigure:
 
 @dataclass
 class Absent:
-    """A figure the data does not support, and why (shown in the report)."""
+    """A figure the data does not support, and why (shown in the report).
+
+    ``not_in_study``: the study did not measure it at all (no scene feeds
+    the metric); the page then names it once in the summary instead of
+    showing an empty section.  Otherwise it was measured but something the
+    figure needs is missing, and the section says so.
+    """
 
     section: str
     title: str
     reason: str
+    not_in_study: bool = False
 
 
 def new_figure(width_in: float, height_in: float):

@@ -20,7 +20,7 @@ import numpy as np
 
 from .figure import Absent, ReportFigure, cfa_legend, grid_shape, legend_rows, panel_grid
 from .results import Results
-from .style import CHANNEL_STYLES, cfa_styles, fmt_value
+from .style import CHANNEL_STYLES, cfa_styles, fmt_value, metric_info
 
 #: The ideal sensor: a broad grey line under the cameras' (unlike any CFA's line).
 _IDEAL = dict(color="#000000", alpha=0.35, linestyle="-", linewidth=3.2, solid_capstyle="butt")
@@ -51,10 +51,19 @@ def _pairs(res: Results, metric: str, lum: float):
     return scene, out
 
 
+_NOT_RUN = {
+    "delta-e": "the ColorChecker (macbeth: ΔE00, Table 1, Figs 8-9)",
+    "mtf": "the slanted edge (MTF50, Figs 6, 11)",
+    "moire": "the chirp (MSP, Fig 13)",
+    "achromatic": "the gray bar (AR error, Fig 14)",
+}
+
+
 def _no_details(section, title, res, metric, what):
     scene = res.scene_for(metric)
     if scene is None:
-        return Absent(section, title, f"no {what} in this study (no scene fed '{metric}')")
+        return Absent(section, title, _NOT_RUN.get(metric, f"a scene for {metric_info(metric).short}"),
+                      not_in_study=True)
     return Absent(section, title, f"'{metric}' was measured on {scene!r} but its details "
                   f"(details/{scene}/<cfa>/<demosaic>/L*.json) are missing: rerun the study to rebuild them")
 
@@ -366,7 +375,7 @@ def scielab_maps(res: Results):
     lum = res.primary_luminance
     scene = res.scene_for("scielab")
     if scene is None or lum is None:
-        return Absent("scielab", title, "no S-CIELAB in this study (no puppy or custom scene)")
+        return Absent("scielab", title, "S-CIELAB maps (puppy or a custom scene, Fig 10)", not_in_study=True)
     maps = {}
     for d in res.demosaics:
         for c in res.cfas:

@@ -241,9 +241,8 @@ def luminance_sweep(res: Results):
         if g["luminance"].nunique() > 1 and metric in SCORED_METRICS:
             pairs.append((scene, metric))
     if not pairs:
-        return Absent("sweep", title, "no luminance sweep in this study (every metric was measured at one "
-                      "luminance); add a [[sweep]] to the config, e.g. the paper's S-CIELAB and SSIM on puppy "
-                      "at 3, 6, 12, 50, 100, 200, 400 cd/m²")
+        return Absent("sweep", title, "a luminance sweep (a [[sweep]] in the config adds one, as the paper's "
+                      "S-CIELAB and SSIM on puppy at 3-400 cd/m²)", not_in_study=True)
     pairs.sort(key=lambda p: (SCORED_METRICS.index(p[1]), p[0]))
     dems = [d for d in res.demosaics if d in set(m["demosaic"])]
     cst = cfa_styles(res.cfas)

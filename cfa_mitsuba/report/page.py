@@ -12,6 +12,7 @@ __all__ = ["render_page"]
 
 import base64
 import html
+from pathlib import Path
 
 from .. import __version__
 from .results import Results
@@ -31,7 +32,7 @@ SECTIONS = (
      "False colour on a black-and-white chirp and the frequency where it starts."),
     ("achromatic", "Achromatic reproduction: gray bar", "Fig 14",
      "Lightness along the gray bar and its error per step."),
-    ("sweep", "Low light: metrics against luminance", "s. 3 (S-CIELAB, SSIM at 3-400 cd/m²)",
+    ("sweep", "Low light: metrics against luminance", "s. 3: S-CIELAB, SSIM at 3-400 cd/m²",
      "How the image metrics degrade as the scene gets darker."),
     ("outputs", "Camera outputs", "Figs 10, 12, 14 (images)",
      "The rendered sRGB images, every CFA and demosaicing method next to the ideal sensor."),
@@ -164,7 +165,7 @@ def _section_figures(sec: str, items: list, embeds: dict) -> str:
     return "".join(out)
 
 
-def _summary(res: Results, facts: dict) -> str:
+def _summary(res: Results, facts: dict, not_run: list) -> str:
     cfg = res.config
     cst = cfa_styles(res.cfas)
     parts = []
@@ -189,7 +190,7 @@ def _summary(res: Results, facts: dict) -> str:
             r = s.get("render") or {}
             size = f" {r['width']}×{r['height']}" if r.get("width") and r.get("height") else ""
             mets = ", ".join(metric_info(m).short for m in s.get("metrics") or [])
-            src = f", {s['file']}" if s.get("file") else ""
+            src = f", {Path(str(s['file'])).name}" if s.get("file") else ""
             scenes.append(f"{s.get('name')}{size}{src} ({mets})" if mets else f"{s.get('name')}{size}{src}")
     if not scenes:
         scenes = res.scenes
@@ -217,6 +218,12 @@ def _summary(res: Results, facts: dict) -> str:
         rows.append(("Scores", "clipped to [0, 1]" if cfg.get("clip_scores") else
                      "not clipped (values outside a range score below 0 or above 1)"))
     parts.append('<dl class="run">' + "".join(f"<dt>{_e(k)}</dt><dd>{_e(v)}</dd>" for k, v in rows) + "</dl>")
+    if not_run:
+        rows_nr = "; ".join(a.reason for a in not_run)
+        parts.append(f'<p class="note">Not in this study, so not in this report: {_e(rows_nr)}.</p>')
+    if not len(res.metrics):
+        parts.append('<div class="absent"><b>metrics.csv holds no measurements:</b> the study wrote no rows, '
+                     "so there is nothing to report.</div>")
     if res.notes:
         parts.append('<ul class="tight">' + "".join(f'<li class="note">{_e(n)}</li>' for n in res.notes) + "</ul>")
     return "".join(parts)
@@ -263,7 +270,15 @@ def render_page(res: Results, *, figures: list, absents: list, embeds: dict, tab
     desc = res.config.get("description") or ""
     nav = [("summary", "Summary"), ("tables", "Tables 1-3"), ("ranges", "Score ranges")]
     body = []
-    body.append(f'<section id="summary"><h2>Summary</h2>{_summary(res, facts)}</section>')
+    # a section the study did not run at all is named once in the summary, not shown empty
+    by_sec: dict = {}
+    for a in absents:
+        by_sec.setdefault(a.section, []).append(a)
+    skipped = {sec for sec, items in by_sec.items()
+               if all(a.not_in_study for a in items) and not any(f.section == sec for f in figures)}
+    not_run = [items[0] for sec, items in by_sec.items() if sec in skipped]
+    absents = [a for a in absents if a.section not in skipped]
+    body.append(f'<section id="summary"><h2>Summary</h2>{_summary(res, facts, not_run)}</section>')
 
     t = ['<section id="tables"><h2>Tables</h2>']
     lum = res.primary_luminance

@@ -213,6 +213,8 @@ def load_results(out_dir) -> Results:
     import pandas as pd
 
     root = Path(out_dir)
+    if root.exists() and not root.is_dir():
+        raise CfaMitsubaError(f"{str(root)!r} is a file, not a results directory")
     if not root.is_dir():
         raise CfaMitsubaError(f"no such results directory {str(root)!r}")
     mpath = root / "metrics.csv"

@@ -307,7 +307,9 @@ def ranges_table(res: Results) -> str | None:
     s = res.scores
     if not res.ranges and s is None:
         return None
-    metrics = [m for m in SCORED_METRICS if m in res.ranges or (s is not None and m in set(s["metric"]))]
+    metrics = [m for m in SCORED_METRICS if s is not None and m in set(s["metric"])]
+    if not metrics:
+        return None
     out = ['<table class="data ranges"><thead><tr><th>metric</th><th>scene</th><th>worst (score 0)</th>'
            "<th>best (score 1)</th><th>measured (min … max)</th><th>outside the range</th></tr></thead><tbody>"]
     for m in metrics:
