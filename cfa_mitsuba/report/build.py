@@ -187,7 +187,8 @@ def _facts(res: Results) -> dict:
     return facts
 
 
-def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, log=None) -> Path:
+def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, timing: dict | None = None,
+                 log=None) -> Path:
     """Build ``out_dir/report.html`` and ``out_dir/figures/*`` from a study's
     results directory (see :mod:`cfa_mitsuba.report`).
 
@@ -200,6 +201,8 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, lo
         'pdf'; empty: none; the page embeds its figures either way).
     thumbnails : draw the sheets of camera outputs (they are the largest
         part of the page).
+    timing : the study's timing (as timing.json holds it), for a runner that
+        builds the report before it writes timing.json; default: the file.
     log : callable taking one line (default: silent); gets per-figure times.
 
     Returns
@@ -223,6 +226,9 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, lo
                               f"(known: {', '.join(FIGURE_FORMATS)})")
     t0 = time.perf_counter()
     res = load_results(out_dir)
+    if timing is not None:
+        res.timing = dict(timing)
+        res.notes = [n for n in res.notes if not n.startswith("timing.json")]
     root = res.root
     fig_dir = root / "figures"
     with matplotlib.rc_context(RC):

@@ -248,8 +248,9 @@ def _conventions(res: Results) -> str:
         "<b>Scores</b> (eq. 8): (value − worst) / (best − worst) with the ranges listed above, so 1 is best for "
         "every metric; a CFA's score for a demosaic is the mean of its metric scores (Table 3), 'total' the "
         "mean over demosaics; ranks: 1 = best, ties share the lower rank.",
-        "<b>Table marks</b>: a red box marks the best CFA for a metric and demosaic (the paper's red boxes); "
-        "† a value outside its score range; ↑/↓ higher/lower is better. Hover a cell for its score and rank.",
+        "<b>Table marks</b>: a red box marks the best value of a metric for a demosaic (the paper's red boxes); "
+        "† a value outside its score range; ≥ an MSP that is a lower bound; ↑/↓ higher/lower is better. Hover "
+        "a cell for its score and rank.",
         "<b>Colours</b>: each CFA keeps one colour and marker in every figure (Paul Tol's colour-blind-safe "
         "schemes; markers and line styles tell CFAs apart where colours are close).",
         "<b>Files</b>: every figure is also in <code>figures/</code> next to this report (PNG and SVG); the "
@@ -295,9 +296,10 @@ def render_page(res: Results, *, figures: list, absents: list, embeds: dict, tab
                  '<span class="paper">(paper Table 2)</span></h3>')
         if tab:
             t.append(f'<div class="tablewrap">{tab}</div>')
-            t.append('<p class="note">Boxed: the best CFA for the metric and demosaic (the paper\'s red boxes). '
-                     "↑ higher / ↓ lower is better; † outside the metric's score range (see below). Hover a cell "
-                     "for its score and rank.</p>")
+            t.append('<p class="note">Boxed: the best value of the metric for the demosaic (the paper\'s red '
+                     "boxes). ↑ higher / ↓ lower is better; † outside the metric's score range (see below); ≥ an "
+                     "MSP where no moiré was found up to the chirp's top frequency. Hover a cell for its score and "
+                     "rank.</p>")
     if not tables.get("table2"):
         t.append('<div class="absent"><b>Not available:</b> nothing was scored.</div>')
     for L, tab in tables.get("table3", []):

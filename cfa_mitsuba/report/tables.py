@@ -2,8 +2,9 @@
 
 - Table 1: mean dE over the 24 patches and mean dL over the 6 grey patches
   per CFA (the paper gives bilinear only; here one row group per demosaic);
-- Table 2: every scored metric per CFA per demosaic, the best CFA per metric
-  and demosaic boxed (the paper's red boxes, ``metric_rank == 1``);
+- Table 2: every scored metric per CFA per demosaic, the best value per
+  metric and demosaic boxed (the paper's red boxes; by value, as clipped
+  scores tie at 1 beyond a range's best end);
 - Table 3: mean normalised score per demosaic and their mean ('total'),
   with ranks (:func:`cfa_mitsuba.study.scoring.rank_table`).
 
@@ -121,13 +122,15 @@ def table2(res: Results, luminance: float) -> str | None:
             if i == 0:
                 row.append(f'<th rowspan="{len(present)}" class="rowgroup">{_e(d)}</th>')
             row.append(f'<th class="metric">{_metric_label(m, res)}</th>')
+            # the best value, not metric_rank 1: clipped scores tie at 1 for every value beyond the best end
+            best = _best({c: float(by[(c, d, m)].value) for c in cfas if (c, d, m) in by}, _direction(m, res))
             for c in cfas:
                 r = by.get((c, d, m))
                 if r is None:
                     row.append('<td class="na">—</td>')
                     continue
                 klass = []
-                if getattr(r, "metric_rank", None) == 1 and n_cfa > 1:
+                if c in best and n_cfa > 1:
                     klass.append("best")
                 oor = bool(getattr(r, "out_of_range", False))
                 if oor:
