@@ -13,6 +13,11 @@ from pathlib import Path
 
 from ..errors import CfaMitsubaError
 
+# The process's umask, read once at import (reading it means setting it, so
+# not on every write, where another thread could be creating a file).
+_UMASK = os.umask(0o022)
+os.umask(_UMASK)
+
 
 def check_writable_dir(directory, *, create: bool = True) -> Path:
     """Return ``directory`` as a Path, creating it if asked; refuse it with a
@@ -51,6 +56,10 @@ def atomic_output(path, *, suffix: str | None = None):
     tmp_path = Path(tmp)
     try:
         yield tmp_path
+        # mkstemp creates the file 0600; give it the permissions an ordinary
+        # open() would (0666 less the umask), so others (e.g. Dask workers
+        # sharing a render cache) can read it.
+        os.chmod(tmp_path, 0o666 & ~_UMASK)
         os.replace(tmp_path, target)
     except BaseException:
         with contextlib.suppress(OSError):
