@@ -369,7 +369,9 @@ def _render_canonical(sc: Scene, cfg: RenderConfig) -> SpectralImage:
         "wavelengths": list(cfg.wavelengths),
         "band_edges_nm": spectra.band_edges(wl).tolist(),
         "units": "W/(m^2 sr nm)",
-        "band_definition": "box mean over the band's edges of the linearly interpolated spectrum",
+        "band_definition": ("band means (box averages of the linearly interpolated colour-science data) of "
+                            "illuminant and reflectances, multiplied band by band" if built.band_constant else
+                            "box mean over the band's edges of the linearly interpolated spectrum"),
         "band_constant_spectra": built.band_constant,
         "illuminant": "D65",
         "canonical_white_radiance": np.asarray(white, dtype=np.float64).tolist(),
