@@ -15,18 +15,20 @@ times the cost), all bands along every path.
 
 Default quality: 100 samples per pixel (10 x 10 strata).  Measured on a
 180 x 159 render, the median relative luminance noise per pixel is 0.93 %
-at 64 spp and falls as 1/sqrt(spp), so 100 spp gives about 0.75 %, inside
-the 1 % target with margin, at about 3.6 us of CPU per sample (about 165
-CPU seconds for 636 x 720).  (A uniform D65 sky as extra fill cost 35 %
-more per sample and raised the noise; a second area light as fill raised
-the noise too.)
+at 64 spp and falls as 1/sqrt(spp), so 100 spp should give about 0.75 %,
+inside the 1 % target with margin; measured at 636 x 720 (two seeds):
+0.66 %.  It costs about 2.8 us of CPU per sample (about 130 CPU seconds
+for 636 x 720).  (A uniform D65 sky as extra fill cost 35 % more per sample
+and raised the noise; a second area light as fill raised the noise too.)
 
 Camera: the paper's 10 degree horizontal field of view, 636 x 720, through
 Mitsuba's ``thinlens`` focused on the dog at :data:`FOCUS_DISTANCE_M`.  The
 lens is the one that images that field onto 720 pixels of 2.2 um (1.584 mm):
 focal length f = 0.792 mm / tan(5 deg) = 9.05 mm, at f/2 (aperture radius
-f / 2N = 2.26 mm), so that depth of field shows: the blue block (0.9 m) and
-the backdrop (3 m) are blurred by discs of about 8 and 11 pixels.  Mitsuba's
+f / 2N = 2.26 mm), so that depth of field shows: the blur disc (thin lens,
+diameter 2R |d - S| / S on the object, here in pixels of the 720-wide
+image) is 5.6 px for the blue block (0.88 m), 3.5 px for the ball (1.55
+m), 7 to 9 px for the panels (2.2 to 2.7 m) and 9.3 px for the backdrop.  Mitsuba's
 thin lens models defocus only; the optics stage adds diffraction (at the
 sidecar's ``f_number``), relative illumination and the pixel aperture.
 
