@@ -65,6 +65,7 @@ def bench_charts():
     print("| scene | size (rows x cols) | spp | process wall (s) | Mitsuba render (s) |")
     print("|---|---|---|---|---|")
     total = mitsuba_total = 0.0
+    accuracy = []
     with tempfile.TemporaryDirectory() as tmp:
         for name in CHARTS:
             dt, _ = _ours(name, tmp)
@@ -72,7 +73,37 @@ def bench_charts():
             total += dt
             mitsuba_total += meta["render_time_s"]
             print(f"| {name} | {meta['height']} x {meta['width']} | {meta['spp']} | {dt:.1f} | {meta['render_time_s']:.2f} |")
+            accuracy.append(_chart_accuracy(name, Path(tmp) / f"{name}.exr"))
     print(f"| **total** | | | **{total:.1f}** | {mitsuba_total:.2f} |")
+    print("\nAccuracy of those renders (against colour-science band means and the exact box integrals):\n")
+    for line in accuracy:
+        print(f"- {line}")
+
+
+def _chart_accuracy(name, exr):
+    from cfa_mitsuba import spectra
+    from cfa_mitsuba.io import read_spectral_exr
+    from cfa_mitsuba.render import charts
+
+    img = read_spectral_exr(exr)
+    white = np.asarray(img.meta["white_radiance"])
+    lum = spectra.luminance_cd_m2(img.data).mean()
+    if name == "macbeth":
+        _, refl = spectra.colorchecker()
+        err = noise = 0.0
+        for i, p in enumerate(img.meta["geometry"]["patches"]):
+            y0, x0, y1, x1 = p["interior_rect"]
+            pix = img.data[y0:y1, x0:x1].reshape(-1, img.data.shape[-1])
+            err = max(err, float(np.max(np.abs(pix.mean(0) / (white * refl[i]) - 1))))
+            noise = max(noise, float(np.max(pix.std(0) / pix.mean(0))))
+        return (f"macbeth: worst patch-interior band error vs D65 x Ohta band means {100 * err:.1e} %, "
+                f"worst band relative std in a patch {100 * noise:.1e} %, mean luminance {lum:.4f} cd/m^2")
+    exact = charts.exact_reflectance(name, img.meta["width"], img.meta["height"], img.meta["oversample"])
+    e = (img.data / white - exact[..., None]) / exact.max()
+    hi = e[:, img.meta["width"] // 2:]
+    return (f"{name}: anti-aliasing error vs the exact box integral, rms {100 * np.sqrt(np.mean(e ** 2)):.1e} % "
+            f"of full scale (right half {100 * np.sqrt(np.mean(hi ** 2)):.1e} %), max {100 * np.abs(e).max():.1e} %, "
+            f"mean luminance {lum:.4f} cd/m^2")
 
 
 # ------------------------------------------------------------------- stock
