@@ -4,7 +4,6 @@ from __future__ import annotations
 
 __all__ = ["build_report", "FIGURE_FORMATS"]
 
-import os
 import sys
 import time
 import warnings
@@ -118,9 +117,6 @@ def _write(path: Path, data) -> None:
             tmp.write_bytes(data)
         else:
             tmp.write_text(data, encoding="utf-8")
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(path, 0o666 & ~mask)  # readable like any other file, not mkstemp's 0600
 
 
 def _facts(res: Results) -> dict:
@@ -252,10 +248,10 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
         "ranges": tables.ranges_table(res),
     }
     text = page.render_page(res, figures=figures, absents=absents, embeds=embeds, tables=tabs, facts=_facts(res))
-    # figures/: this build's files only (a rebuild must not leave figures of CFAs no longer in the results)
+    # figures/: this build's files only (a rebuild must not leave figures of CFAs no longer in the
+    # results); with no formats asked for, figures/ is left as it is
     if formats:
         fig_dir.mkdir(exist_ok=True)
-    if fig_dir.is_dir():
         keep = {f"{k}.{fmt}" for k, by in files.items() for fmt in by}
         for old in fig_dir.iterdir():
             if old.is_file() and old.suffix.lstrip(".") in FIGURE_FORMATS and old.name not in keep:

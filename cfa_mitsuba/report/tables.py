@@ -60,10 +60,14 @@ def _metric_label(metric: str, res: Results) -> str:
     return f'<span title="{_e(info.long)}">{_e(info.short)}</span>{unit} <span class="dir">{arrow}</span>'
 
 
-def _best(values: dict, higher: bool) -> set:
+def _best(values: dict, higher: bool, decimals: int | None = None) -> set:
+    """The keys of the best value; with ``decimals``, every value equal to it
+    as printed is best too (a reader sees a tie, so the table shows one)."""
     finite = {k: v for k, v in values.items() if v is not None and np.isfinite(v)}
     if not finite:
         return set()
+    if decimals is not None:
+        finite = {k: float(f"{v:.{decimals}f}") for k, v in finite.items()}  # as fmt_value prints it
     target = max(finite.values()) if higher else min(finite.values())
     return {k for k, v in finite.items() if v == target}
 
@@ -82,7 +86,7 @@ def table1(res: Results) -> str | None:
         present = [m for m in rows_metrics if any(res.value(scene, c, d, lum, m) is not None for c in cfas)]
         for i, m in enumerate(present):
             vals = {c: res.value(scene, c, d, lum, m) for c in cfas}
-            best = _best(vals, higher=False)
+            best = _best(vals, higher=False, decimals=metric_info(m).decimals)
             row = [_tr(i)]
             if i == 0:
                 row.append(f'<th rowspan="{len(present)}" class="rowgroup">{_e(d)}</th>')
@@ -123,7 +127,8 @@ def table2(res: Results, luminance: float) -> str | None:
                 row.append(f'<th rowspan="{len(present)}" class="rowgroup">{_e(d)}</th>')
             row.append(f'<th class="metric">{_metric_label(m, res)}</th>')
             # the best value, not metric_rank 1: clipped scores tie at 1 for every value beyond the best end
-            best = _best({c: float(by[(c, d, m)].value) for c in cfas if (c, d, m) in by}, _direction(m, res))
+            best = _best({c: float(by[(c, d, m)].value) for c in cfas if (c, d, m) in by}, _direction(m, res),
+                         metric_info(m).decimals)
             for c in cfas:
                 r = by.get((c, d, m))
                 if r is None:
@@ -170,7 +175,7 @@ def _table2_from_metrics(res: Results, luminance: float) -> str | None:
         for i, k in enumerate(present):
             scene = res.scene_for(k)
             vals = {c: res.value(scene, c, d, luminance, k) for c in cfas}
-            best = _best(vals, _direction(k, res))
+            best = _best(vals, _direction(k, res), metric_info(k).decimals)
             row = [_tr(i)]
             if i == 0:
                 row.append(f'<th rowspan="{len(present)}" class="rowgroup">{_e(d)}</th>')
