@@ -26,6 +26,7 @@ __all__ = [
     "parse_spectral_channel",
     "read_spectral_exr",
     "write_spectral_exr",
+    "linear_srgb",
 ]
 
 import json
@@ -88,10 +89,12 @@ def parse_spectral_channel(name: str) -> float | None:
     return value * 10.0 ** (exp + 9) if exp + 9 >= 0 else value / 10.0 ** (-(exp + 9))
 
 
-def _preview_rgb(data: np.ndarray, wavelengths: np.ndarray, meta: dict) -> np.ndarray:
-    """Linear sRGB (D65) of band radiance, scaled so that the scene's white
-    diffuser (``meta['white_luminance_cd_m2']``) has Y = 1; without it, an
-    18 % grey at the image's mean luminance."""
+def linear_srgb(data: np.ndarray, wavelengths, meta: dict) -> np.ndarray:
+    """Linear sRGB (IEC 61966-2-1 primaries, D65 white) of band radiance
+    (H, W, B) in W/(m^2 sr nm), scaled so that the scene's white diffuser
+    (``meta['white_luminance_cd_m2']``) has Y = 1; without it, so that the
+    image's mean is an 18 % grey.  No chromatic adaptation: D65 is both our
+    scenes' illuminant and sRGB's white."""
     import warnings
 
     with warnings.catch_warnings():
@@ -139,7 +142,7 @@ def write_spectral_exr(path, image: SpectralImage, *, preview: bool = True) -> P
     channels = {spectral_channel_name(w): np.ascontiguousarray(data[..., b], dtype=np.float32) for b, w in enumerate(wl)}
     if preview and wl.size >= 2 and wl[0] - 0.5 * (wl[1] - wl[0]) >= 360 and wl[-1] + 0.5 * (wl[-1] - wl[-2]) <= 830:
         # (the CIE 1931 functions are defined on 360..830 nm only)
-        rgb = _preview_rgb(data, wl, meta)
+        rgb = linear_srgb(data, wl, meta)
         for i, c in enumerate("RGB"):
             channels[c] = np.ascontiguousarray(rgb[..., i], dtype=np.float32)
     with atomic_output(p) as tmp:

@@ -121,7 +121,7 @@ def _texels_per_stratum_grid(spp: int, cap: int) -> int:
     return max(d for d in range(1, min(s, cap) + 1) if s % d == 0)
 
 
-def _common_meta(scene: Scene, config: RenderConfig) -> dict:
+def _common_meta() -> dict:
     return {"scene_distance_m": CHART_DISTANCE_M, "illuminant": "D65"}
 
 
@@ -173,7 +173,7 @@ def _build_macbeth(scene: Scene, config: RenderConfig) -> Built:
             "to_world": frame.rect(*patch["rect"], z=1e-5 * frame.distance),
             "emitter": {"type": "area", "radiance": band_spectrum(config, white * refl[i])},
         }
-    meta = _common_meta(scene, config)
+    meta = _common_meta()
     meta["geometry"] = {
         "reflectance_set": "ColorChecker N Ohta",
         "surround_reflectance": SURROUND_REFLECTANCE,
@@ -253,7 +253,7 @@ def _build_edge(scene: Scene, config: RenderConfig) -> Built:
     # Row 0 of a bitmap lands at the bottom of a rectangle seen from +z.
     texture = {"type": "bitmap", "bitmap": mi.Bitmap(np.flipud(cells).astype(np.float32)[..., None]),
                "raw": True, "filter_type": "nearest", "wrap_mode": "clamp"}
-    meta = _common_meta(scene, config)
+    meta = _common_meta()
     meta["geometry"] = _edge_geometry(config.width, config.height, config.oversample)
     white = d65_white_radiance(config.wl)
     return Built(meta=meta, objects={"chart": frame.background(texture)}, sensor=frame.sensor(config.fov_deg),
@@ -341,7 +341,7 @@ def _build_row_pattern(scene: Scene, config: RenderConfig, bitmap: np.ndarray, g
     texture = {"type": "bitmap", "bitmap": mi.Bitmap(bitmap), "raw": True,
                "filter_type": "nearest", "wrap_mode": "clamp"}
     objects = {"chart": frame.background(texture)}
-    meta = _common_meta(scene, config)
+    meta = _common_meta()
     meta["geometry"] = geometry
     white = d65_white_radiance(config.wl)
     return Built(meta=meta, objects=objects, sensor=frame.sensor(config.fov_deg),
@@ -383,8 +383,9 @@ def exact_reflectance(name: str, width: int, height: int, oversample: int | None
     """The exact box integral over each EXR pixel of an achromatic chart's
     reflectance pattern, shape (height, width): what an alias-free render
     divided by its white radiance must equal.  Independent of Mitsuba."""
-    scene = get_chart(name)
-    k = oversample if oversample is not None else scene.oversample
+    from .registry import get_scene
+
+    k = oversample if oversample is not None else get_scene(name).oversample
     if name == "slanted-edge":
         return _edge_reflectance(height, width)
     if name == "chirp":
@@ -397,12 +398,6 @@ def exact_reflectance(name: str, width: int, height: int, oversample: int | None
     else:
         raise CfaMitsubaError(f"no exact reflectance pattern for scene {name!r}")
     return np.broadcast_to(row, (height, width)).copy()
-
-
-def get_chart(name: str) -> Scene:
-    from .registry import get_scene
-
-    return get_scene(name)
 
 
 # ----------------------------------------------------------------- registry

@@ -42,7 +42,6 @@ __all__ = [
     "d65_white_radiance",
     "band_spectrum",
     "band_step_spectrum",
-    "flat_spectrum",
 ]
 
 import numpy as np
@@ -113,9 +112,3 @@ def band_spectrum(config, values) -> dict:
                 "values": ", ".join(repr(float(y)) for y in v)}
     return {"type": "irregular", "wavelengths": ", ".join(repr(float(c)) for c in centres),
             "values": ", ".join(repr(float(y)) for y in v)}
-
-
-def flat_spectrum(value: float) -> dict:
-    """A spectrally flat Mitsuba spectrum (used for achromatic patterns,
-    where the value is the pattern level, not a radiance)."""
-    return {"type": "uniform", "value": float(value)}

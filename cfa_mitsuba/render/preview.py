@@ -1,10 +1,9 @@
 """sRGB previews of spectral renders (for people, not for metrics).
 
-The radiance is converted to CIE 1931 XYZ (spectra.xyz_from_radiance),
-scaled so that the scene's white diffuser (``meta['white_luminance_cd_m2']``)
-has Y = 1, and encoded as display sRGB (IEC 61966-2-1, D65 white, which is
-also our scenes' illuminant, so no adaptation is needed) with
-colour-science; values outside the gamut are clipped.
+The radiance goes to linear sRGB with the scene's white diffuser at Y = 1
+(:func:`cfa_mitsuba.io.exr.linear_srgb`, the EXR's own R, G, B channels),
+is clipped to the gamut and encoded as display sRGB (IEC 61966-2-1) with
+colour-science.
 """
 
 from __future__ import annotations
@@ -16,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import spectra
+from ..io.exr import linear_srgb
 from ..values import SpectralImage
 
 
@@ -27,12 +26,8 @@ def srgb_preview(image: SpectralImage, exposure: float = 1.0) -> np.ndarray:
         warnings.simplefilter("ignore")
         import colour
 
-    xyz = spectra.xyz_from_radiance(image.data, image.wavelengths)
-    white = float(image.meta.get("white_luminance_cd_m2") or 0.0)
-    if not white > 0:
-        white = max(float(np.percentile(xyz[..., 1], 99)), 1e-12)
-    rgb = colour.XYZ_to_sRGB(xyz / white * exposure)
-    return np.clip(rgb, 0.0, 1.0)
+    rgb = linear_srgb(image.data, image.wavelengths, image.meta) * exposure
+    return np.clip(colour.models.eotf_inverse_sRGB(np.clip(rgb, 0.0, 1.0)), 0.0, 1.0)
 
 
 def write_preview(path, image: SpectralImage, exposure: float = 1.0) -> Path:
