@@ -4,7 +4,6 @@ from __future__ import annotations
 
 __all__ = ["build_report", "FIGURE_FORMATS"]
 
-import sys
 import time
 import warnings
 from pathlib import Path
@@ -264,7 +263,3 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
     log(f"report: {len(figures)} figure(s), {len(absents)} absent, {len(text) / 1e6:.1f} MB, "
         f"{time.perf_counter() - t0:.1f} s")
     return path
-
-
-def _stderr_log(msg: str) -> None:  # pragma: no cover - used by the CLI's --verbose
-    print(msg, file=sys.stderr)

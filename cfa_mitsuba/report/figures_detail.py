@@ -20,7 +20,7 @@ import numpy as np
 
 from .figure import Absent, ReportFigure, cfa_legend, grid_shape, legend_rows, panel_grid
 from .results import Results
-from .style import CHANNEL_STYLES, cfa_styles, fmt_value, metric_info
+from .style import cfa_styles, fmt_value, metric_info
 
 #: The ideal sensor: a broad grey line under the cameras' (unlike any CFA's line).
 _IDEAL = dict(color="#000000", alpha=0.35, linestyle="-", linewidth=3.2, solid_capstyle="butt")

@@ -4,16 +4,15 @@ everywhere.
 
 Colours are Paul Tol's colour-blind-safe qualitative schemes (Tol 2021,
 "Colour schemes", SRON/EPS/TN/09-002): 'bright' for the demosaicing methods
-and 'muted' plus 'light' for the CFAs; the ideal sensor is always a thick
-grey line.  Past nine CFAs colour alone no
-longer separates them for every reader, so each CFA also has its own marker
-and, from the tenth on, a dashed line.
+and 'muted' plus 'light' for the CFAs; the ideal sensor is always a broad
+grey line.  Past nine CFAs colour alone no longer separates them for every
+reader, so each CFA also has its own marker and, from the tenth on, a
+dashed line.
 """
 
 from __future__ import annotations
 
-__all__ = ["MetricInfo", "METRIC_INFO", "metric_info", "cfa_styles", "demosaic_styles", "CHANNEL_STYLES",
-           "fmt_value"]
+__all__ = ["MetricInfo", "METRIC_INFO", "metric_info", "cfa_styles", "demosaic_styles", "fmt_value"]
 
 from dataclasses import dataclass
 
@@ -25,15 +24,6 @@ _CFA_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*", "h", "<", ">", "p")
 #: Tol 'bright' for the (at most a handful of) demosaicing methods.
 _DEMOSAIC_COLOURS = ("#4477AA", "#EE6677", "#228833", "#CCBB44", "#66CCEE", "#AA3377", "#BBBBBB")
 _DEMOSAIC_LINES = ("-", "--", "-.", ":", (0, (5, 1, 1, 1)), (0, (3, 1, 1, 1, 1, 1)), (0, (1, 1)))
-
-#: Colour channels of the MTF plots: the paper's red, green, blue and black,
-#: told apart by line style as well as colour.
-CHANNEL_STYLES = {
-    "R": dict(color="#CC3311", linestyle="-", label="R"),
-    "G": dict(color="#228833", linestyle="--", label="G"),
-    "B": dict(color="#0077BB", linestyle="-.", label="B"),
-    "lum": dict(color="#000000", linestyle="-", linewidth=2.0, label="luminance (0.3R+0.6G+0.1B)"),
-}
 
 
 @dataclass(frozen=True)
