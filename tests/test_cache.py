@@ -35,11 +35,11 @@ def test_key_covers_what_determines_the_render():
 
 def test_second_call_reuses_and_rescales(tmp_path):
     first = cm.render.render_cached("gray-bar", cache=tmp_path, **SMALL)
-    assert first.meta["cache_hit"] is False
+    assert first.meta["cache_reused"] is False
     entries = list((tmp_path / "renders").rglob("*.exr"))
     assert len(entries) == 1 and entries[0].stem == first.meta["cache_key"]
     second = cm.render.render_cached("gray-bar", cache=tmp_path, luminance=40.0, **SMALL)
-    assert second.meta["cache_hit"] is True
+    assert second.meta["cache_reused"] is True
     np.testing.assert_allclose(second.data, first.data * 0.4, rtol=1e-12)
     assert second.meta["render_time_s"] == first.meta["render_time_s"]
     # A cached render is the same numbers as a fresh one.
@@ -53,8 +53,8 @@ def test_unreadable_entry_is_rendered_again(tmp_path):
     cache.path(key).parent.mkdir(parents=True)
     cache.path(key).write_bytes(b"garbage")
     img = cm.render.render_cached("gray-bar", cache=cache, **SMALL)
-    assert img.meta["cache_hit"] is False
-    assert cm.render.render_cached("gray-bar", cache=cache, **SMALL).meta["cache_hit"] is True
+    assert img.meta["cache_reused"] is False
+    assert cm.render.render_cached("gray-bar", cache=cache, **SMALL).meta["cache_reused"] is True
 
 
 def test_unwritable_cache_is_a_clear_error(tmp_path):

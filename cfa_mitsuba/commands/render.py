@@ -96,7 +96,7 @@ def run(args) -> int:
     else:
         image = engine.render_cached(sc, **settings)
         key = image.meta["cache_key"]
-        if image.meta.get("cache_hit"):
+        if image.meta.get("cache_reused"):
             sys.stderr.write(f"{prog}: reused cached render {key} (rendered earlier in {image.meta['render_time_s']:.1f} s)\n")
         else:
             sys.stderr.write(f"{prog}: rendered {sc.name} in {image.meta['render_time_s']:.1f} s, cached as {key}\n")

@@ -431,7 +431,7 @@ def render_cached(scene, *, cache=None, **settings) -> SpectralImage:
 
     ``cache``: a :class:`~cfa_mitsuba.io.cache.RenderCache`, a directory, or
     None for the default (``$CFA_MITSUBA_CACHE`` or ``~/.cache/cfa-mitsuba``).
-    The result's ``meta["cache_hit"]`` says whether this call reused a render.
+    The result's ``meta["cache_reused"]`` says whether this call reused a render.
     Concurrent callers with the same settings render once (a per-key lock).
     """
     from ..io.cache import RenderCache, hash_key
@@ -441,5 +441,5 @@ def render_cached(scene, *, cache=None, **settings) -> SpectralImage:
     key = hash_key(_key_fields(sc, cfg))
     canonical, hit = store.get_or_create(key, lambda: _render_canonical(sc, cfg))
     out = scale_to_luminance(canonical, cfg.luminance_cd_m2)
-    out.meta["cache_hit"] = hit
+    out.meta["cache_reused"] = hit
     return out
