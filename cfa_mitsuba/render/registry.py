@@ -149,11 +149,10 @@ def _load_builtins() -> None:
 
 
 def list_scenes() -> list[tuple[str, str]]:
-    """(name, one-line description) of each built-in scene, plus the XML form."""
+    """(name, one-line description) of each built-in scene (every name is
+    valid for :func:`get_scene`; a Mitsuba XML path is accepted as well)."""
     _load_builtins()
-    rows = [(s.name, s.description) for s in _REGISTRY.values()]
-    rows.append(("FILE.xml", "a Mitsuba 3 scene file: its geometry, materials, emitters and camera; our film, sampler and integrator"))
-    return rows
+    return [(s.name, s.description) for s in _REGISTRY.values()]
 
 
 def get_scene(name) -> Scene:
