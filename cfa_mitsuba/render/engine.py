@@ -63,7 +63,13 @@ _INT_LIMIT = 1 << 31
 
 # ----------------------------------------------------------------- settings
 
+def _name(what: str) -> str:
+    """A setting's name with its command-line spelling: 'width (--width)'."""
+    return f"{what} (--{what.replace('_', '-')})"
+
+
 def _positive_int(value, what: str, *, minimum: int = 1, maximum: int = _INT_LIMIT) -> int:
+    what = _name(what)
     if isinstance(value, bool):
         raise CfaMitsubaError(f"{what} must be an integer, got {value!r}")
     try:
@@ -81,6 +87,7 @@ def _positive_int(value, what: str, *, minimum: int = 1, maximum: int = _INT_LIM
 
 
 def _positive_float(value, what: str) -> float:
+    what = _name(what)
     try:
         x = float(value)
     except (TypeError, ValueError):
@@ -136,10 +143,10 @@ def resolve_settings(scene, *, width=None, height=None, spp=None, luminance=None
         raise CfaMitsubaError("--fov applies to built-in scenes; a scene file keeps its camera's field of view")
     f = _positive_float(sc.fov_deg if fov is None else fov, "fov")
     if f >= 170:
-        raise CfaMitsubaError(f"fov must be below 170 degrees, got {f:g}")
+        raise CfaMitsubaError(f"fov (--fov) must be below 170 degrees, got {f:g}")
     depth = _positive_int(sc.max_depth if max_depth is None else max_depth, "max_depth", maximum=64)
     if depth > 1 and not sc.is_3d:
-        raise CfaMitsubaError(f"max_depth applies to 3D scenes; {sc.name!r} is a chart seen directly")
+        raise CfaMitsubaError(f"max_depth (--max-depth) applies to 3D scenes; {sc.name!r} is a chart seen directly")
     wl = _wavelengths(bands)
     v = _variant.choose_variant(variant)
     return sc, RenderConfig(width=w, height=h, spp=n, seed=s, wavelengths=wl, variant=v, oversample=k,
