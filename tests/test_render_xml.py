@@ -93,3 +93,17 @@ def test_missing_file_and_fov_option(tmp_path):
         cm.render.get_scene(str(tmp_path / "nope.xml"))
     with pytest.raises(CfaMitsubaError, match="fov"):
         cm.render.resolve_settings(str(EXAMPLE), fov=20)
+
+
+def test_white_reference_under_a_uniform_sky_is_the_sky(tmp_path):
+    """A perfect white diffuser under a uniform sky of radiance 1 (every
+    band) and nothing else in its hemisphere reflects exactly 1: an
+    independent check of the white probe and of the scale bookkeeping."""
+    sky = '<emitter type="constant"><spectrum name="radiance" value="1"/></emitter>'
+    ball = '<shape type="sphere"><point name="center" x="0" y="0" z="-3"/><float name="radius" value="0.5"/><bsdf type="diffuse"/></shape>'
+    p = _write(tmp_path, SCENE.format(sensor=SENSOR, body=sky + ball))
+    img = cm.render.render(str(p), spp=16)
+    white = np.asarray(img.meta["white_radiance"]) / img.meta["scale_from_canonical"]
+    np.testing.assert_allclose(white, 1.0, rtol=0.01)
+    # The sky seen directly is 1 as well (top-left pixel misses the ball).
+    np.testing.assert_allclose(img.data[0, 0] / img.meta["scale_from_canonical"], 1.0, rtol=1e-5)

@@ -236,7 +236,7 @@ def _probe_parts(mi, probe: dict, as_xml: bool):
         sensor = (f'<sensor type="radiancemeter"><transform name="to_world"><lookat origin="{v(o)}" target="{v(c)}" '
                   f'up="{v(up)}"/></transform><!--cfa:film--><!--cfa:sampler--></sensor>')
         shape = (f'<shape type="rectangle"><transform name="to_world"><scale value="{h!r}"/><lookat origin="{v(c)}" '
-                 f'target="{v(o)}" up="{v(up)}"/></transform><bsdf type="diffuse"><float name="reflectance" value="1"/>'
+                 f'target="{v(o)}" up="{v(up)}"/></transform><bsdf type="diffuse"><spectrum name="reflectance" value="1"/>'
                  f'</bsdf></shape>')
         return sensor + shape
     T = mi.ScalarTransform4f
