@@ -252,6 +252,8 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         timing["phases"]["evaluate_s"] = time.perf_counter() - t
 
     rows = [r for task in tasks for r in done[_task_id(task)]["rows"]]
+    failures = [f for task in tasks for f in done[_task_id(task)].get("failures", [])]
+    _write_failures(out, failures, log)
     order = {
         "scene": [s.name for s in config.scenes], "cfa": [_cfa_label(c) for c in config.cfas],
         "demosaic": list(config.demosaics), "metric": list(SCORED_METRICS),
@@ -266,18 +268,35 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     with atomic_output(out / "ranges.json") as tmp:
         tmp.write_text(json.dumps({k: _range_pair(v) for k, v in ranges.items()}, indent=1))
 
+    timing["phases"]["total_s"] = time.perf_counter() - t_start
     if report if report is not None else config.output.get("report", True):
         t = time.perf_counter()
         from ..report import build_report
 
         build_report(out, formats=config.output.get("figures", ("png", "svg")),
-                     thumbnails=config.output.get("thumbnails", True))
+                     thumbnails=config.output.get("thumbnails", True), timing=timing)
         timing["phases"]["report_s"] = time.perf_counter() - t
     timing["phases"]["total_s"] = time.perf_counter() - t_start
     with atomic_output(out / "timing.json") as tmp:
         tmp.write_text(json.dumps(timing, indent=1))
     log(_timing_text(timing, len(tasks), reused))
     return StudyResult(out, metrics, scores, timing, len(tasks), reused)
+
+
+def _write_failures(out: Path, failures: list[dict], log) -> None:
+    """failures.csv lists every metric that could not be measured (absent
+    from metrics.csv); without failures, no file (a stale one is removed)."""
+    target = out / "failures.csv"
+    if not failures:
+        target.unlink(missing_ok=True)
+        return
+    import pandas as pd
+
+    with atomic_output(target) as tmp:
+        pd.DataFrame(failures).to_csv(tmp, index=False)
+    log(f"warning: {len(failures)} metric value(s) could not be measured; see {target}")
+    for f in failures[:5]:
+        log(f"  {f['scene']}/{f['cfa']}/{f['demosaic']}/L{f['luminance']:g} {f['metric']}: {f['error']}")
 
 
 def _range_pair(r) -> list[float]:

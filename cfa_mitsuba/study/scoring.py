@@ -210,7 +210,9 @@ def score(metrics, ranges=None, *, clip: bool = True):
     ``score`` (see :func:`normalise`) and:
 
     - ``metric_rank``: the CFA's rank on this metric among the CFAs with the
-      same demosaic and luminance (1 = best; the paper's red boxes, Table 2);
+      same demosaic and luminance (1 = best; the paper's red boxes, Table 2),
+      ranked on ``raw_score`` so that clipping does not tie values beyond a
+      range's best end;
     - ``mean_score``, ``n_metrics``: the mean of the CFA's scores for this
       demosaic and luminance (Table 3 rows) and how many metrics it averages;
     - ``demosaic_rank``: rank of ``mean_score`` among the CFAs (Fig 17 a-d);
@@ -230,7 +232,8 @@ def score(metrics, ranges=None, *, clip: bool = True):
     """
     out = normalise(metrics, ranges, clip=clip)
     group = ["demosaic", "luminance"]
-    out["metric_rank"] = out.groupby(group + ["metric"])["score"].rank(ascending=False, method="min").astype(int)
+    # on the unclipped score: values past a range's best end still rank apart
+    out["metric_rank"] = out.groupby(group + ["metric"])["raw_score"].rank(ascending=False, method="min").astype(int)
     per = (out.groupby(["cfa"] + group)["score"].agg(mean_score="mean", n_metrics="count").reset_index())
     per["demosaic_rank"] = per.groupby(group)["mean_score"].rank(ascending=False, method="min").astype(int)
     total = per.groupby(["cfa", "luminance"])["mean_score"].mean().rename("total_score").reset_index()

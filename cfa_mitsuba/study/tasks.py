@@ -127,32 +127,50 @@ def _srgb8(xyz: np.ndarray, white_xyz: np.ndarray) -> np.ndarray:
     return mcolour.xyz_to_srgb8(xyz, white_xyz)
 
 
-def _metric_results(metric_names, ideal_xyz, cam_xyz, white_xyz, geo: dict, pitch_um: float) -> dict:
-    """Run the requested metrics of one scene; returns {name: MetricResult|float}."""
-    from .. import metrics as m
+def _metric_results(metric_names, ideal_xyz, cam_xyz, white_xyz, geo: dict, pitch_um: float,
+                    failures: list | None = None) -> dict:
+    """Run the requested metrics of one scene; returns {name: MetricResult|float}.
+
+    A metric that cannot be computed on this image (a user-facing
+    CfaMitsubaError, e.g. an edge the analysis cannot locate) is left out of
+    the result and its message appended to ``failures`` (when given), so one
+    unmeasurable camera does not end a study; without ``failures`` it raises.
+    """
+    from ..errors import CfaMitsubaError
 
     out = {}
-    srgb_pair = None
+    srgb_pair = [None]
     for name in metric_names:
-        if name == "delta-e":
-            out[name] = m.delta_e(ideal_xyz, cam_xyz, white_xyz, patches=geo.get("patches"))
-        elif name == "scielab":
-            out[name] = m.scielab(ideal_xyz, cam_xyz, white_xyz, samples_per_degree=geo["samples_per_degree"])
-        elif name == "mtf":
-            out[name] = m.mtf(_linear_rgb(cam_xyz, white_xyz), roi=geo.get("roi"), pixel_pitch_um=pitch_um)
-        elif name == "moire":
-            out[name] = m.moire(ideal_xyz, cam_xyz, white_xyz, frequency_cy_per_deg=geo["frequency_cy_per_deg"],
-                                row=geo.get("row"))
-        elif name == "achromatic":
-            out[name] = m.achromatic(ideal_xyz, cam_xyz, white_xyz, row=geo.get("row"), steps=geo.get("steps"))
-        elif name in ("ssim", "mdsi", "haarpsi"):
-            if srgb_pair is None:
-                srgb_pair = (_srgb8(ideal_xyz, white_xyz), _srgb8(cam_xyz, white_xyz))
-            fn = {"ssim": m.ssim, "mdsi": m.mdsi, "haarpsi": m.haarpsi}[name]
-            out[name] = fn(*srgb_pair)
-        else:  # pragma: no cover - the config validator refuses unknown metrics
-            raise ValueError(f"unknown metric {name!r}")
+        try:
+            out[name] = _one_metric(name, ideal_xyz, cam_xyz, white_xyz, geo, pitch_um, srgb_pair)
+        except CfaMitsubaError as exc:
+            if failures is None:
+                raise
+            failures.append({"metric": name, "error": str(exc)})
     return out
+
+
+def _one_metric(name, ideal_xyz, cam_xyz, white_xyz, geo, pitch_um, srgb_pair):
+    from .. import metrics as m
+
+    if name == "delta-e":
+        return m.delta_e(ideal_xyz, cam_xyz, white_xyz, patches=geo.get("patches"))
+    if name == "scielab":
+        return m.scielab(ideal_xyz, cam_xyz, white_xyz, samples_per_degree=geo["samples_per_degree"])
+    if name == "mtf":
+        return m.mtf(_linear_rgb(cam_xyz, white_xyz), roi=geo.get("roi"), pixel_pitch_um=pitch_um,
+                     reference=_linear_rgb(ideal_xyz, white_xyz))
+    if name == "moire":
+        return m.moire(ideal_xyz, cam_xyz, white_xyz, frequency_cy_per_deg=geo["frequency_cy_per_deg"],
+                       row=geo.get("row"))
+    if name == "achromatic":
+        return m.achromatic(ideal_xyz, cam_xyz, white_xyz, row=geo.get("row"), steps=geo.get("steps"))
+    if name in ("ssim", "mdsi", "haarpsi"):
+        if srgb_pair[0] is None:
+            srgb_pair[0] = (_srgb8(ideal_xyz, white_xyz), _srgb8(cam_xyz, white_xyz))
+        fn = {"ssim": m.ssim, "mdsi": m.mdsi, "haarpsi": m.haarpsi}[name]
+        return fn(*srgb_pair[0])
+    raise ValueError(f"unknown metric {name!r}")  # pragma: no cover - the config validator refuses it
 
 
 def _rows(base: dict, results: dict) -> list[dict]:
@@ -220,7 +238,9 @@ def evaluate_task(task: dict) -> dict:
     (white balance, white preserving, pocs iterations), ``mean_match``,
     ``seed`` (the study seed), ``details_dir`` (or None).
 
-    Returns ``{"rows": [...], "timing": {...}}``.
+    Returns ``{"rows": [...], "timing": {...}, "failures": [...]}``: a
+    metric that could not be measured on one camera output is a failure
+    record (scene, cfa, demosaic, luminance, metric, error), not a row.
     """
     from .. import metrics as m
     from ..isp import process
@@ -254,7 +274,7 @@ def evaluate_task(task: dict) -> dict:
     cfa_label = task.get("cfa_label", task["cfa"])
     isp_opts = dict(task.get("isp") or {})
     pocs_iterations = isp_opts.pop("pocs_iterations", None)
-    rows = []
+    rows, failures = [], []
     details_dir = Path(task["details_dir"]) if task.get("details_dir") else None
     lum_tag = f"L{lum:g}"
     for method in task["demosaics"]:
@@ -269,10 +289,12 @@ def evaluate_task(task: dict) -> dict:
         if task.get("mean_match", True):
             cam, scale = m.mean_match(cam, ideal.xyz, return_scale=True)
         t = time.perf_counter()
-        results = _metric_results(task["metrics"], ideal.xyz, cam, white, geo, pitch)
+        failed: list[dict] = []
+        results = _metric_results(task["metrics"], ideal.xyz, cam, white, geo, pitch, failed)
         timing["metrics_s"] += time.perf_counter() - t
         base = {"scene": task["scene"], "cfa": cfa_label, "demosaic": method, "luminance": lum}
         rows.extend(_rows(base, results))
+        failures.extend({**base, **f} for f in failed)
         if details_dir is not None:
             isp_meta = out.meta.get("isp", {})
             extra = {
@@ -290,7 +312,7 @@ def evaluate_task(task: dict) -> dict:
             ideal_results = _metric_results(
                 [n for n in task["metrics"] if n in ("mtf",)], ideal.xyz, ideal.xyz, white, geo, pitch)
             _save_details(ideal_dir, lum_tag, ideal_results, ideal, {"white_xyz": white.tolist()})
-    return {"rows": rows, "timing": timing}
+    return {"rows": rows, "timing": timing, "failures": failures}
 
 
 def _safe(label: str) -> str:
