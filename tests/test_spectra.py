@@ -72,3 +72,24 @@ def test_data_sets_have_expected_shapes():
     assert spectra.training_reflectances().shape == (190, 31)
     assert spectra.camera_rgb().shape == (31, 3)
     assert spectra.camera_rgb().sum(axis=1).max() <= spectra.CAMERA_PEAK_QE + 1e-12
+
+
+def test_band_average_product_is_exact_and_differs_from_product_of_means():
+    import colour
+
+    d65 = spectra.illuminant_table("D65")
+    names, tables = spectra.colorchecker_tables()
+    wl = spectra.DEFAULT_WAVELENGTHS
+    edges = spectra.band_edges(wl)
+    worst_gap = 0.0
+    for t in tables[:6]:
+        got = spectra.band_average_product([d65, t], wl)
+        for b, (lo, hi) in enumerate(zip(edges[:-1], edges[1:])):
+            x = np.linspace(lo, hi, 20001)
+            x = 0.5 * (x[1:] + x[:-1])
+            dense = np.mean(np.interp(x, *d65) * np.interp(x, *t))
+            assert got[b] == pytest.approx(dense, rel=1e-7)
+        means = spectra.band_average(*d65, wl) * spectra.band_average(*t, wl)
+        worst_gap = max(worst_gap, np.max(np.abs(means / got - 1)))
+    assert 1e-3 < worst_gap < 2e-2  # the two conventions really differ (at 400 nm)
+    assert colour  # colour-science is the data source

@@ -161,7 +161,12 @@ def _build_macbeth(scene: Scene, config: RenderConfig) -> Built:
     wl = config.wl
     frame = _Frame(config)
     white = d65_white_radiance(wl)
-    names, refl = spectra.colorchecker(wl)
+    names, tables = spectra.colorchecker_tables()
+    # Each patch emits the exact band means of D65(l) x rho(l) (the product
+    # of the interpolated tables), not the product of the two band means.
+    scale = white / spectra.illuminant("D65", wl)
+    d65_table = spectra.illuminant_table("D65")
+    radiance = [scale * spectra.band_average_product([d65_table, t], wl) for t in tables]
     objects = {"surround": frame.background(band_spectrum(config, white * SURROUND_REFLECTANCE))}
     patches = macbeth_layout(config.width, config.height)
     for i, patch in enumerate(patches):
@@ -171,7 +176,7 @@ def _build_macbeth(scene: Scene, config: RenderConfig) -> Built:
         objects[f"patch{i:02d}"] = {
             "type": "rectangle",
             "to_world": frame.rect(*patch["rect"], z=1e-5 * frame.distance),
-            "emitter": {"type": "area", "radiance": band_spectrum(config, white * refl[i])},
+            "emitter": {"type": "area", "radiance": band_spectrum(config, radiance[i])},
         }
     meta = _common_meta()
     meta["geometry"] = {
