@@ -233,5 +233,5 @@ def test_scene_registry_declares_defaults_and_metrics():
         assert sc.metrics == metrics
         assert (sc.height, sc.width) == sizes[name]
         assert sc.fov_deg > 0 and sc.spp >= 1
-    assert cm.render.get_scene("slanted-edge").oversample == 4 and cm.render.get_scene("chirp").oversample == 4
+    assert cm.render.get_scene("slanted-edge").oversample == 4 and cm.render.get_scene("chirp").oversample == 2
     assert cm.render.get_scene("macbeth").oversample == 1

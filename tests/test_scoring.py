@@ -15,9 +15,9 @@ UNIT = {"delta-e": "dE00", "scielab": "dE00", "ssim": "", "mtf": "cy/mm", "moire
         "mdsi": "", "haarpsi": ""}
 # Per CFA: values at the best end, the middle, and the worst end of the paper's ranges.
 VALUES = {
-    "good": {"delta-e": 2.2, "scielab": 2.5, "ssim": 1.0, "mtf": 110.0, "moire": 3.75, "achromatic": 0.5, "mdsi": 0.0, "haarpsi": 1.0},
-    "mid": {"delta-e": 4.1, "scielab": 6.0, "ssim": 0.5, "mtf": 70.0, "moire": 2.125, "achromatic": 0.75, "mdsi": 0.25, "haarpsi": 0.5},
-    "bad": {"delta-e": 6.0, "scielab": 9.5, "ssim": 0.0, "mtf": 30.0, "moire": 0.5, "achromatic": 1.0, "mdsi": 0.5, "haarpsi": 0.0},
+    "good": {"delta-e": 2.2, "scielab": 2.5, "ssim": 1.0, "mtf": 110.0, "moire": 7.5, "achromatic": 0.5, "mdsi": 0.0, "haarpsi": 1.0},
+    "mid": {"delta-e": 4.1, "scielab": 6.0, "ssim": 0.5, "mtf": 70.0, "moire": 4.25, "achromatic": 0.75, "mdsi": 0.25, "haarpsi": 0.5},
+    "bad": {"delta-e": 6.0, "scielab": 9.5, "ssim": 0.0, "mtf": 30.0, "moire": 1.0, "achromatic": 1.0, "mdsi": 0.5, "haarpsi": 0.0},
 }
 
 
@@ -39,8 +39,8 @@ def test_paper_ranges_are_the_defaults():
     assert (r["ssim"].worst, r["ssim"].best) == (0.0, 1.0)
     assert (r["mtf"].worst, r["mtf"].best) == (30.0, 110.0)
     assert (r["haarpsi"].worst, r["haarpsi"].best) == (0.0, 1.0)
-    # MSP: 0.04..0.30 cy/px (the paper's 20..150 px of 500) at our chirp's 12.5 px/deg
-    assert (r["moire"].worst, r["moire"].best) == (0.5, 3.75)
+    # MSP: 0.04..0.30 cy/px (the paper's 20..150 px of 500) at our chirp's 25 px/deg
+    assert (r["moire"].worst, r["moire"].best) == (1.0, 7.5)
     assert (msp_range_cpd(50).worst, msp_range_cpd(50).best) == (2.0, 15.0)
     # MTF range moved to another pitch: the same cy/px scores the same
     r28 = default_ranges(pixel_pitch_um=2.8)["mtf"]

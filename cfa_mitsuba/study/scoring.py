@@ -83,8 +83,8 @@ def msp_range_cpd(samples_per_degree: float, *, worst_cy_px: float = 0.04, best_
 
 
 #: Samples per degree of our chirp as rendered by default: 500 EXR pixels at
-#: oversampling K = 4 over 10 degrees -> a 125-px camera image, 12.5 px/deg.
-CHIRP_SAMPLES_PER_DEGREE = 12.5
+#: oversampling K = 2 over 10 degrees -> a 250-px camera image, 25 px/deg.
+CHIRP_SAMPLES_PER_DEGREE = 25.0
 
 
 def default_ranges(*, chirp_samples_per_degree: float = CHIRP_SAMPLES_PER_DEGREE,
@@ -95,7 +95,7 @@ def default_ranges(*, chirp_samples_per_degree: float = CHIRP_SAMPLES_PER_DEGREE
 
     - ``moire``: its 20..150 is a pixel position on its chirp; ours is in true
       cycles per degree, :func:`msp_range_cpd` at the chirp camera image's
-      samples per degree (default 12.5: 0.5..3.75 cy/deg);
+      samples per degree (default 25: 1.0..7.5 cy/deg);
     - ``mtf``: 30..110 cy/mm as the paper (its 2.2 um pitch); with
       ``pixel_pitch_um`` the range is moved to that pitch so that the same
       cycles per pixel (0.066..0.242) score the same.
@@ -119,7 +119,7 @@ def default_ranges(*, chirp_samples_per_degree: float = CHIRP_SAMPLES_PER_DEGREE
     }
 
 
-#: :func:`default_ranges` for our default renders (chirp 12.5 px/deg; MTF50 in
+#: :func:`default_ranges` for our default renders (chirp 25 px/deg; MTF50 in
 #: cy/mm as the paper).  For a table in cy/px pass
 #: ``ScoreRange(0.066, 0.242, ('cy/px',))`` (the paper's range at 2.2 um).
 DEFAULT_RANGES: dict[str, ScoreRange] = default_ranges()
