@@ -106,6 +106,9 @@ def add_arguments(parser) -> None:
                              "realisation changes with any change of the signal, see --help's docs)")
     parser.add_argument("--noise-seeds", type=_non_negative_int, default=4, metavar="N",
                         help="seeds for each metric's sensor-noise spread (default 4; 0: skip)")
+    parser.add_argument("--default-seeds", type=_non_negative_int, default=3, metavar="N",
+                        help="extra renders of the default spp with other seeds, for the rms deviation the check "
+                             "uses (default 3; 0: skip)")
     parser.add_argument("--seed", type=_non_negative_int, default=0, metavar="S",
                         help="render seed of the levels (the reference uses S+1 and S+2) and study seed (default 0)")
     parser.add_argument("--luminance", type=float, default=100.0, metavar="CD_M2",
@@ -130,7 +133,7 @@ def run(args) -> int:
         pocs_iterations=args.pocs_iterations, pocs_reference_iterations=args.pocs_reference, cfa=args.cfa,
         demosaic=args.demosaic, seed=args.seed, luminance=args.luminance, render_noise=args.render_noise,
         repeat=args.repeat, compare_cfas=DEFAULT_COMPARE_CFAS if args.compare_cfas is None else args.compare_cfas,
-        noise_seeds=args.noise_seeds, variant=args.variant,
+        noise_seeds=args.noise_seeds, default_seeds=args.default_seeds, variant=args.variant,
     )
     check_writable_dir(args.out)  # before minutes of rendering, not after
     result = run_convergence(plan)

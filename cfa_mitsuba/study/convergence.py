@@ -21,7 +21,10 @@ For one scene, :func:`run_convergence`
    sampler draws a new realisation whenever the mean signal changes at all
    (a 1e-4 relative change of the radiance re-draws 95 % of the pixels), so
    a fixed noise seed does not freeze the sensor noise across renders and
-   would bury the render-induced deviation under seed-to-seed noise;
+   would bury the render-induced deviation under seed-to-seed noise.  A
+   deviation from one render is one draw of a random variable (it crosses
+   zero now and then), so the default spp is rendered with a few more seeds
+   and the check uses the rms over them;
 5. on the processing side, captures the reference once with sensor noise
    (the study's seed for this scene and CFA) and processes it with POCS at
    each iteration count (tolerance 0, so exactly that many iterations),
@@ -65,11 +68,15 @@ import numpy as np
 from ..errors import CfaMitsubaError
 
 #: Columns of ``convergence_<scene>.csv``.  ``stage``: ``render`` (quality =
-#: spp), ``pocs`` (quality = iterations), ``reference`` (the reference's own
-#: error; quality = its spp per render), ``sensor-noise`` (a metric's standard
-#: deviation over noise seeds; quality = number of seeds), ``cfa-spread`` and
-#: ``cfa-gap`` (a metric's max - min, and smallest difference between two
-#: of the compared CFAs; quality = number of CFAs).  ``error``: relative rms
+#: spp), ``render-seeds`` (the default spp rendered with other seeds),
+#: ``pocs`` (quality = iterations), ``reference`` (the reference's own
+#: error; quality = its spp per render), ``reference-pocs`` (the converged
+#: POCS's values, error 0), ``sensor-noise`` (a metric's standard deviation
+#: over noise seeds; quality = number of seeds), ``cfa-spread`` and
+#: ``cfa-gap`` (a metric's max - min, and smallest difference between two of
+#: the compared CFAs, with the render stage's demosaic; quality = number of
+#: CFAs), ``pocs-cfa-spread``, ``pocs-cfa-gap`` (the same with POCS).
+#: ``error``: relative rms
 #: (radiance rows, unit ``relative``) or absolute deviation in the metric's
 #: unit.  ``value``: the metric's value at that quality (empty for radiance).
 CSV_COLUMNS = ("scene", "stage", "quality", "wall_s", "quantity", "error", "unit", "value")
@@ -120,6 +127,7 @@ class ConvergencePlan:
     repeat: int = 2
     compare_cfas: tuple[str, ...] = DEFAULT_COMPARE_CFAS
     noise_seeds: int = 4
+    default_seeds: int = 3
     variant: str | None = None
 
     def to_dict(self) -> dict:
@@ -181,7 +189,8 @@ def _check_levels(values, what: str, *, square: bool) -> tuple[int, ...]:
 def make_plan(scene, *, width=None, height=None, spp=None, reference_spp=None, pocs_iterations=None,
               pocs_reference_iterations: int = 50, cfa: str = "bayer", demosaic: str = "bilinear",
               seed: int = 0, luminance: float = 100.0, render_noise: str = "off", repeat: int = 2,
-              compare_cfas=DEFAULT_COMPARE_CFAS, noise_seeds: int = 4, variant=None) -> ConvergencePlan:
+              compare_cfas=DEFAULT_COMPARE_CFAS, noise_seeds: int = 4, default_seeds: int = 3,
+              variant=None) -> ConvergencePlan:
     """Check the settings of a convergence run and fill the defaults.
 
     Parameters
@@ -205,6 +214,10 @@ def make_plan(scene, *, width=None, height=None, spp=None, reference_spp=None, p
     repeat : renders per level for timing (the fastest counts).
     compare_cfas : CFAs whose metric spread is reported (empty: none).
     noise_seeds : sensor-noise seeds for the metric's noise spread (0: none).
+    default_seeds : extra renders of the default spp (seeds ``seed + 3``
+        ...): a metric's deviation at one render is one draw of a random
+        variable (it can cross zero), so the check uses the rms over these
+        and the level's render (0: the level's render alone).
     variant : Mitsuba variant (default: the best available).
 
     Raises :class:`CfaMitsubaError` naming the first bad setting.
@@ -254,12 +267,15 @@ def make_plan(scene, *, width=None, height=None, spp=None, reference_spp=None, p
         raise CfaMitsubaError(f"--repeat must be a whole number >= 1, got {repeat!r}")
     if not (isinstance(noise_seeds, int) and (noise_seeds == 0 or noise_seeds >= 2)):
         raise CfaMitsubaError(f"--noise-seeds must be 0 or at least 2, got {noise_seeds!r}")
+    if not (isinstance(default_seeds, int) and default_seeds >= 0):
+        raise CfaMitsubaError(f"--default-seeds must be a whole number >= 0, got {default_seeds!r}")
     return ConvergencePlan(
         scene=str(scene), name=sc.name, width=cfg.width, height=cfg.height, oversample=k, size_note=note,
         metrics=tuple(sc.metrics), is_3d=sc.is_3d, default_spp=_square_up(sc.spp), spp_levels=levels,
         reference_spp=ref, pocs_iterations=its, pocs_reference_iterations=pocs_ref, cfa=str(cfa),
         demosaic=str(demosaic), seed=cfg.seed, luminance_cd_m2=cfg.luminance_cd_m2, render_noise=render_noise,
-        repeat=repeat, compare_cfas=tuple(compare_cfas), noise_seeds=noise_seeds, variant=variant,
+        repeat=repeat, compare_cfas=tuple(compare_cfas), noise_seeds=noise_seeds,
+        default_seeds=default_seeds if _square_up(sc.spp) in levels else 0, variant=variant,
     )
 
 
@@ -475,6 +491,17 @@ def run_convergence(plan: ConvergencePlan, *, log=None) -> ConvergenceResult:
             + (f" (runs {', '.join(f'{t:.2f}' for t in times)})" if len(times) > 1 else "")
             + f"; radiance error median band {100 * np.nanmedian(e_img):.3g} %")
 
+    # The default spp again with other seeds: the spread of its deviation.
+    if p.default_seeds:
+        for i in range(p.default_seeds):
+            s_i = p.seed + 3 + i
+            log(f"  default {p.default_spp} spp, seed {s_i} ({i + 1}/{p.default_seeds}) ...")
+            img, dt, _ = _timed_render(p, p.default_spp, s_i, 1)
+            vals, _, _ = chain.evaluate(img, p.cfa, p.demosaic, p.render_noise, p.seed)
+            for k, v in vals.items():
+                row("render-seeds", p.default_spp, dt, k, abs(v - ref_vals[k]), units[k], v)
+        del img
+
     # 3. POCS on the reference's noisy capture (the study's seed).
     study_seed = task_seed(p.seed, p.name, p.cfa, p.luminance_cd_m2)
     oi = chain.optical(ref)
@@ -487,7 +514,7 @@ def run_convergence(plan: ConvergencePlan, *, log=None) -> ConvergenceResult:
         row("reference-pocs", p.pocs_reference_iterations, pocs_ref_s, k, 0.0, units[k], v)
     for it in p.pocs_iterations:
         times, vals = [], None
-        for _ in range(p.repeat):
+        for _ in range(max(p.repeat, 3)):  # cheap, and timing on a shared machine is noisy
             vals, _, dt = chain.metrics(ideal, raw, "pocs", iterations=it, tolerance=0.0)
             times.append(dt)
         for k, v in vals.items():
@@ -511,16 +538,19 @@ def run_convergence(plan: ConvergencePlan, *, log=None) -> ConvergenceResult:
                 float(np.mean([s[k] for s in per_seed])))
     cfa_values: dict[str, dict] = {}
     if p.compare_cfas:
-        log(f"  CFA spread: {', '.join(p.compare_cfas)} ({p.demosaic}) ...")
+        methods = list(dict.fromkeys([p.demosaic, "pocs"]))
+        log(f"  CFA spread: {', '.join(p.compare_cfas)} ({', '.join(methods)}) ...")
         for c in p.compare_cfas:
             raw_c = chain.capture(oi, c, "all", task_seed(p.seed, p.name, c, p.luminance_cd_m2))
-            cfa_values[c] = chain.metrics(ideal, raw_c, p.demosaic)[0]
-        for k in ref_vals:
-            v = sorted(cfa_values[c][k] for c in p.compare_cfas)
-            spread = v[-1] - v[0]
-            gap = min((b - a for a, b in zip(v, v[1:])), default=float("nan"))
-            row("cfa-spread", len(v), None, k, spread, units[k])
-            row("cfa-gap", len(v), None, k, gap, units[k])
+            for method in methods:
+                cfa_values.setdefault(method, {})[c] = chain.metrics(ideal, raw_c, method)[0]
+        for method in methods:
+            prefix = "" if method == p.demosaic else "pocs-"
+            for k in ref_vals:
+                v = sorted(cfa_values[method][c][k] for c in p.compare_cfas)
+                gap = min((b - a for a, b in zip(v, v[1:])), default=float("nan"))
+                row(f"{prefix}cfa-spread", len(v), None, k, v[-1] - v[0], units[k])
+                row(f"{prefix}cfa-gap", len(v), None, k, gap, units[k])
 
     summary = _summarise(p, rows, units, ref_vals, metric_floor, region, exact, ref_times, level_times,
                          pocs_default, noise_std, cfa_values, time.perf_counter() - t_start)
@@ -584,6 +614,8 @@ def _summarise(p, rows, units, ref_vals, metric_floor, region, exact, ref_times,
     df = _frame(rows)
     rates: dict = {"render": {}, "pocs": {}}
     floors = {}
+    own_rows = df[(df["stage"] == "reference") & df["quantity"].str.startswith("radiance:")]["error"]
+    own_measured = _summ(own_rows)
     for prefix, label in (("radiance", "image"), ("uniform", "uniform region")):
         _, own_med, own_max, _ = _radiance_series(df, "reference", prefix)
         t, med, mx, q = _radiance_series(df, "render", prefix)
@@ -598,8 +630,8 @@ def _summarise(p, rows, units, ref_vals, metric_floor, region, exact, ref_times,
     for stage, floor_of in (("render", metric_floor), ("pocs", {})):
         for k in ref_vals:
             sub = df[(df["stage"] == stage) & (df["quantity"] == k)].sort_values("quality")
-            scale = max(abs(ref_vals[k]), 1.0)
-            floor = max(floor_of.get(k, 0.0), 1e-9 * scale)
+            # Renders are float32: metric changes below FLOAT_FLOOR of the value are rounding.
+            floor = max(floor_of.get(k, 0.0), FLOAT_FLOOR * max(abs(ref_vals[k]), 1.0))
             r_t = fit_rate(sub["wall_s"], sub["error"], floor)
             r_q = fit_rate(sub["quality"], sub["error"], floor)
             rates[stage][k] = {"per_wall_time": r_t["rate"], "per_spp" if stage == "render" else "per_iteration":
@@ -614,23 +646,46 @@ def _summarise(p, rows, units, ref_vals, metric_floor, region, exact, ref_times,
             e = lev[lev["quantity"].str.startswith(prefix + ":")]["error"]
             at_default[f"radiance {label} median band"] = float(e.median())
             at_default[f"radiance {label} worst band"] = float(e.max())
-        at_default["metric_deviation"] = {k: float(lev[lev["quantity"] == k]["error"].iloc[0]) for k in ref_vals}
+        one = {k: float(lev[lev["quantity"] == k]["error"].iloc[0]) for k in ref_vals}
+        seeds = df[df["stage"] == "render-seeds"]
+        at_default["metric_deviation_one_render"] = one
+        at_default["renders"] = 1 + int(p.default_seeds)
+        # rms over the level's render and the extra seeds: the deviation a study's render carries
+        at_default["metric_deviation"] = {
+            k: float(np.sqrt(np.mean(np.square([one[k], *seeds[seeds["quantity"] == k]["error"].astype(float)]))))
+            for k in ref_vals}
+        at_default["metric_deviation_max"] = {
+            k: float(max([one[k], *seeds[seeds["quantity"] == k]["error"].astype(float)])) for k in ref_vals}
     checks = {}
-    spread_rows = df[df["stage"] == "cfa-spread"].set_index("quantity")["error"] if cfa_values else {}
-    gap_rows = df[df["stage"] == "cfa-gap"].set_index("quantity")["error"] if cfa_values else {}
+    pocs_checks = {}
+
+    def by_metric(stage):
+        sub = df[df["stage"] == stage]
+        return dict(zip(sub["quantity"], sub["error"].astype(float)))
+
+    def compare(c: dict, dev, spread, gap):
+        c.update(cfa_spread=spread, cfa_smallest_gap=gap)
+        if dev is not None and spread is not None:
+            c["ratio_to_spread"] = dev / spread if spread > 0 else None
+            c["ratio_to_smallest_gap"] = dev / gap if gap and gap > 0 else None
+            c["well_below_spread"] = bool(spread > 0 and dev <= WELL_BELOW * spread)
+            c["below_smallest_gap"] = bool(gap is not None and gap > 0 and dev < gap)
+        return c
+
+    spread, gap = by_metric("cfa-spread"), by_metric("cfa-gap")
+    pocs_spread, pocs_gap = by_metric("pocs-cfa-spread"), by_metric("pocs-cfa-gap")
+    if p.demosaic == "pocs":
+        pocs_spread, pocs_gap = spread, gap
     for k in ref_vals:
         dev = at_default.get("metric_deviation", {}).get(k)
-        c = {"render_deviation_at_default": dev, "unit": units[k], "reference_value": ref_vals[k],
-             "reference_noise": metric_floor[k], "sensor_noise_std": noise_std.get(k)}
-        if cfa_values:
-            spread, gap = float(spread_rows[k]), float(gap_rows[k])
-            c.update(cfa_spread=spread, cfa_smallest_gap=gap)
-            if dev is not None:
-                c["ratio_to_spread"] = dev / spread if spread > 0 else None
-                c["ratio_to_smallest_gap"] = dev / gap if gap > 0 else None
-                c["well_below_spread"] = bool(spread > 0 and dev <= WELL_BELOW * spread)
-                c["below_smallest_gap"] = bool(gap > 0 and dev < gap)
-        checks[k] = c
+        checks[k] = compare({"render_deviation_at_default": dev, "renders": at_default.get("renders"),
+                             "render_deviation_max": at_default.get("metric_deviation_max", {}).get(k),
+                             "unit": units[k], "reference_value": ref_vals[k],
+                             "reference_noise": metric_floor[k], "sensor_noise_std": noise_std.get(k)},
+                            dev, spread.get(k), gap.get(k))
+        pdev = pocs_default["deviation"][k]
+        pocs_checks[k] = compare({"pocs_default_deviation": pdev, "unit": units[k]}, pdev, pocs_spread.get(k),
+                                 pocs_gap.get(k))
     return {
         "scene": p.name,
         "plan": p.to_dict(),
@@ -638,8 +693,11 @@ def _summarise(p, rows, units, ref_vals, metric_floor, region, exact, ref_times,
             "spp_per_render": p.reference_spp, "renders": 2, "seeds": [p.seed + 1, p.seed + 2],
             "wall_s": ref_times,
             "own_noise": "half the rms difference of the two renders, relative to the reference's mean, per band",
+            "own_noise_measured_median_band": own_measured["median"],
+            "own_noise_measured_worst_band": own_measured["max"],
             "own_noise_image_median_band": floors["radiance, image, median band"],
             "own_noise_image_worst_band": floors["radiance, image, worst band"],
+            "floor_definition": f"max(the reference's own noise, {FLOAT_FLOOR:g} float32 rounding)",
             "exact_check": exact,
             "metric_values": ref_vals,
             "metric_noise": {k: metric_floor[k] for k in ref_vals},
@@ -654,6 +712,7 @@ def _summarise(p, rows, units, ref_vals, metric_floor, region, exact, ref_times,
                            f"log(iterations)) over the points above {FLOOR_FACTOR:g}x the noise floor",
         "cfa_values": cfa_values,
         "checks": checks,
+        "pocs_checks": pocs_checks,
         "well_below": f"render-induced deviation at the default spp <= {WELL_BELOW:g} x the CFA spread",
         "total_wall_s": total_s,
         "cores": _cores(),
@@ -691,7 +750,7 @@ def format_table(result: ConvergenceResult) -> str:
     metrics = list(s["reference"]["metric_values"])
     out = [f"{p.name}: {p.width} x {p.height} EXR px (K = {p.oversample}), {p.cfa} + {p.demosaic}, "
            f"reference 2 x {p.reference_spp} spp (own noise: median band "
-           f"{100 * s['reference']['own_noise_image_median_band']:.2g} %)"]
+           f"{100 * s['reference']['own_noise_measured_median_band']:.2g} %)"]
     head = ["spp", "wall s", "rad med %", "rad max %", "unif med %"] + [f"d {m}" for m in metrics]
     lines = [head]
     for q in sorted(df[df["stage"] == "render"]["quality"].unique()):
@@ -726,9 +785,17 @@ def format_table(result: ConvergenceResult) -> str:
             verdict = f"well below (<= {WELL_BELOW:g} x the spread)"
         else:
             verdict = f"NOT well below (> {WELL_BELOW:g} x the spread)"
-        out.append(f"check {m}: render-induced deviation at {p.default_spp} spp {_fmt(c['render_deviation_at_default'])}"
+        out.append(f"check {m}: render-induced deviation at {p.default_spp} spp (rms of {c['renders']} renders) "
+                   f"{_fmt(c['render_deviation_at_default'])}"
                    f" {c['unit']} vs CFA spread {_fmt(c['cfa_spread'])} (smallest gap {_fmt(c['cfa_smallest_gap'])}, "
                    f"sensor-noise std {_fmt(c['sensor_noise_std'])}): {verdict}")
+    for m, c in s.get("pocs_checks", {}).items():
+        if c.get("cfa_spread") is None:
+            continue
+        verdict = "well below" if c.get("well_below_spread") else "NOT well below"
+        out.append(f"check {m} (POCS default, {s['pocs_default']['iterations_done']} iterations): deviation from "
+                   f"converged {_fmt(c['pocs_default_deviation'])} {c['unit']} vs CFA spread with POCS "
+                   f"{_fmt(c['cfa_spread'])} (smallest gap {_fmt(c['cfa_smallest_gap'])}): {verdict}")
     return "\n".join(out)
 
 
@@ -823,11 +890,15 @@ def plot_convergence(result: ConvergenceResult, paths) -> None:
                                      f"{label}, {agg}: {_rates_label(s['rates']['render'][key], 'spp')}")
                 if key == "radiance, image, median band":
                     _label_points(ax, t, 100 * y, q, "spp")
+        own = 100 * s["reference"]["own_noise_measured_median_band"]
         floor = 100 * s["reference"]["own_noise_image_median_band"]
-        if floor > 0:
-            ax.axhline(floor, color="#000000", linestyle=":", linewidth=1,
-                       label=f"reference's own noise, median band ({floor:.2g} %)")
-        _finish(ax, "render wall time (s)", "radiance error: rms / mean (%)", "(a) render: radiance per band", lows)
+        ax.axhline(floor, color="#000000", linestyle=":", linewidth=1,
+                   label=(f"floor: reference's own noise, median band ({floor:.2g} %)" if own >= floor else
+                          f"floor: float32 rounding ({floor:.2g} %; reference's own noise {own:.2g} %)"))
+        title = "(a) render: radiance per band"
+        if all(v["per_wall_time"] is None for k, v in s["rates"]["render"].items() if k.startswith("radiance")):
+            title += "\nevery level at the float32 floor: exact at any spp"
+        _finish(ax, "render wall time (s)", "radiance error: rms / mean (%)", title, lows)
 
         # (b) metrics vs render time
         ax = axes[1]
@@ -840,17 +911,32 @@ def plot_convergence(result: ConvergenceResult, paths) -> None:
             lows += _draw_series(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
                                  sub["quality"].to_numpy(float), p.default_spp, st,
                                  f"{info.short} [{unit}]: {_rates_label(s['rates']['render'][m], 'spp')}")
+            seeds = df[(df["stage"] == "render-seeds") & (df["quantity"] == m) & (df["error"] > 0)]
+            at = sub[sub["quality"] == p.default_spp]["wall_s"]
+            if len(seeds) and len(at):  # drawn at the default level's time (the same render cost)
+                ax.plot(np.full(len(seeds), float(at.iloc[0])), seeds["error"].to_numpy(float), linestyle="none",
+                        marker=st["marker"], markersize=4, markerfacecolor="none", markeredgecolor=st["color"],
+                        alpha=0.8)
+            spread = s["checks"][m].get("cfa_spread")
             gap = s["checks"][m].get("cfa_smallest_gap")
+            if spread and spread > 0:
+                ax.axhline(spread, color=st["color"], linestyle="--", linewidth=1)
             if gap and gap > 0:
-                ax.axhline(gap, color=st["color"], linestyle="--", linewidth=1,
-                           label=f"{info.short}: smallest gap between CFAs ({_fmt(gap, 2)})")
+                ax.axhline(gap, color=st["color"], linestyle=":", linewidth=1)
         if len(headline) and len(df[df["stage"] == "render"]):
             sub = df[(df["stage"] == "render") & (df["quantity"] == headline[0])].sort_values("quality")
             _label_points(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
                           sub["quality"].to_numpy(float), "spp", below=True)
+        if p.compare_cfas:
+            names = ", ".join(p.compare_cfas)
+            ax.plot([], [], color="#555555", linestyle="--", linewidth=1,
+                    label=f"dashed, metric's colour: spread between {names} ({p.demosaic})")
+            ax.plot([], [], color="#555555", linestyle=":", linewidth=1,
+                    label="dotted: smallest gap between two of them")
         noise = "sensor noise off" if p.render_noise == "off" else f"sensor noise '{p.render_noise}'"
-        _finish(ax, "render wall time (s)", "|metric - reference's| (metric's unit)",
-                f"(b) render: metric deviation ({noise})", lows)
+        title = f"(b) render: metric deviation ({noise})" + _zero_note(df, "render", headline)
+        _finish(ax, "render wall time (s)", "|metric - reference's| (metric's unit)", title, lows,
+                seeds_note=bool((df["stage"] == "render-seeds").any()))
 
         # (c) POCS
         ax = axes[2]
@@ -864,6 +950,9 @@ def plot_convergence(result: ConvergenceResult, paths) -> None:
             lows += _draw_series(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
                                  sub["quality"].to_numpy(float), None, st,
                                  f"{info.short} [{unit}]: {_rates_label(s['rates']['pocs'][m], 'iteration')}")
+            pspread = s.get("pocs_checks", {}).get(m, {}).get("cfa_spread")
+            if pspread and pspread > 0:
+                ax.axhline(pspread, color=st["color"], linestyle="--", linewidth=1)
             dev = pdflt["deviation"][m]
             if dev > 0:
                 ax.plot([pdflt["wall_s"]], [dev], linestyle="none", marker="o", markersize=13, markerfacecolor="none",
@@ -872,14 +961,25 @@ def plot_convergence(result: ConvergenceResult, paths) -> None:
             sub = df[(df["stage"] == "pocs") & (df["quantity"] == headline[0])].sort_values("quality")
             _label_points(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
                           sub["quality"].to_numpy(float), "it")
+        if p.compare_cfas:
+            ax.plot([], [], color="#555555", linestyle="--", linewidth=1,
+                    label=f"dashed, metric's colour: spread between {', '.join(p.compare_cfas)} (pocs)")
         ax.axvline(pdflt["wall_s"], color="#555555", linestyle=":", linewidth=1,
                    label=f"default: {p.pocs_default_iterations} iterations, tolerance 1e-3 "
                          f"(stopped at {pdflt['iterations_done']}; ringed)")
         _finish(ax, "processing wall time (s)", "|metric - converged POCS| (metric's unit)",
-                f"(c) processing: POCS iterations vs {p.pocs_reference_iterations} (tolerance 0)", lows)
+                f"(c) processing: POCS iterations vs {p.pocs_reference_iterations} (tolerance 0)"
+                + _zero_note(df, "pocs", headline), lows)
 
         for path in paths:
             fig.savefig(path, metadata={"Date": None} if str(path).endswith(".svg") else None)
+
+
+def _zero_note(df, stage: str, metrics) -> str:
+    sub = df[(df["stage"] == stage) & df["quantity"].isin(list(metrics))]
+    if len(sub) and (sub["error"] == 0).all():
+        return "\nevery deviation exactly 0: the metric does not change"
+    return ""
 
 
 def _rates_label(r: dict, per: str) -> str:
@@ -894,15 +994,13 @@ def _draw_series(ax, x, y, q, default_q, style, label) -> list:
     as hollow down-triangles at the bottom (returned for placement)."""
     x, y, q = np.asarray(x, float), np.asarray(y, float), np.asarray(q, float)
     pos = y > 0
-    ax.plot(x[pos], y[pos], label=label, markersize=5, linewidth=1.4, **style)
+    ax.plot(x[pos], y[pos], label=label, markersize=5, linewidth=1.4, **style)  # (an empty line keeps the legend)
     zeros = [(xx, style["color"]) for xx in x[~pos]]
     if default_q is not None:
         sel = (q == default_q) & pos
         if sel.any():
             ax.plot(x[sel], y[sel], linestyle="none", marker="o", markersize=13, markerfacecolor="none",
                     markeredgecolor=style["color"], markeredgewidth=1.4)
-    if not pos.any():
-        ax.plot([], [], label=label, **style)
     return zeros
 
 
@@ -913,7 +1011,7 @@ def _label_points(ax, x, y, q, what: str, below: bool = False) -> None:
                         ha="center", fontsize=7, color="#333333")
 
 
-def _finish(ax, xlabel, ylabel, title, zeros) -> None:
+def _finish(ax, xlabel, ylabel, title, zeros, seeds_note: bool = False) -> None:
     from matplotlib.ticker import LogFormatter
 
     ax.set_xscale("log")
@@ -925,10 +1023,12 @@ def _finish(ax, xlabel, ylabel, title, zeros) -> None:
     ax.set_ylabel(ylabel)
     ax.set_title(title)
     if zeros:
-        lo, hi = ax.get_ylim()
-        if not (np.isfinite(lo) and lo > 0) or lo >= hi:
-            lo, hi = 1e-12, 1.0
-            ax.set_ylim(lo, hi)
+        # Room below every drawn value (curves and reference lines) for the zero markers.
+        ys = np.concatenate([np.asarray(line.get_ydata(), dtype=float).ravel() for line in ax.get_lines()] or [[]])
+        ys = ys[np.isfinite(ys) & (ys > 0)]
+        top = float(ys.max()) * 3 if ys.size else 1.0
+        lo = float(ys.min()) / 30 if ys.size else 1e-3
+        ax.set_ylim(lo, max(top, lo * 100))
         y0 = lo * 1.6
         for xx, colour in zeros:
             ax.plot([xx], [y0], linestyle="none", marker="v", markersize=6, markerfacecolor="none",
@@ -936,5 +1036,5 @@ def _finish(ax, xlabel, ylabel, title, zeros) -> None:
         ax.plot([], [], linestyle="none", marker="v", markerfacecolor="none", markeredgecolor="#333333",
                 label="exactly 0 (identical to the reference)")
     ax.plot([], [], linestyle="none", marker="o", markersize=11, markerfacecolor="none", markeredgecolor="#333333",
-            label="ringed: the scene's default")
+            label="ringed: the scene's default" + ("; small hollow: the default with other seeds" if seeds_note else ""))
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=1, fontsize=7, handlelength=2.6)
