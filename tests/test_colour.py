@@ -111,3 +111,73 @@ def test_luminance_weights_non_negative_and_fit_luminance():
     for name in ("rgb3", "cmy2", "cmy3", "rgbw1"):
         w = cm.isp.luminance_weights(epr_of(name), WHITE, WL)
         assert np.all(w >= 0) and abs(w.sum() - 1) < 1e-12
+
+
+def _kkt_fit(epr):
+    """The textbook white-preserving fit (KKT system on the normal
+    equations): an independent solution for well-conditioned CFAs."""
+    refl = spectra.training_reflectances(WL)
+    rad = refl * WHITE
+    cam = rad @ epr.T / white_response(epr, WHITE)
+    n = epr.shape[0]
+    kkt = np.block([[2 * cam.T @ cam, np.ones((n, 1))], [np.ones((1, n)), np.zeros((1, 1))]])
+    rhs = np.vstack([2 * cam.T @ spectra.xyz_from_radiance(rad, WL), spectra.xyz_from_radiance(WHITE, WL)[None]])
+    return np.linalg.lstsq(kkt, rhs, rcond=None)[0][:n]
+
+
+@pytest.mark.parametrize("name", ["bayer", "cmy1", "cmy2", "rgbw1", "cmy3"])
+def test_white_preserving_fit_equals_the_kkt_solution(name):
+    """The null-space solver gives the KKT (minimum-norm) matrix, also where
+    a channel is an exact sum of others (rgbw1's W, cmy3's G): rank 3."""
+    fit = cm.isp.fit_colour_matrix(epr_of(name), WHITE, WL)
+    assert np.allclose(fit.matrix, _kkt_fit(epr_of(name)), rtol=0, atol=1e-8 * np.abs(fit.matrix).max())
+    assert fit.rank == (6 if name == "cmy2" else 3)
+
+
+def _near_twin_epr(eps):
+    """bayer-like G R / B H with H = G (1 + eps ripple): nearly dependent."""
+    g = cm.sensor.get_cfa("bayer").sensitivities(WL)
+    ripple = 1.0 + eps * np.sin(2 * np.pi * (WL - 400.0) / 60.0)
+    return electrons_per_radiance_of(np.vstack([g, g[1] * ripple]), WL) * 1e20
+
+
+@pytest.mark.parametrize("eps", [1e-3, 1e-6, 1e-9])
+def test_nearly_dependent_channels_fit_stably(eps):
+    """The huge least-squares matrix is solved on the responses (not the
+    normal equations, which square the condition number and used to switch
+    silently to the merged solution near eps = 1e-6): the noise gain grows
+    as 1 / eps, the white stays exact."""
+    fit = cm.isp.fit_colour_matrix(_near_twin_epr(eps), WHITE, WL)
+    assert fit.rank == 4
+    assert 0.3 / eps < fit.noise_gain.min() and fit.noise_gain.max() < 3.0 / eps
+    white = spectra.xyz_from_radiance(WHITE, WL)
+    # exact to the rounding of summing entries of size 1 / eps
+    assert np.allclose(fit.matrix.sum(axis=0), white, rtol=1e-12, atol=1e-14 * np.abs(fit.matrix).max())
+
+
+def test_rcond_regularises_nearly_dependent_channels():
+    fit = cm.isp.fit_colour_matrix(_near_twin_epr(1e-6), WHITE, WL, rcond=1e-4)
+    same = cm.isp.fit_colour_matrix(_near_twin_epr(0.0), WHITE, WL)
+    assert fit.rank == 3 and same.rank == 3
+    assert np.allclose(fit.matrix, same.matrix, rtol=0, atol=1e-3)
+    assert fit.noise_gain.max() < 2
+    with pytest.raises(cm.CfaMitsubaError, match="rcond"):
+        cm.isp.fit_colour_matrix(_near_twin_epr(0.0), WHITE, WL, rcond=-1)
+
+
+@pytest.mark.parametrize("scale", [1e-250, 1e250])
+def test_fit_survives_extreme_exposure_and_luminance_scales(scale):
+    ref = cm.isp.fit_colour_matrix(epr_of("cmy2"), WHITE, WL)
+    with np.errstate(all="raise"):  # no overflow or underflow on the way
+        a = cm.isp.fit_colour_matrix(epr_of("cmy2", scale), WHITE, WL)
+        b = cm.isp.fit_colour_matrix(epr_of("cmy2"), WHITE * scale, WL)
+    assert np.allclose(a.matrix, ref.matrix, rtol=1e-9)
+    assert np.allclose(b.matrix / scale, ref.matrix, rtol=1e-9)
+    assert np.allclose(b.noise_gain, ref.noise_gain, rtol=1e-9)
+
+
+def test_white_response_names_a_non_finite_response():
+    epr = epr_of("bayer")
+    epr[1, 3] = np.nan
+    with pytest.raises(cm.CfaMitsubaError, match="channel 1's response to the scene white is not finite"):
+        cm.isp.white_balance_gains(epr, WHITE)

@@ -58,9 +58,14 @@ def white_response(electrons_per_radiance, white_radiance) -> np.ndarray:
         raise CfaMitsubaError(
             f"electrons_per_radiance {epr.shape} and white_radiance {white.shape} do not share a band grid"
         )
-    e = epr @ white
-    if not np.all(np.isfinite(e)) or np.any(e <= 0):
-        bad = int(np.flatnonzero(~(np.isfinite(e) & (e > 0)))[0])
+    with np.errstate(over="ignore", invalid="ignore"):
+        e = epr @ white
+    if not np.all(np.isfinite(e)):
+        bad = int(np.flatnonzero(~np.isfinite(e))[0])
+        raise CfaMitsubaError(f"channel {bad}'s response to the scene white is not finite ({e[bad]}): "
+                              "NaN, infinite or overflowing electrons_per_radiance or white_radiance")
+    if np.any(e <= 0):
+        bad = int(np.flatnonzero(e <= 0)[0])
         raise CfaMitsubaError(f"channel {bad} collects no signal from the scene white: cannot white-balance")
     return e
 
@@ -113,6 +118,9 @@ class ColourFit:
     rms_error_training : RMS XYZ error on the training set relative to the
         white's Y (dimensionless).
     white_preserving : whether white maps exactly to ``white_xyz``.
+    rank : numerical rank of the balanced training responses (N for
+        independent channels; 3 for rgbw1's R, G, B, W = R + G + B): the
+        number of independent directions the fit used.  None when unknown.
     """
 
     matrix: np.ndarray
@@ -121,6 +129,7 @@ class ColourFit:
     noise_gain: np.ndarray
     rms_error_training: float
     white_preserving: bool
+    rank: int | None = None
 
     def apply(self, balanced: np.ndarray) -> np.ndarray:
         """(..., N) balanced channels -> (..., 3) XYZ in cd/m^2."""
@@ -133,17 +142,23 @@ class ColourFit:
             "noise_gain_xyz": self.noise_gain.tolist(),
             "fit_rms_error_training": self.rms_error_training,
             "white_preserving": self.white_preserving,
+            "fit_rank": self.rank,
         }
 
 
 def _balanced_responses(epr, white, reflectances):
+    # Only the spectral shape matters after white balance: remove the
+    # exposure scale, so that extreme exposures neither underflow nor overflow.
+    peak = float(np.max(np.abs(epr))) if epr.size else 0.0
+    if np.isfinite(peak) and peak > 0:
+        epr = epr / peak
     radiance = reflectances * white[None, :]
     cam = radiance @ epr.T / white_response(epr, white)[None, :]
     return radiance, cam
 
 
 def fit_colour_matrix(electrons_per_radiance, white_radiance, wavelengths=spectra.DEFAULT_WAVELENGTHS, *,
-                      white_preserving: bool = True, reflectances=None) -> ColourFit:
+                      white_preserving: bool = True, reflectances=None, rcond: float | None = None) -> ColourFit:
     """Fit the N x 3 matrix from balanced channels to absolute XYZ.
 
     Parameters
@@ -157,15 +172,31 @@ def fit_colour_matrix(electrons_per_radiance, white_radiance, wavelengths=spectr
         constrained least squares, Finlayson & Drew 1996).
     reflectances : (K, B) training reflectances; default the 190 rawtoaces
         patches (:func:`cfa_mitsuba.spectra.training_reflectances`).
+    rcond : relative cut-off for small singular values of the balanced
+        training responses (``numpy.linalg.lstsq``): directions below
+        ``rcond`` x the largest are dropped (minimum-norm solution).  None
+        (default): machine precision x K, so only channels that are linear
+        combinations of others to rounding (rgbw1's W = R + G + B) are
+        merged, and two *nearly* identical channels get the exact, large
+        least-squares matrix, whose noise gain is reported.  A larger value
+        (e.g. 1e-6) regularises such a CFA.
 
     Returns
     -------
     :class:`ColourFit`.
 
+    The fit is solved on the responses themselves (SVD), never on the
+    normal equations, which square the condition number: the constrained
+    fit eliminates the constraint (null-space method, Golub & Van Loan
+    s. 6.2) and the white is restored exactly afterwards, so a spectrally
+    flat grey maps to grey even when the matrix holds entries of 1e6.
+
     References
     ----------
     G. D. Finlayson, M. S. Drew, "Constrained least-squares regression in
     color spaces", J. Electronic Imaging 6(4), 1997 (white-point preserving).
+    G. H. Golub, C. F. Van Loan, "Matrix Computations", 4th ed., s. 6.2
+    (least squares with linear equality constraints, null-space method).
 
     Examples
     --------
@@ -186,26 +217,40 @@ def fit_colour_matrix(electrons_per_radiance, white_radiance, wavelengths=spectr
             f"colour fit: electrons_per_radiance {epr.shape} and white_radiance {white.shape} "
             f"must be on the {wl.size}-band grid"
         )
+    if rcond is not None and not (np.isfinite(rcond) and 0 <= rcond < 1):
+        raise CfaMitsubaError(f"colour fit: rcond must lie in [0, 1), got {rcond!r}")
     refl = spectra.training_reflectances(wl) if reflectances is None else np.asarray(reflectances, float)
-    radiance, cam = _balanced_responses(epr, white, refl)
-    target = spectra.xyz_from_radiance(radiance, wl)
     white_xyz = spectra.xyz_from_radiance(white, wl)
+    if not (np.all(np.isfinite(white_xyz)) and white_xyz[1] > 0):
+        raise CfaMitsubaError(f"colour fit: the scene white's XYZ {white_xyz.tolist()} is not finite and positive")
+    # Fit for the white at Y = 1 and scale the matrix after: the numbers stay
+    # O(1) at any luminance (1e-30 or 1e300 cd/m^2 alike).
+    y_white, white_xyz_abs = float(white_xyz[1]), white_xyz
+    radiance, cam = _balanced_responses(epr, white / y_white, refl)
+    target = spectra.xyz_from_radiance(radiance, wl)
+    white_xyz = white_xyz / y_white
     n = epr.shape[0]
     if white_preserving:
-        # min ||A M - X||^2 subject to 1^T M = white_xyz, by the KKT system.
-        ones = np.ones((1, n))
-        kkt = np.block([[2 * cam.T @ cam, ones.T], [ones, np.zeros((1, 1))]])
-        rhs = np.vstack([2 * cam.T @ target, white_xyz[None, :]])
-        sol = np.linalg.lstsq(kkt, rhs, rcond=None)[0]
-        m = sol[:n]
+        # min ||A M - X||^2 subject to 1^T M = white_xyz: M = M0 + N Z with
+        # M0 = 1 white_xyz^T / n (meets the constraint) and N an orthonormal
+        # basis of the vectors summing to 0; Z is a plain least-squares fit.
+        m0 = np.full((n, 1), 1.0 / n) @ white_xyz[None, :]
+        basis = np.linalg.qr(np.ones((n, 1)), mode="complete")[0][:, 1:]
+        z = np.linalg.lstsq(cam @ basis, target - cam @ m0, rcond=rcond)[0]
+        m = m0 + basis @ z
+        # the elimination holds the sums only to rounding x |Z|: restore them
+        m += (white_xyz - m.sum(axis=0))[None, :] / n
     else:
-        m = np.linalg.lstsq(cam, target, rcond=None)[0]
+        m = np.linalg.lstsq(cam, target, rcond=rcond)[0]
+    sv_cam = np.linalg.svd(cam, compute_uv=False)
+    cut = (np.finfo(float).eps * max(cam.shape) if rcond is None else rcond) * sv_cam[0]
+    rank = int(np.count_nonzero(sv_cam > cut))
     rel = m / white_xyz[None, :]
     sv = np.linalg.svd(rel, compute_uv=False)
     cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
     noise = np.linalg.norm(m, axis=0) / np.abs(m.sum(axis=0))
     rms = float(np.sqrt(np.mean((cam @ m - target) ** 2)) / white_xyz[1])
-    return ColourFit(m, white_xyz, cond, noise, rms, bool(white_preserving))
+    return ColourFit(m * y_white, white_xyz_abs, cond, noise, rms, bool(white_preserving), rank)
 
 
 def luminance_weights(electrons_per_radiance, white_radiance, wavelengths=spectra.DEFAULT_WAVELENGTHS) -> np.ndarray:
