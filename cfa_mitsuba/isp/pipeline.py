@@ -10,7 +10,7 @@ passes through unchanged to XYZ and sRGB.
 
 from __future__ import annotations
 
-__all__ = ["process", "WHITE_BALANCE_MODES"]
+__all__ = ["process", "WHITE_BALANCE_MODES", "MIN_WHITE_ELECTRONS"]
 
 import inspect
 from dataclasses import dataclass
@@ -19,13 +19,19 @@ import numpy as np
 
 from ..errors import CfaMitsubaError
 from ..values import RawImage, RenderedImage
-from .colour import fit_colour_matrix, gray_world_gains, luminance_weights, white_balance_gains, xyz_to_srgb
+from .colour import (fit_colour_matrix, gray_world_gains, luminance_weights, white_balance_gains, white_response,
+                     xyz_to_srgb)
 from .demosaic import check_mosaic, demosaic as _demosaic, get_demosaic
 from .mosaic import geometry
 
 #: ``illuminant``: gains from the sensor's response to the scene's white
 #: (known illuminant); ``gray-world``: the image's channel means made equal.
 WHITE_BALANCE_MODES = ("illuminant", "gray-world")
+#: Fewest electrons a channel must collect from the scene white to be
+#: white-balanced.  Far below any physical signal (one photo-electron in
+#: 10^30 exposures); it only stops gains of 10^300 (an exposure of 1e-300 s)
+#: from overflowing the demosaic and the metrics into NaN.
+MIN_WHITE_ELECTRONS = 1e-30
 
 
 @dataclass(frozen=True)
@@ -64,6 +70,21 @@ def _saturated_fraction(raw: RawImage) -> float | None:
     if not isinstance(bits, int):
         return None
     return float(np.mean(raw.raw >= 2**bits - 1))
+
+
+def _check_white_signal(raw: RawImage, epr: np.ndarray, white: np.ndarray) -> None:
+    """Refuse a capture whose channels collect (next to) nothing from the
+    scene white: their white-balance gains would be infinite or overflow."""
+    with np.errstate(all="ignore"):
+        white_e = epr @ white
+    if not np.all(np.isfinite(white_e)):
+        white_response(epr, white)  # raises, naming the channel
+    if np.any(white_e < MIN_WHITE_ELECTRONS):
+        c = int(np.argmin(white_e))
+        raise CfaMitsubaError(
+            f"channel {raw.channels[c]!r} collects {white_e[c]:.3g} electrons from the scene white in this capture "
+            f"(exposure {raw.exposure_s:.3g} s): no usable signal to white-balance "
+            f"(need at least {MIN_WHITE_ELECTRONS:g}; lengthen the exposure or raise the luminance)")
 
 
 def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: str = "illuminant",
@@ -112,6 +133,8 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     wl = np.asarray(raw_image.wavelengths, dtype=np.float64)
     epr = np.asarray(raw_image.electrons_per_radiance, dtype=np.float64)
     white = np.asarray(raw_image.white_radiance, dtype=np.float64)
+    if not raw_image.is_ideal:
+        _check_white_signal(raw_image, epr, white)
     fit = fit_colour_matrix(epr, white, wl, white_preserving=white_preserving) if not raw_image.is_ideal else None
     meta = dict(raw_image.meta or {})
     meta.setdefault("capture", raw_image.settings)
