@@ -185,6 +185,15 @@ def _scaled_meta(oi: OpticalImage, s: float) -> dict:
     return meta
 
 
+def _require_representable(*arrays, exposure: float, scale: float, what: str = "electron count") -> None:
+    """Refuse an exposure x luminance product whose signal overflows float64
+    (e.g. 1e300 s at 1e300 cd/m^2), instead of passing inf or NaN on."""
+    if not all(np.all(np.isfinite(a)) for a in arrays):
+        raise CfaMitsubaError(
+            f"exposure {exposure:.3g} s at luminance scale {scale:.3g} overflows the {what} "
+            "(not a finite number): use a shorter exposure or a lower luminance")
+
+
 def _check_seed(seed) -> int:
     if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or int(seed) < 0:
         raise CfaMitsubaError(f"seed must be a non-negative integer, got {seed!r}")
@@ -240,16 +249,18 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     h, w, nb = pix.shape
     th, tw = cfa.tile_shape
     require(h >= th and w >= tw, f"the sensor ({w} x {h} pixels) is smaller than the CFA tile ({tw} x {th})")
-    k = _electrons_per_irradiance(wl, sensor) * (exposure * s)  # (B,)
-    weights = (qe * k).T  # (B, C)
-    photo = _mosaic_response(pix, weights, cfa)
+    factor = np.asarray(oi.meta["on_axis_factor"], dtype=np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):
+        k = _electrons_per_irradiance(wl, sensor) * (exposure * s)  # (B,)
+        weights = (qe * k).T  # (B, C)
+        photo = _mosaic_response(pix, weights, cfa)
+        epr = qe * (factor * _electrons_per_irradiance(wl, sensor) * exposure)[None, :]
+    _require_representable(photo, epr, exposure=exposure, scale=s)
 
     rng = temporal_rng(seed) if noise != "off" else None
     electrons = collect_electrons(photo, exposure_s=exposure, sensor=sensor, noise=noise, rng=rng)
     raw = read_out(electrons, sensor=sensor, noise=noise, rng=rng)
 
-    factor = np.asarray(oi.meta["on_axis_factor"], dtype=np.float64)
-    epr = qe * (factor * _electrons_per_irradiance(wl, sensor) * exposure)[None, :]
     meta = _scaled_meta(oi, s)
     # wells that were full before read-out (read noise then spreads their codes)
     meta["saturated_fraction"] = float(np.count_nonzero(electrons >= sensor.well_capacity_e)) / electrons.size
@@ -300,7 +311,9 @@ def capture_ideal(image, *, luminance_cd_m2: float | None = None, exposure_s="au
     cmfs = _spectra.cmfs_xyz(wl)  # (B, 3)
     per_radiance = cmfs * (_spectra.band_widths(wl) * _spectra.KM_LM_W)[:, None]  # (B, 3)
     factor = np.asarray(oi.meta["on_axis_factor"], dtype=np.float64)
-    xyz = (pix.reshape(-1, nb) @ (per_radiance * (s / factor)[:, None])).reshape(h, w, 3)
+    with np.errstate(over="ignore", invalid="ignore"):
+        xyz = (pix.reshape(-1, nb) @ (per_radiance * (s / factor)[:, None])).reshape(h, w, 3)
+    _require_representable(xyz, exposure=exposure, scale=s, what="XYZ image")
     meta = _scaled_meta(oi, s)
     settings = {
         "cfa": {"name": "ideal", "description": "CIE 1931 XYZ at every pixel, no noise, no mosaic",
