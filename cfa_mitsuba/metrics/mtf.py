@@ -185,12 +185,19 @@ def _polarity(work: np.ndarray) -> float:
 
 def _reference_edge(reference, bounds, weights, transposed: bool, sign: float):
     """Fit the edge line on the reference image's luminance in the same
-    region, orientation and polarity as the image under test."""
+    region, orientation and polarity as the image under test, after checking
+    that the image shows that edge at all: the same orientation and polarity
+    (decided on the image before its edge fit failed; when noise decided
+    them, the line would be fitted along the wrong axis or with the wrong
+    sign, and fail with a misleading message)."""
     y0, y1, x0, x1 = bounds
     r = as_image(reference, "reference edge image", channels=(3,), allow_gray=True, min_size=8)
     require(r.shape[0] >= y1 and r.shape[1] >= x1, "the reference image is smaller than the edge region")
     r = r[y0:y1, x0:x1]
     lum = r @ np.asarray(weights, dtype=np.float64) if r.ndim == 3 else r
+    hidden = "no edge found in the image: noise or clipping hides it"
+    require(_is_horizontal(lum) == transposed and _polarity(lum.T if transposed else lum) == sign,
+            f"{hidden} (its orientation or polarity differs from the reference's edge)")
     if transposed:
         lum = lum.T
     slope, intercept, rms = _fit_edge(_row_derivative(lum) * sign)
@@ -219,7 +226,9 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
         ``image`` itself (demosaicing artefacts that repeat with the CFA tile
         can scatter the per-row centroids by pixels): the line is then
         fitted on ``reference`` and ``details['edge_source']`` says
-        ``'reference'`` instead of ``'image'``.
+        ``'reference'`` instead of ``'image'``.  Not when the image's edge
+        runs the other way or has the other polarity (noise or clipping
+        decided them): that is an error.
 
     Returns
     -------
@@ -232,7 +241,8 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
         ``percent_alias`` (100 x sum of the luminance MTF above Nyquist over
         its sum, up to 1 cy/px, as ISETCam's ISO12233 but on luminance as the
         paper says), ``edge_angle_deg``, ``orientation``, ``roi``,
-        ``edge_fit_rms_px``, ``contrast`` ((bright - dark) / (bright + dark);
+        ``edge_fit_rms_px``, ``contrast`` ((bright - dark) / (bright + dark),
+        a dark side below 0 counted as 0, so 0..1;
         ISO 12233 recommends no less than 0.2... and warns below it:
         ``low_contrast``).  An MTF that never falls below 0.5 up to the
         highest analysed frequency reports that frequency with
@@ -298,7 +308,11 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
 
     k = max(1, min(5, npix // 4))
     dark, bright = sorted((work[:, :k].mean(), work[:, -k:].mean()))
-    contrast = (bright - dark) / (bright + dark) if bright + dark > 0 else float("nan")
+    # Michelson contrast is defined for non-negative signals: a dark side
+    # below 0 (read noise about black in a linear camera image) counts as 0,
+    # so the value stays in [0, 1] (not 1e16 or NaN as bright + dark -> 0).
+    dark = max(dark, 0.0)
+    contrast = (bright - dark) / (bright + dark) if bright > 0 else 0.0
 
     out = {}
     for name, rec in records.items():

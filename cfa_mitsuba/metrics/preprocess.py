@@ -27,7 +27,9 @@ def mean_match(test, reference, *, border: int = 10, return_scale: bool = False)
 
     Returns
     -------
-    ndarray (and the scale factor if ``return_scale``).
+    ndarray (and the scale factor if ``return_scale``).  Refused (one-line
+    :class:`~cfa_mitsuba.errors.CfaMitsubaError`) when either interior mean
+    is not positive: a black reference would scale any test image to 0.
 
     Examples
     --------
@@ -41,6 +43,8 @@ def mean_match(test, reference, *, border: int = 10, return_scale: bool = False)
     require(b >= 0 and h > 2 * b and w > 2 * b, f"border {b} px leaves nothing of the {h} x {w} image")
     mt, mr = t[b:h - b, b:w - b].mean(), r[b:h - b, b:w - b].mean()
     require(mt > 0, f"cannot mean-match: the test image's interior mean is {mt:g} (need > 0)")
+    # a black reference would scale the test image to exactly 0, a perfect score for any camera
+    require(mr > 0, f"cannot mean-match: the reference image's interior mean is {mr:g} (need > 0)")
     scale = float(mr / mt)
     out = t * scale
     return (out, scale) if return_scale else out
