@@ -75,7 +75,10 @@ from ..errors import CfaMitsubaError
 #: over noise seeds; quality = number of seeds), ``cfa-spread`` and
 #: ``cfa-gap`` (a metric's max - min, and smallest difference between two of
 #: the compared CFAs, with the render stage's demosaic; quality = number of
-#: CFAs), ``pocs-cfa-spread``, ``pocs-cfa-gap`` (the same with POCS).
+#: CFAs), ``pocs-cfa-spread``, ``pocs-cfa-gap`` (the same with POCS),
+#: ``cfa-pairs`` (rms change, from the reference to the default spp's
+#: renders, of the difference between two CFAs: what can reorder them;
+#: sensor noise off) and ``cfa-common`` (rms shift common to all CFAs).
 #: ``error``: relative rms
 #: (radiance rows, unit ``relative``) or absolute deviation in the metric's
 #: unit.  ``value``: the metric's value at that quality (empty for radiance).
@@ -476,9 +479,12 @@ def run_convergence(plan: ConvergencePlan, *, log=None) -> ConvergenceResult:
 
     # 2. The levels.
     level_times = {}
+    default_imgs = []  # the default spp's renders, for the CFA differences below
     for n, spp in enumerate(p.spp_levels, 1):
         img, dt, times = _timed_render(p, spp, p.seed, p.repeat)
         level_times[spp] = times
+        if spp == p.default_spp:
+            default_imgs.append(img)
         e_img = relative_rms_per_band(img.data, ref.data)
         e_reg = relative_rms_per_band(img.data, ref.data, region)
         for b, a, c in zip(bands, e_img, e_reg):
@@ -497,10 +503,11 @@ def run_convergence(plan: ConvergencePlan, *, log=None) -> ConvergenceResult:
             s_i = p.seed + 3 + i
             log(f"  default {p.default_spp} spp, seed {s_i} ({i + 1}/{p.default_seeds}) ...")
             img, dt, _ = _timed_render(p, p.default_spp, s_i, 1)
+            default_imgs.append(img)
             vals, _, _ = chain.evaluate(img, p.cfa, p.demosaic, p.render_noise, p.seed)
             for k, v in vals.items():
                 row("render-seeds", p.default_spp, dt, k, abs(v - ref_vals[k]), units[k], v)
-        del img
+    del img
 
     # 3. POCS on the reference's noisy capture (the study's seed).
     study_seed = task_seed(p.seed, p.name, p.cfa, p.luminance_cd_m2)
@@ -551,10 +558,44 @@ def run_convergence(plan: ConvergencePlan, *, log=None) -> ConvergenceResult:
                 gap = min((b - a for a, b in zip(v, v[1:])), default=float("nan"))
                 row(f"{prefix}cfa-spread", len(v), None, k, v[-1] - v[0], units[k])
                 row(f"{prefix}cfa-gap", len(v), None, k, gap, units[k])
+        if len(p.compare_cfas) >= 2 and default_imgs:
+            log(f"  CFA differences at {p.default_spp} spp ({len(default_imgs)} render(s)) vs the reference ...")
+            pair, common = _difference_deviation(chain, p, ref, default_imgs, list(ref_vals))
+            for k in ref_vals:
+                row("cfa-pairs", p.default_spp, None, k, pair[k], units[k])
+                row("cfa-common", p.default_spp, None, k, common[k], units[k])
+    del default_imgs
 
     summary = _summarise(p, rows, units, ref_vals, metric_floor, region, exact, ref_times, level_times,
                          pocs_default, noise_std, cfa_values, time.perf_counter() - t_start)
     return ConvergenceResult(p, rows, summary)
+
+
+def _difference_deviation(chain, p, ref, renders, metrics) -> tuple[dict, dict]:
+    """How the default spp's render error moves the differences between CFAs.
+
+    Each CFA in ``p.compare_cfas`` is captured noise-free from the reference
+    and from each default-spp render, processed with ``p.demosaic``, and
+    measured.  With d_c = m_c(render) - m_c(reference): returns per metric
+    (rms over renders and CFA pairs of d_a - d_b, which is what can reorder
+    two CFAs; rms over renders of the mean over CFAs of d_c, a shift common
+    to every CFA, which cannot).
+    """
+    def values(img):
+        oi = chain.optical(img)
+        ideal = chain.ideal(oi)
+        return {c: chain.metrics(ideal, chain.capture(oi, c, "off", 0), p.demosaic)[0] for c in p.compare_cfas}
+
+    at_ref = values(ref)
+    pair_sq, common_sq = {k: [] for k in metrics}, {k: [] for k in metrics}
+    for img in renders:
+        got = values(img)
+        for k in metrics:
+            d = np.array([got[c][k] - at_ref[c][k] for c in p.compare_cfas])
+            common_sq[k].append(float(d.mean()) ** 2)
+            pair_sq[k].extend(float(a - b) ** 2 for i, a in enumerate(d) for b in d[i + 1:])
+    return ({k: float(np.sqrt(np.mean(v))) for k, v in pair_sq.items()},
+            {k: float(np.sqrt(np.mean(v))) for k, v in common_sq.items()})
 
 
 def _mean_ratio(a, b, region=None):
@@ -580,11 +621,16 @@ def _exact_error(plan: ConvergencePlan, ref) -> dict | None:
     if name == "macbeth":
         from .. import spectra
 
-        names, refl = spectra.colorchecker(ref.wavelengths)
+        # A patch's band value is the box mean of D65(l) rho(l) (the product of
+        # the interpolated colour-science tables), scaled as the white is.
+        wl = np.asarray(ref.wavelengths, dtype=np.float64)
+        _, tables = spectra.colorchecker_tables()
+        scale = white / spectra.illuminant("D65", wl)
+        d65 = spectra.illuminant_table("D65")
         exact = np.broadcast_to(white * charts.SURROUND_REFLECTANCE, ref.data.shape).copy()
-        for i, patch in enumerate(charts.macbeth_layout(plan.width, plan.height)):
+        for table, patch in zip(tables, charts.macbeth_layout(plan.width, plan.height)):
             y0, x0, y1, x1 = patch["rect"]
-            exact[y0:y1, x0:x1] = white * refl[i]
+            exact[y0:y1, x0:x1] = scale * spectra.band_average_product([d65, table], wl)
     else:
         pattern = charts.exact_reflectance(name, plan.width, plan.height, plan.oversample)
         exact = pattern[..., None] * white[None, None, :]
@@ -673,6 +719,7 @@ def _summarise(p, rows, units, ref_vals, metric_floor, region, exact, ref_times,
         return c
 
     spread, gap = by_metric("cfa-spread"), by_metric("cfa-gap")
+    pairs, common = by_metric("cfa-pairs"), by_metric("cfa-common")
     pocs_spread, pocs_gap = by_metric("pocs-cfa-spread"), by_metric("pocs-cfa-gap")
     if p.demosaic == "pocs":
         pocs_spread, pocs_gap = spread, gap
@@ -683,6 +730,10 @@ def _summarise(p, rows, units, ref_vals, metric_floor, region, exact, ref_times,
                              "unit": units[k], "reference_value": ref_vals[k],
                              "reference_noise": metric_floor[k], "sensor_noise_std": noise_std.get(k)},
                             dev, spread.get(k), gap.get(k))
+        if k in pairs:
+            checks[k].update(cfa_difference_deviation=pairs[k], cfa_common_shift=common[k],
+                             difference_below_smallest_gap=bool(gap.get(k) and pairs[k] < gap[k]),
+                             difference_well_below_spread=bool(spread.get(k) and pairs[k] <= WELL_BELOW * spread[k]))
         pdev = pocs_default["deviation"][k]
         pocs_checks[k] = compare({"pocs_default_deviation": pdev, "unit": units[k]}, pdev, pocs_spread.get(k),
                                  pocs_gap.get(k))
@@ -716,7 +767,29 @@ def _summarise(p, rows, units, ref_vals, metric_floor, region, exact, ref_times,
         "well_below": f"render-induced deviation at the default spp <= {WELL_BELOW:g} x the CFA spread",
         "total_wall_s": total_s,
         "cores": _cores(),
+        "code": _code_version(),
     }
+
+
+def _code_version() -> dict:
+    """The package version and, in a git checkout, the commit and whether
+    the working tree had changes (results depend on the code they ran)."""
+    import subprocess
+
+    from .. import __version__
+
+    out = {"cfa_mitsuba": __version__}
+    root = Path(__file__).resolve().parents[2]
+    try:
+        commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, timeout=10)
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root,
+                               capture_output=True, text=True, timeout=10)
+        if commit.returncode == 0:
+            out["git_commit"] = commit.stdout.strip()
+            out["git_dirty"] = bool(dirty.stdout.strip())
+    except (OSError, subprocess.SubprocessError):
+        pass
+    return out
 
 
 def _cores() -> int:
@@ -785,6 +858,11 @@ def format_table(result: ConvergenceResult) -> str:
             verdict = f"well below (<= {WELL_BELOW:g} x the spread)"
         else:
             verdict = f"NOT well below (> {WELL_BELOW:g} x the spread)"
+        if c.get("cfa_difference_deviation") is not None:
+            out.append(f"check {m}: at {p.default_spp} spp the differences between CFAs move by "
+                       f"{_fmt(c['cfa_difference_deviation'])} {c['unit']} rms (common shift "
+                       f"{_fmt(c['cfa_common_shift'])}) vs the smallest gap {_fmt(c['cfa_smallest_gap'])}: "
+                       + ("below" if c["difference_below_smallest_gap"] else "NOT below"))
         out.append(f"check {m}: render-induced deviation at {p.default_spp} spp (rms of {c['renders']} renders) "
                    f"{_fmt(c['render_deviation_at_default'])}"
                    f" {c['unit']} vs CFA spread {_fmt(c['cfa_spread'])} (smallest gap {_fmt(c['cfa_smallest_gap'])}, "
@@ -917,6 +995,10 @@ def plot_convergence(result: ConvergenceResult, paths) -> None:
                 ax.plot(np.full(len(seeds), float(at.iloc[0])), seeds["error"].to_numpy(float), linestyle="none",
                         marker=st["marker"], markersize=4, markerfacecolor="none", markeredgecolor=st["color"],
                         alpha=0.8)
+            pair = s["checks"][m].get("cfa_difference_deviation")
+            if pair and pair > 0 and len(at):
+                ax.plot([float(at.iloc[0]) * 1.12], [pair], linestyle="none", marker="*", markersize=10,
+                        color=st["color"], markeredgecolor="#000000", markeredgewidth=0.4)
             spread = s["checks"][m].get("cfa_spread")
             gap = s["checks"][m].get("cfa_smallest_gap")
             if spread and spread > 0:
@@ -933,6 +1015,10 @@ def plot_convergence(result: ConvergenceResult, paths) -> None:
                     label=f"dashed, metric's colour: spread between {names} ({p.demosaic})")
             ax.plot([], [], color="#555555", linestyle=":", linewidth=1,
                     label="dotted: smallest gap between two of them")
+            if (df["stage"] == "cfa-pairs").any():
+                ax.plot([], [], linestyle="none", marker="*", markersize=10, color="#999999", markeredgecolor="#000000",
+                        markeredgewidth=0.4, label="star: rms change of the differences between those CFAs "
+                                                   "at the default (what can reorder them)")
         noise = "sensor noise off" if p.render_noise == "off" else f"sensor noise '{p.render_noise}'"
         title = f"(b) render: metric deviation ({noise})" + _zero_note(df, "render", headline)
         _finish(ax, "render wall time (s)", "|metric - reference's| (metric's unit)", title, lows,
