@@ -364,8 +364,10 @@ def _render_canonical(sc: Scene, cfg: RenderConfig) -> SpectralImage:
     elapsed = time.perf_counter() - start
     data = data.astype(np.float32).astype(np.float64)
     bad = int(data.size - np.count_nonzero(np.isfinite(data)))
-    if bad:  # pragma: no cover - a renderer bug, not bad input
-        raise RuntimeError(f"Mitsuba returned {bad} NaN or infinite values")
+    if bad:  # a scene file with an infinite (or float32-overflowing) emitter or texture value
+        raise CfaMitsubaError(
+            f"the render of {sc.name!r} has {bad} NaN or infinite radiance values: check the scene's emitters "
+            "and textures for infinite or huge (> 3e38) values")
     wl = cfg.wl
     meta = {
         "scene": sc.name,
