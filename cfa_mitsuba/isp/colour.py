@@ -118,9 +118,10 @@ class ColourFit:
     rms_error_training : RMS XYZ error on the training set relative to the
         white's Y (dimensionless).
     white_preserving : whether white maps exactly to ``white_xyz``.
-    rank : numerical rank of the balanced training responses (N for
-        independent channels; 3 for rgbw1's R, G, B, W = R + G + B): the
-        number of independent directions the fit used.  None when unknown.
+    rank : the number of independent channel directions the fit used: the
+        numerical rank of the balanced training responses at the fit's
+        ``rcond`` (N for independent channels; 3 for rgbw1's R, G, B and
+        W = R + G + B, whose W direction is merged).  None when unknown.
     """
 
     matrix: np.ndarray
@@ -236,15 +237,14 @@ def fit_colour_matrix(electrons_per_radiance, white_radiance, wavelengths=spectr
         # basis of the vectors summing to 0; Z is a plain least-squares fit.
         m0 = np.full((n, 1), 1.0 / n) @ white_xyz[None, :]
         basis = np.linalg.qr(np.ones((n, 1)), mode="complete")[0][:, 1:]
-        z = np.linalg.lstsq(cam @ basis, target - cam @ m0, rcond=rcond)[0]
+        z, _, rank, _ = np.linalg.lstsq(cam @ basis, target - cam @ m0, rcond=rcond)
+        rank += 1  # the constrained direction (the white) is always determined
         m = m0 + basis @ z
         # the elimination holds the sums only to rounding x |Z|: restore them
         m += (white_xyz - m.sum(axis=0))[None, :] / n
     else:
-        m = np.linalg.lstsq(cam, target, rcond=rcond)[0]
-    sv_cam = np.linalg.svd(cam, compute_uv=False)
-    cut = (np.finfo(float).eps * max(cam.shape) if rcond is None else rcond) * sv_cam[0]
-    rank = int(np.count_nonzero(sv_cam > cut))
+        m, _, rank, _ = np.linalg.lstsq(cam, target, rcond=rcond)
+    rank = int(rank)
     rel = m / white_xyz[None, :]
     sv = np.linalg.svd(rel, compute_uv=False)
     cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
