@@ -60,7 +60,7 @@ import json
 import math
 import sys
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -78,7 +78,8 @@ from ..errors import CfaMitsubaError
 #: CFAs), ``pocs-cfa-spread``, ``pocs-cfa-gap`` (the same with POCS),
 #: ``cfa-pairs`` (rms change, from the reference to the default spp's
 #: renders, of the difference between two CFAs: what can reorder them;
-#: sensor noise off) and ``cfa-common`` (rms shift common to all CFAs).
+#: sensor noise as the render stage's) and ``cfa-common`` (rms shift
+#: common to all CFAs).
 #: ``error``: relative rms
 #: (radiance rows, unit ``relative``) or absolute deviation in the metric's
 #: unit.  ``value``: the metric's value at that quality (empty for radiance).
@@ -574,17 +575,21 @@ def run_convergence(plan: ConvergencePlan, *, log=None) -> ConvergenceResult:
 def _difference_deviation(chain, p, ref, renders, metrics) -> tuple[dict, dict]:
     """How the default spp's render error moves the differences between CFAs.
 
-    Each CFA in ``p.compare_cfas`` is captured noise-free from the reference
-    and from each default-spp render, processed with ``p.demosaic``, and
+    Each CFA in ``p.compare_cfas`` is captured (sensor noise as the render
+    stage's, ``p.render_noise``) from the reference and from each default-spp render, processed with ``p.demosaic``, and
     measured.  With d_c = m_c(render) - m_c(reference): returns per metric
     (rms over renders and CFA pairs of d_a - d_b, which is what can reorder
     two CFAs; rms over renders of the mean over CFAs of d_c, a shift common
     to every CFA, which cannot).
     """
+    from .tasks import task_seed
+
     def values(img):
         oi = chain.optical(img)
         ideal = chain.ideal(oi)
-        return {c: chain.metrics(ideal, chain.capture(oi, c, "off", 0), p.demosaic)[0] for c in p.compare_cfas}
+        return {c: chain.metrics(ideal, chain.capture(oi, c, p.render_noise,
+                                                     task_seed(p.seed, p.name, c, p.luminance_cd_m2)),
+                                 p.demosaic)[0] for c in p.compare_cfas}
 
     at_ref = values(ref)
     pair_sq, common_sq = {k: [] for k in metrics}, {k: [] for k in metrics}
@@ -1102,9 +1107,17 @@ def _finish(ax, xlabel, ylabel, title, zeros, seeds_note: bool = False) -> None:
 
     ax.set_xscale("log")
     ax.set_yscale("log")
-    for axis in (ax.xaxis, ax.yaxis):  # plain-text labels (mathtext is off in the report's style)
-        axis.set_major_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(1.2, 0.4)))
-        axis.set_minor_formatter(LogFormatter(labelOnlyBase=False, minor_thresholds=(1.2, 0.4)))
+    class _Plain(LogFormatter):
+        """LogFormatter's choice of which ticks to label, written as %.3g
+        (plain text: mathtext is off in the report's style; and 0.12, 0.15
+        rather than two labels that both read 1e-01)."""
+
+        def __call__(self, x, pos=None):
+            return f"{x:.3g}" if super().__call__(x, pos) else ""
+
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_formatter(_Plain(labelOnlyBase=False, minor_thresholds=(1.2, 0.4)))
+        axis.set_minor_formatter(_Plain(labelOnlyBase=False, minor_thresholds=(1.2, 0.4)))
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.set_title(title)
