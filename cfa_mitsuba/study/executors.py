@@ -107,18 +107,20 @@ class LocalExecutor:
                 fut.cancel()
 
 
-def _dask_call(fn: Callable, item, slots_per_host: dict):
-    """Run ``fn(item)`` on a Dask worker with Dr.Jit capped to this task's
-    share of the node: the node's cores divided by the task slots (worker
-    threads) of every worker on that node, so renders never oversubscribe."""
+def _dask_call(fn: Callable, item, processes_per_host: dict):
+    """Run ``fn(item)`` on a Dask worker with Dr.Jit capped to this worker
+    process's share of its node: the node's cores divided by the worker
+    processes on that node.  Renders inside one process are serialised
+    (study.tasks), so renders never oversubscribe a node however many
+    threads each worker runs."""
     try:
         from distributed import get_worker
 
         host = get_worker().address.rsplit(":", 1)[0]
-        slots = slots_per_host.get(host, 1)
+        procs = processes_per_host.get(host, 1)
     except (ImportError, ValueError):
-        slots = 1
-    os.environ["CFA_MITSUBA_THREADS"] = str(max(1, _cpu_count() // max(1, slots)))
+        procs = 1
+    os.environ["CFA_MITSUBA_THREADS"] = str(thread_budget(procs))
     return fn(item)
 
 
@@ -149,11 +151,11 @@ class DaskExecutor:
         if not workers:
             self.client.wait_for_workers(1, timeout=self.timeout_s)
             workers = self.client.scheduler_info().get("workers", {})
-        # Task slots per host (a worker runs 'nthreads' tasks at once).
-        self._slots: dict[str, int] = {}
-        for addr, w in workers.items():
+        # Worker processes per host: they share the host's cores.
+        self._procs: dict[str, int] = {}
+        for addr in workers:
             host = addr.rsplit(":", 1)[0]
-            self._slots[host] = self._slots.get(host, 0) + int(w.get("nthreads", 1))
+            self._procs[host] = self._procs.get(host, 0) + 1
         n = len(workers)
         self.description = f"Dask cluster at {self.address} ({n} worker{'s' if n != 1 else ''})"
         return self
@@ -170,7 +172,7 @@ class DaskExecutor:
         items = list(items)
         futures = {}
         for item in items:
-            fut = self.client.submit(_dask_call, fn, item, self._slots, pure=False, retries=self.retries)
+            fut = self.client.submit(_dask_call, fn, item, self._procs, pure=False, retries=self.retries)
             futures[fut] = item
         try:
             for fut in as_completed(futures):

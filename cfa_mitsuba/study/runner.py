@@ -192,7 +192,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     ``scheduler``: a Dask scheduler address instead; ``report``: build the
     HTML report (default: the config's ``output.report``).
     """
-    from .executors import make_executor
+    from .executors import make_executor, thread_budget
 
     log = log or (lambda msg: print(msg, file=sys.stderr))
     out = check_writable_dir(out_dir)
@@ -230,7 +230,11 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
             render_info[src["scene"]] = summary
 
         need_render = sources if todo else []
-        _run_tasks(executor, render_task, need_render, "render", progress, got_render)
+        # Locally, renders run one at a time in this process with every core
+        # (Dr.Jit parallelises a render well; two renders on one thread each
+        # would leave a core idle once the quick charts are done).
+        render_executor = executor if scheduler else _InProcess(thread_budget(1))
+        _run_tasks(render_executor, render_task, need_render, "render", progress, got_render)
         timing["phases"]["render_s"] = time.perf_counter() - t
         timing["renders"] = render_info
         if todo:
@@ -281,6 +285,27 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         tmp.write_text(json.dumps(timing, indent=1))
     log(_timing_text(timing, len(tasks), reused))
     return StudyResult(out, metrics, scores, timing, len(tasks), reused)
+
+
+class _InProcess:
+    """Runs tasks here, one after another, with a Dr.Jit thread budget."""
+
+    def __init__(self, threads: int):
+        self.threads = threads
+
+    def map_unordered(self, fn, items):
+        import os
+
+        saved = os.environ.get("CFA_MITSUBA_THREADS")
+        os.environ["CFA_MITSUBA_THREADS"] = str(self.threads)
+        try:
+            for item in items:
+                yield item, fn(item)
+        finally:
+            if saved is None:
+                os.environ.pop("CFA_MITSUBA_THREADS", None)
+            else:
+                os.environ["CFA_MITSUBA_THREADS"] = saved
 
 
 def _write_failures(out: Path, failures: list[dict], log) -> None:

@@ -26,6 +26,7 @@ __all__ = ["render_task", "evaluate_task", "task_seed", "load_scene_image"]
 import functools
 import hashlib
 import json
+import threading
 import time
 from pathlib import Path
 
@@ -46,6 +47,12 @@ def task_seed(study_seed: int, *parts) -> int:
     return int.from_bytes(hashlib.sha256(text.encode()).digest()[:4], "little")
 
 
+#: One render at a time per process: Mitsuba's variant is process-global, and
+#: a Dask worker runs several tasks in threads of one process; each render
+#: already uses the process's whole thread budget.
+_RENDER_LOCK = threading.Lock()
+
+
 def _render_kwargs(source: dict) -> dict:
     return dict(source.get("settings") or {})
 
@@ -58,7 +65,8 @@ def load_scene_image(source: dict):
     if source["kind"] == "exr":
         return io.read_spectral_exr(source["path"])
     scene = source.get("file") or source["scene"]
-    return render.render_cached(scene, **_render_kwargs(source))
+    with _RENDER_LOCK:
+        return render.render_cached(scene, **_render_kwargs(source))
 
 
 def render_task(source: dict) -> dict:
@@ -67,7 +75,8 @@ def render_task(source: dict) -> dict:
 
     t0 = time.perf_counter()
     scene = source.get("file") or source["scene"]
-    img = render.render_cached(scene, **_render_kwargs(source))
+    with _RENDER_LOCK:
+        img = render.render_cached(scene, **_render_kwargs(source))
     meta = img.meta
     return {
         "scene": source["scene"],
