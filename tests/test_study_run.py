@@ -1,0 +1,153 @@
+"""End to end: the quick study (the CI end-to-end test), interruption and
+resumption, and the same study on a real Dask cluster on loopback.
+
+The three share one uninterrupted local run of configs/quick.toml (module
+fixture); the renders it makes are reused from the session's render cache by
+the others, so every later run differs only in how the evaluation work is
+scheduled or interrupted, and must give the same numbers.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from conftest import REPO
+
+QUICK = REPO / "configs" / "quick.toml"
+KEYS = ["scene", "cfa", "demosaic", "luminance", "metric"]
+
+
+def study(*args, **popen):
+    cmd = [sys.executable, "-m", "cfa_mitsuba", "study", str(QUICK), "--quiet", *map(str, args)]
+    if popen:
+        return subprocess.Popen(cmd, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **popen)
+    return subprocess.run(cmd, cwd=REPO, capture_output=True, text=True)
+
+
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory):
+    out = tmp_path_factory.mktemp("quick")
+    t0 = time.perf_counter()
+    proc = study("--out", out)
+    wall = time.perf_counter() - t0
+    assert proc.returncode == 0, proc.stderr
+    return out, wall, proc
+
+
+def test_quick_study_writes_everything(quick):
+    out, wall, proc = quick
+    for name in ("metrics.csv", "scores.csv", "report.html", "timing.json", "config.json"):
+        assert (out / name).is_file(), name
+    assert any((out / "figures").glob("*.png")) and any((out / "figures").glob("*.svg"))
+    metrics = pd.read_csv(out / "metrics.csv")
+    headline = set(metrics["metric"])
+    assert {"delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi"} <= headline
+    assert np.isfinite(metrics["value"]).all()
+    assert not (out / "failures.csv").exists()
+    print(f"quick study: {wall:.1f} s wall (renders included on a cold cache)")
+
+
+def test_quick_study_matches_stored_values(quick):
+    """Every value within its stored tolerance (4 sigma of the render noise,
+    tests/data/make_quick_expected.py says how it was measured)."""
+    out, _, _ = quick
+    got = pd.read_csv(out / "metrics.csv")
+    exp = pd.read_csv(REPO / "tests" / "data" / "quick_expected.csv", comment="#")
+    merged = exp.merge(got, on=KEYS, how="outer", suffixes=("_exp", "_got"), indicator=True)
+    missing = merged[merged["_merge"] != "both"]
+    assert missing.empty, f"rows differ from the stored set:\n{missing[KEYS + ['_merge']]}"
+    dev = (merged["value_got"] - merged["value_exp"]).abs()
+    bad = merged[dev > merged["tolerance"]]
+    assert bad.empty, "values outside tolerance:\n" + bad[KEYS + ["value_exp", "value_got", "tolerance"]].to_string()
+
+
+def _tasks_done(out: Path) -> int:
+    return len(list((out / ".work").glob("*.json"))) if (out / ".work").is_dir() else 0
+
+
+def _wait_for_tasks(out: Path, n: int, proc, timeout=120.0):
+    t0 = time.time()
+    while _tasks_done(out) < n:
+        assert proc.poll() is None, f"study ended before {n} tasks: {proc.communicate()}"
+        assert time.time() - t0 < timeout, "no progress"
+        time.sleep(0.05)
+
+
+def test_killed_study_resumes_and_gives_the_same_tables(quick, tmp_path):
+    ref, _, _ = quick
+    out = tmp_path / "killed"
+    proc = study("--out", out, "--no-report", start_new_session=True)
+    _wait_for_tasks(out, 4, proc)
+    os.killpg(proc.pid, signal.SIGKILL)  # the study and its worker processes
+    proc.communicate()
+    finished = _tasks_done(out)
+    total = len(pd.read_csv(ref / "metrics.csv").drop_duplicates(["scene", "cfa", "luminance"]))
+    assert 4 <= finished < total, (finished, total)
+    assert not (out / "metrics.csv").exists()
+
+    again = study("--out", out, "--no-report")
+    assert again.returncode == 0, again.stderr
+    m = re.search(r"(\d+) task\(s\) run, (\d+) reused", again.stderr)
+    assert m and int(m.group(2)) == finished and int(m.group(1)) == total - finished, again.stderr
+    assert (out / "metrics.csv").read_bytes() == (ref / "metrics.csv").read_bytes()
+    assert (out / "scores.csv").read_bytes() == (ref / "scores.csv").read_bytes()
+
+
+@pytest.fixture
+def dask_cluster(tmp_path):
+    """A real scheduler and two plain `dask worker` processes on loopback."""
+    env = dict(os.environ)
+    sched_file = tmp_path / "scheduler.json"
+    procs = [subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
+         "--no-dashboard", "--scheduler-file", str(sched_file)],
+        env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)]
+    try:
+        t0 = time.time()
+        while not sched_file.exists():
+            assert time.time() - t0 < 60, "scheduler did not start"
+            time.sleep(0.1)
+        address = json.loads(sched_file.read_text())["address"]
+        for _ in range(2):  # no options: the default nanny, threads and memory limit
+            procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address],
+                                          env=env, cwd=tmp_path, stdout=subprocess.DEVNULL,
+                                          stderr=subprocess.DEVNULL, start_new_session=True))
+        from distributed import Client
+
+        with Client(address, timeout=60) as client:
+            client.wait_for_workers(2, timeout=60)
+        yield address, procs
+    finally:
+        for p in procs[::-1]:
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGTERM)
+        for p in procs:
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, signal.SIGKILL)
+
+
+def test_dask_cluster_gives_identical_results_despite_a_killed_worker(quick, dask_cluster, tmp_path):
+    ref, _, _ = quick
+    address, procs = dask_cluster
+    out = tmp_path / "dask"
+    proc = study("--out", out, "--no-report", "--scheduler", address, start_new_session=True)
+    _wait_for_tasks(out, 3, proc)
+    os.killpg(procs[1].pid, signal.SIGKILL)  # one worker (its nanny too) dies mid-study
+    stdout, stderr = proc.communicate(timeout=600)
+    assert proc.returncode == 0, stderr
+    assert "Dask cluster" in stderr
+    assert (out / "metrics.csv").read_bytes() == (ref / "metrics.csv").read_bytes()
+    assert (out / "scores.csv").read_bytes() == (ref / "scores.csv").read_bytes()
