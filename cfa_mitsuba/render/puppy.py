@@ -13,13 +13,17 @@ reflect.  Path tracing with two bounces (:data:`MAX_DEPTH` = 3: direct light
 plus one indirect bounce; a further bounce adds 0.7 % of the light at 1.6
 times the cost), all bands along every path.
 
-Default quality: 100 samples per pixel (10 x 10 strata).  Measured on a
-180 x 159 render, the median relative luminance noise per pixel is 0.93 %
-at 64 spp and falls as 1/sqrt(spp), so 100 spp should give about 0.75 %,
-inside the 1 % target with margin; measured at 636 x 720 (two seeds):
-0.66 %.  It costs about 2.8 us of CPU per sample (about 130 CPU seconds
-for 636 x 720).  (A uniform D65 sky as extra fill cost 35 % more per sample
-and raised the noise; a second area light as fill raised the noise too.)
+Default quality: 256 samples per pixel (16 x 16 strata), set by the
+convergence study (docs/convergence.md).  Noise alone would allow less:
+the median relative luminance noise per pixel is 0.93 % at 64 spp (180 x
+159) and falls as 1/sqrt(spp), 0.66 % at 100 spp (636 x 720, two seeds),
+so 100 spp already meets the 1 % target.  But at 100 spp the render's noise
+moves the *differences* between CFAs by up to 15 % of their spread (MDSI at
+full size); 256 spp brings that to about 6 % for 2.6x the render time
+(about 2.8 us of CPU per sample: some 330 CPU seconds at 636 x 720, paid
+once per study because renders are cached).  (A uniform D65 sky as extra
+fill cost 35 % more per sample and raised the noise; a second area light as
+fill raised the noise too.)
 
 Camera: the paper's 10 degree horizontal field of view, 636 x 720, through
 Mitsuba's ``thinlens`` focused on the dog at :data:`FOCUS_DISTANCE_M`.  The
@@ -225,6 +229,6 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
 register_scene(Scene(
     name="puppy",
     description="3D toy dog on a table, coloured panels and blocks at 0.9-3 m, D65 area light, thin lens focused on the dog (f/2); FOV 10 deg",
-    width=720, height=636, fov_deg=10.0, spp=100, oversample=1, metrics=FULL_REFERENCE_METRICS,
+    width=720, height=636, fov_deg=10.0, spp=256, oversample=1, metrics=FULL_REFERENCE_METRICS,
     builder=_build, max_depth=MAX_DEPTH,
 ))
