@@ -384,7 +384,7 @@ class _Chain:
         """({metric: value}, {metric: unit}, processing wall time s)."""
         from .. import metrics as m
         from ..isp import process
-        from .tasks import _metric_results, _rows
+        from .tasks import metric_results, metric_rows
 
         t = time.perf_counter()
         out = process(raw, method, **opts)
@@ -392,8 +392,8 @@ class _Chain:
         cam = m.mean_match(out.xyz, ideal.xyz)
         geo = m.scene_geometry(ideal.meta, ideal.xyz.shape)
         white = np.asarray(ideal.white_xyz, dtype=np.float64)
-        res = _metric_results(self.plan.metrics, ideal.xyz, cam, white, geo, self.sensor.pixel_pitch_um)
-        rows = _rows({}, res)
+        res = metric_results(self.plan.metrics, ideal.xyz, cam, white, geo, self.sensor.pixel_pitch_um)
+        rows = metric_rows({}, res)
         return {r["metric"]: r["value"] for r in rows}, {r["metric"]: r["unit"] for r in rows}, dt
 
     def evaluate(self, img, cfa: str, method: str, noise: str, seed: int):

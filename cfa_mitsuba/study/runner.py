@@ -375,15 +375,20 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
                     "optics": {}, "sensor": {}, "capture": {}, "isp": {}, "mean_match": True, "seed": seed,
                     "details_dir": None,
                 })
-    rows = []
+    rows, failures = [], []
+
+    def got(task, result):
+        rows.extend(result["rows"])
+        failures.extend(result.get("failures", []))
+
     with make_executor(workers=workers) as executor:
         log(f"evaluate: {len(exrs)} render(s) x {len(cfas)} CFA(s) x {len(demosaics)} demosaic(s) "
             f"on {executor.description}")
-        _run_tasks(executor, evaluate_task, tasks, "evaluate", progress,
-                   lambda task, result: rows.extend(result["rows"]))
+        _run_tasks(executor, evaluate_task, tasks, "evaluate", progress, got)
     order = {"scene": [], "cfa": [_cfa_label(c) for c in cfas], "demosaic": list(demosaics),
              "metric": list(SCORED_METRICS)}
     metrics = _order_rows(rows, order)
     with atomic_output(out / "metrics.csv") as tmp:
         metrics.to_csv(tmp, index=False, float_format="%.10g")
+    _write_failures(out, failures, log)
     return metrics

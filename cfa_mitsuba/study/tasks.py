@@ -21,7 +21,7 @@ many, or on a Dask cluster, and after an interruption.
 
 from __future__ import annotations
 
-__all__ = ["render_task", "evaluate_task", "task_seed", "load_scene_image"]
+__all__ = ["render_task", "evaluate_task", "task_seed", "load_scene_image", "metric_results", "metric_rows"]
 
 import functools
 import hashlib
@@ -136,7 +136,7 @@ def _srgb8(xyz: np.ndarray, white_xyz: np.ndarray) -> np.ndarray:
     return mcolour.xyz_to_srgb8(xyz, white_xyz)
 
 
-def _metric_results(metric_names, ideal_xyz, cam_xyz, white_xyz, geo: dict, pitch_um: float,
+def metric_results(metric_names, ideal_xyz, cam_xyz, white_xyz, geo: dict, pitch_um: float,
                     failures: list | None = None) -> dict:
     """Run the requested metrics of one scene; returns {name: MetricResult|float}.
 
@@ -159,8 +159,19 @@ def _metric_results(metric_names, ideal_xyz, cam_xyz, white_xyz, geo: dict, pitc
     return out
 
 
+#: Sidecar geometry a metric cannot run without (the others fall back to
+#: the whole image or to a default).
+_NEEDS_GEOMETRY = {"moire": ("frequency_cy_per_deg", "the chirp's frequency per column"),
+                   "scielab": ("samples_per_degree", "the field of view (fov_deg)")}
+
+
 def _one_metric(name, ideal_xyz, cam_xyz, white_xyz, geo, pitch_um, srgb_pair):
     from .. import metrics as m
+    from ..errors import CfaMitsubaError
+
+    if name in _NEEDS_GEOMETRY and geo.get(_NEEDS_GEOMETRY[name][0]) is None:
+        key, what = _NEEDS_GEOMETRY[name]
+        raise CfaMitsubaError(f"{name} needs {what} in the render's sidecar ('{key}'); this scene has none")
 
     if name == "delta-e":
         return m.delta_e(ideal_xyz, cam_xyz, white_xyz, patches=geo.get("patches"))
@@ -182,7 +193,7 @@ def _one_metric(name, ideal_xyz, cam_xyz, white_xyz, geo, pitch_um, srgb_pair):
     raise ValueError(f"unknown metric {name!r}")  # pragma: no cover - the config validator refuses it
 
 
-def _rows(base: dict, results: dict) -> list[dict]:
+def metric_rows(base: dict, results: dict) -> list[dict]:
     from ..metrics import get_metric
 
     rows = []
@@ -252,6 +263,7 @@ def evaluate_task(task: dict) -> dict:
     record (scene, cfa, demosaic, luminance, metric, error), not a row.
     """
     from .. import metrics as m
+    from ..errors import CfaMitsubaError
     from ..isp import process
     from ..sensor import capture
     from ..sensor.params import SensorParams
@@ -290,26 +302,39 @@ def evaluate_task(task: dict) -> dict:
         opts = dict(isp_opts)
         if method == "pocs" and pocs_iterations is not None:
             opts["iterations"] = pocs_iterations
+        base = {"scene": task["scene"], "cfa": cfa_label, "demosaic": method, "luminance": lum}
         t = time.perf_counter()
-        out = process(raw, method, **opts)
-        timing["process_s"] += time.perf_counter() - t
+        try:
+            out = process(raw, method, **opts)
+        except CfaMitsubaError as exc:
+            # e.g. a channel the scene white leaves dark: no output to measure.
+            failures.extend({**base, "metric": name, "error": str(exc)} for name in task["metrics"])
+            continue
+        finally:
+            timing["process_s"] += time.perf_counter() - t
         cam = out.xyz
         scale = 1.0
         if task.get("mean_match", True):
-            cam, scale = m.mean_match(cam, ideal.xyz, return_scale=True)
+            try:
+                cam, scale = m.mean_match(cam, ideal.xyz, return_scale=True)
+            except CfaMitsubaError as exc:
+                # A black ideal image (no light in the interior) cannot set a
+                # scale: every metric of this output is unmeasurable.
+                failures.extend({**base, "metric": name, "error": str(exc)} for name in task["metrics"])
+                continue
         t = time.perf_counter()
         failed: list[dict] = []
-        results = _metric_results(task["metrics"], ideal.xyz, cam, white, geo, pitch, failed)
+        results = metric_results(task["metrics"], ideal.xyz, cam, white, geo, pitch, failed)
         timing["metrics_s"] += time.perf_counter() - t
-        base = {"scene": task["scene"], "cfa": cfa_label, "demosaic": method, "luminance": lum}
-        rows.extend(_rows(base, results))
+        rows.extend(metric_rows(base, results))
         failures.extend({**base, **f} for f in failed)
         if details_dir is not None:
             isp_meta = out.meta.get("isp", {})
             extra = {
                 "mean_match_scale": float(scale),
                 "condition_number": isp_meta.get("condition_number"),
-                "noise_gain": isp_meta.get("noise_gain"),
+                "noise_gain_xyz": isp_meta.get("noise_gain_xyz"),
+                "fit_rank": isp_meta.get("fit_rank"),
                 "exposure_s": float(raw.exposure_s),
                 "saturated_fraction": raw.meta.get("saturated_fraction"),
                 "seed": seed,
@@ -318,7 +343,7 @@ def evaluate_task(task: dict) -> dict:
     if details_dir is not None:
         ideal_dir = details_dir / task["scene"] / "ideal"
         if not (ideal_dir / f"{lum_tag}.png").exists():
-            ideal_results = _metric_results(
+            ideal_results = metric_results(
                 [n for n in task["metrics"] if n in ("mtf",)], ideal.xyz, ideal.xyz, white, geo, pitch)
             _save_details(ideal_dir, lum_tag, ideal_results, ideal, {"white_xyz": white.tolist()})
     return {"rows": rows, "timing": timing, "failures": failures}

@@ -1,0 +1,74 @@
+"""One evaluation task: an output that cannot be measured is a failure
+record in failures.csv, not an aborted run or a silent row."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+import cfa_mitsuba as cm
+from cfa_mitsuba import spectra
+from cfa_mitsuba.values import SpectralImage
+from conftest import run_cli
+
+WL = spectra.DEFAULT_WAVELENGTHS
+
+
+def _frame_exr(path, metrics):
+    """A 40 x 40 scene lit in a 4-pixel frame, dark inside, with the sidecar
+    a render gives; ``metrics`` is the list the sidecar names."""
+    d65 = spectra.illuminant("D65", WL)
+    white = d65 * (100.0 / spectra.luminance_cd_m2(d65, WL))
+    data = np.zeros((40, 40, WL.size))
+    data[:4], data[-4:], data[:, :4], data[:, -4:] = white, white, white, white
+    meta = {"scene": "frame", "fov_deg": 10.0, "scene_distance_m": 1.2, "oversample": 1,
+            "illuminant": "D65", "white_radiance": white.tolist(), "metrics": list(metrics)}
+    cm.io.write_spectral_exr(path, SpectralImage(data, WL.copy(), meta), preview=False)
+
+
+def test_unmeasurable_metric_goes_to_failures_csv(tmp_path):
+    """moire needs the chirp's frequency map, which this scene's sidecar
+    lacks, and MTF finds no edge in it: their values are failures, each with
+    its reason; SSIM's are rows."""
+    renders = tmp_path / "renders"
+    renders.mkdir()
+    _frame_exr(renders / "frame.exr", ["moire", "mtf", "ssim"])
+    out = tmp_path / "out"
+    proc = run_cli("evaluate", "--renders", renders, "--cfa", "bayer,rgbw1", "--demosaic", "bilinear,pocs",
+                   "--luminance", "100", "--out", out, "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    assert "Traceback" not in proc.stderr and "could not be measured" in proc.stderr
+    failures = pd.read_csv(out / "failures.csv")
+    assert len(failures) == 2 * 2 * 2 and set(failures["metric"]) == {"moire", "mtf"}
+    reasons = dict(zip(failures["metric"], failures["error"]))
+    assert "frequency_cy_per_deg" in reasons["moire"] and "no edge" in reasons["mtf"]
+    metrics = pd.read_csv(out / "metrics.csv")
+    assert set(metrics["metric"]) == {"ssim"} and len(metrics) == 4
+    assert np.isfinite(metrics["value"]).all()
+
+
+def test_black_ideal_interior_is_a_recorded_failure(tmp_path, monkeypatch):
+    """mean_match refuses a black reference interior (any camera would be
+    scaled to 0 and score perfectly); the task records every metric of that
+    output as a failure and goes on.  Optics leave light everywhere, so the
+    refusal is injected here (mean_match's own test covers when it fires)."""
+    from cfa_mitsuba import metrics
+    from cfa_mitsuba.errors import CfaMitsubaError
+    from cfa_mitsuba.study import tasks
+
+    exr = tmp_path / "frame.exr"
+    _frame_exr(exr, ["ssim", "haarpsi"])
+
+    def refuse(*args, **kwargs):
+        raise CfaMitsubaError("cannot mean-match: the reference image's interior mean is 0 (need > 0)")
+
+    monkeypatch.setattr(metrics, "mean_match", refuse)
+    task = {"source": {"kind": "exr", "path": str(exr)}, "scene": "frame", "luminance": 100.0, "cfa": "bayer",
+            "demosaics": ["bilinear", "pocs"], "metrics": ["ssim", "haarpsi"], "optics": {}, "sensor": {},
+            "capture": {}, "isp": {}, "mean_match": True, "seed": 0, "details_dir": None}
+    result = tasks.evaluate_task(task)
+    assert result["rows"] == []
+    assert len(result["failures"]) == 4
+    assert {(f["demosaic"], f["metric"]) for f in result["failures"]} == {
+        (d, m) for d in ("bilinear", "pocs") for m in ("ssim", "haarpsi")}
+    assert all("interior mean is 0" in f["error"] for f in result["failures"])
