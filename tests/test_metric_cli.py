@@ -114,3 +114,25 @@ def test_list_metrics(cli):
     assert proc.returncode == 0
     assert [l.split()[0] for l in proc.stdout.splitlines()] == [
         "delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi"]
+
+
+def test_processed_npz_white_is_used_unless_white_given(cli, tmp_path):
+    """A 'cfa-mitsuba process' .npz stores the white of its absolute XYZ;
+    delta-e on two of them uses it (here a 250 cd/m^2 white, far from the
+    sRGB default's 100), and --white still overrides it."""
+    import cfa_mitsuba as cm
+
+    rng = np.random.default_rng(3)
+    white = np.array([237.6, 250.0, 272.2])
+    ref = rng.uniform(10, 200, (24, 32, 3))
+    test = ref * rng.uniform(0.95, 1.05, ref.shape)
+    for name, xyz in (("ref", ref), ("test", test)):
+        np.savez(tmp_path / f"{name}.npz", xyz=xyz, srgb=np.zeros_like(xyz), white_xyz=white, meta="{}")
+    args = ("metric", "delta-e", tmp_path / "ref.npz", tmp_path / "test.npz", "--json")
+    proc = cli(*args)
+    got = one_json(proc)["value"]
+    assert got == pytest.approx(float(cm.metrics.delta_e(ref, test, white)), rel=1e-12)
+    assert "white_xyz" in proc.stderr
+    default = float(cm.metrics.delta_e(ref, test, np.array([95.05, 100.0, 108.9])))
+    assert abs(got - default) > 0.1  # the stored white matters
+    assert one_json(cli(*args, "--white", "95.05,100,108.9"))["value"] == pytest.approx(default, rel=1e-12)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
 
 HELP = "compute one image-quality metric on image files"
 
@@ -18,7 +19,8 @@ How pixel values are read (--input; inferred when omitted, with a notice):
   16-bit PNG     linear for mtf (linear code / 65535), else srgb (encoded)
   EXR X,Y,Z      xyz    (absolute XYZ; white from --white, else (95.05, 100, 108.9))
   EXR R,G,B / Y  linear (linear RGB, white = 1)
-  NPY / NPZ      linear for mtf, else xyz
+  NPY / NPZ      linear for mtf, else xyz (the white of a 'process' .npz is
+                 its stored white_xyz unless --white is given)
 Metrics on XYZ (delta-e, scielab, moire, achromatic) convert sRGB / linear
 input with the IEC 61966-2-1 matrix (white (95.05, 100, 108.9)); ssim, mdsi
 and haarpsi convert XYZ / linear input to sRGB code values (0..255).
@@ -127,6 +129,22 @@ def _load(path, forced, metric_inputs):
     return _Loaded(str(path), np.asarray(data, dtype=np.float64), mode, why, f.meta)
 
 
+def _stored_white(path):
+    """The ``white_xyz`` array of a ``cfa-mitsuba process`` .npz, else None."""
+    import numpy as np
+
+    if Path(path).suffix.lower() != ".npz":
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if "white_xyz" not in z.files:
+                return None
+            w = np.asarray(z["white_xyz"], dtype=np.float64).ravel()
+    except (ValueError, OSError):
+        return None  # _load has already reported an unreadable file
+    return w if w.size == 3 else None
+
+
 def _to_xyz(img: _Loaded, white):
     import numpy as np
 
@@ -196,14 +214,25 @@ def run(args) -> int:
     need = 1 if single else 2
     require(len(args.images) == need,
             f"{args.name} takes {'one image (the edge)' if single else 'two images: REF TEST'}, got {len(args.images)}")
-    white = np.array(_floats(args.white, 3, "--white") if args.white else cm.colour.SRGB_WHITE_XYZ, dtype=np.float64)
-    require(bool(np.all(white > 0)), f"--white must be positive, got {args.white}")
     imgs = [_load(p, args.input, info.inputs) for p in args.images]
+    stored = next((w for w in map(_stored_white, args.images) if w is not None), None)
+    if args.white:
+        white = np.array(_floats(args.white, 3, "--white"), dtype=np.float64)
+    elif stored is not None:
+        white = stored  # 'cfa-mitsuba process' stores the scene white of its XYZ
+    else:
+        white = np.array(cm.colour.SRGB_WHITE_XYZ, dtype=np.float64)
+    require(bool(np.all(np.isfinite(white)) and np.all(white > 0)),
+            f"--white must be positive, got {args.white}" if args.white else f"stored white_xyz {white.tolist()} is not positive")
     for im in imgs:
         if not args.input:
             _notice(f"reading {im.path} as {im.mode} ({im.why}); pass --input to override")
         if im.mode == "xyz" and info.inputs != "srgb8" and not args.white:
-            _notice(f"{im.path}: XYZ white point assumed (95.05, 100, 108.9); pass --white X,Y,Z")
+            if stored is not None:
+                _notice(f"{im.path}: XYZ white point {tuple(round(float(v), 4) for v in white)} from the "
+                        "processed file's white_xyz; pass --white X,Y,Z to override")
+            else:
+                _notice(f"{im.path}: XYZ white point assumed (95.05, 100, 108.9); pass --white X,Y,Z")
     geo = _geometry(args.geometry, imgs[-1].data.shape) if args.geometry else {}
 
     if single:

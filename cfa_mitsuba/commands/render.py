@@ -86,7 +86,8 @@ def run(args) -> int:
             sys.stderr.write(f"{prog}: {notice}\n")
     if cfg.width % cfg.oversample or cfg.height % cfg.oversample:
         sys.stderr.write(f"{prog}: note: {cfg.width} x {cfg.height} is not a multiple of the oversampling factor "
-                         f"K = {cfg.oversample}; the optics stage needs the EXR size to be\n")
+                         f"K = {cfg.oversample}; capture and study will refuse this EXR (the optics stage needs a whole "
+                         f"number of K x K blocks per sensor pixel): pick a size divisible by {cfg.oversample}\n")
     if args.spp is not None and cfg.spp != args.spp:
         sys.stderr.write(f"{prog}: --spp {args.spp} rounded up to {cfg.spp} (the stratified sampler needs a square)\n")
 
