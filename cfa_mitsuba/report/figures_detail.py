@@ -172,11 +172,18 @@ def moire_curves(res: Results):
     first = pairs[0][2]
     thr = float(first.get("threshold", 25.0))
     block = first.get("block")
-    ymax = thr * 1.6
-    for _, _, det in pairs:
+    # The axis shows the threshold region: up to 4x the threshold or the
+    # upper quartile of the curves' peaks, whichever is higher; a CFA whose
+    # chroma soars far above (cmy2's reaches ~100x the threshold) would
+    # flatten every other curve, so it is cut off and named in the caption.
+    peaks = {}
+    for c, d, det in pairs:
         bm = _arr(det.get("block_mean_test") or [])
         if bm.size and np.isfinite(bm).any():
-            ymax = max(ymax, float(np.nanmax(bm)) * 1.05)
+            peaks[(c, d)] = float(np.nanmax(bm))
+    top = max(peaks.values(), default=thr)
+    ymax = max(thr * 1.6, min(top * 1.05, max(thr * 4.0, 1.05 * float(np.quantile(list(peaks.values()) or [thr], 0.75)))))
+    clipped = [f"{c} ({d}) peaks at {v:.0f}" for (c, d), v in peaks.items() if v > ymax]
     drawn, lower_bounds = [], []
     for i, (ax, d) in enumerate(zip(axes, dems)):
         ref_done = False
@@ -227,6 +234,9 @@ def moire_curves(res: Results):
            f"frequency; the ideal sensor (broad grey line) stays near 0 as the chart has no colour. The MSP, the "
            f"scored metric, is the first frequency (from low to high) where the block mean passes the "
            f"threshold; each CFA's marker sits there on the threshold line.")
+    if clipped:
+        cap += (" Cut off at the top of the axis: " + "; ".join(clipped[:6]) + (" …" if len(clipped) > 6 else "")
+                + ".")
     if lower_bounds:
         cap += (" A ▷ marker means the camera never passed the threshold: its MSP is the chirp's top frequency, "
                 "a lower bound (" + ", ".join(lower_bounds[:8]) + (" …" if len(lower_bounds) > 8 else "") + ").")
