@@ -247,18 +247,27 @@ for _lum in (0.01, 1e5):
     def _(lum=_lum):
         oi, geo = optics("macbeth")
         ideal = cm.isp.process(cm.sensor.capture_ideal(oi, luminance_cd_m2=lum))
-        de = {}
+        de, refused = {}, []
         for name in cm.sensor.list_cfas():
             raw = cm.sensor.capture(oi, name, luminance_cd_m2=lum, seed=1)
             for m in METHODS:
                 img = cm.isp.process(raw, m)
                 finite(img.xyz, img.srgb)
-                cam = M.mean_match(img.xyz, ideal.xyz, border=2)
+                try:
+                    cam = M.mean_match(img.xyz, ideal.xyz, border=2)
+                except CfaMitsubaError as exc:
+                    # read noise about black can leave a camera image's mean below 0
+                    assert "test image's interior mean is -" in str(exc) and lum < 1, exc
+                    assert img.xyz[2:-2, 2:-2].mean() < 0
+                    refused.append(f"{name}/{m}")
+                    continue
                 de[name, m] = float(M.delta_e(ideal.xyz, cam, ideal.white_xyz, patches=geo["patches"]))
         finite(list(de.values()))
+        assert len(refused) <= 8, refused  # the exception, not the rule
         lo, hi = min(de, key=de.get), max(de, key=de.get)
         return (f"12 CFAs x 4 demosaics finite; dE00 {de[lo]:.1f} ({lo[0]}, {lo[1]}) .. {de[hi]:.1f} "
-                f"({hi[0]}, {hi[1]})")
+                f"({hi[0]}, {hi[1]})" + (f"; mean matching refused (camera mean < 0): {', '.join(refused)}"
+                                          if refused else ""))
 
 
 @case("luminance-1e300-all-clipped-finite")

@@ -183,6 +183,28 @@ def _polarity(work: np.ndarray) -> float:
     return 1.0 if right > left else -1.0
 
 
+def _require_edge_above_noise(work: np.ndarray, factor: float = 5.0) -> None:
+    """Refuse an image whose edge step is lost in the noise of its ESF.
+
+    Used when the image's own edge fit failed and the reference's line is
+    borrowed: orientation and polarity can come out right by chance when
+    the step is far below the noise, and the e-SFR of noise is a finite but
+    meaningless number (an MTF50 beyond the diffraction cut-off).  Each bin
+    of the 4x super-sampled ESF averages about nlin / 4 pixels, so its noise
+    is sigma / sqrt(nlin / 4), sigma the pixel noise of the two flat sides;
+    the step must exceed ``factor`` times that.
+    """
+    nlin = work.shape[0]
+    k = max(1, min(5, work.shape[1] // 4))
+    left, right = work[:, :k], work[:, -k:]
+    step = abs(right.mean() - left.mean())
+    sigma = 0.5 * (left.std() + right.std())
+    bin_noise = sigma / np.sqrt(max(1.0, nlin / 4.0))
+    require(step > factor * bin_noise,
+            f"no edge found in the image: noise or clipping hides it (edge step {step:.3g} is "
+            f"{step / max(bin_noise, 1e-300):.1f} x the noise of one ESF bin; need > {factor:g})")
+
+
 def _reference_edge(reference, bounds, weights, transposed: bool, sign: float):
     """Fit the edge line on the reference image's luminance in the same
     region, orientation and polarity as the image under test, after checking
@@ -297,6 +319,7 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
             raise
         slope, intercept, rms = _reference_edge(reference, (y0, y1, x0, x1), weights, transposed, sign)
         edge_source = "reference"
+        _require_edge_above_noise(work)
     angle = float(np.degrees(np.arctan(slope)))
     cycles = np.floor(nlin * abs(slope))
     require(cycles >= 1,
