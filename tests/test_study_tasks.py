@@ -72,3 +72,20 @@ def test_black_ideal_interior_is_a_recorded_failure(tmp_path, monkeypatch):
     assert {(f["demosaic"], f["metric"]) for f in result["failures"]} == {
         (d, m) for d in ("bilinear", "pocs") for m in ("ssim", "haarpsi")}
     assert all("interior mean is 0" in f["error"] for f in result["failures"])
+
+
+def test_unreachable_scheduler_is_refused_before_anything_is_written(tmp_path, monkeypatch):
+    import pytest
+
+    from cfa_mitsuba.errors import CfaMitsubaError
+    from cfa_mitsuba.study import executors
+    from cfa_mitsuba.study.config import load_config
+    from cfa_mitsuba.study.runner import run_study
+    from conftest import REPO
+
+    monkeypatch.setitem(executors.DaskExecutor.__init__.__kwdefaults__, "timeout_s", 2.0)
+    out = tmp_path / "out"
+    with pytest.raises(CfaMitsubaError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:1"):
+        run_study(load_config(REPO / "configs" / "quick.toml"), out, scheduler="tcp://127.0.0.1:1",
+                  progress=False, log=lambda m: None)
+    assert list(out.iterdir()) == []

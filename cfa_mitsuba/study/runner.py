@@ -197,10 +197,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     log = log or (lambda msg: print(msg, file=sys.stderr))
     out = check_writable_dir(out_dir)
     work = out / ".work"
-    work.mkdir(exist_ok=True)
     details = out / "details"
-    with atomic_output(out / "config.json") as tmp:
-        tmp.write_text(json.dumps(config.to_dict(), indent=1, default=str))
 
     sources, tasks = plan_study(config, str(details))
     timing: dict = {"phases": {}, "tasks": {"optics_s": 0.0, "capture_s": 0.0, "process_s": 0.0, "metrics_s": 0.0}}
@@ -221,6 +218,11 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     executor = make_executor(workers=workers or config.workers, scheduler=scheduler)
     render_info: dict = {}
     with executor:
+        # Written once the executor is up (a Dask scheduler that cannot be
+        # reached leaves nothing behind).
+        work.mkdir(exist_ok=True)
+        with atomic_output(out / "config.json") as tmp:
+            tmp.write_text(json.dumps(config.to_dict(), indent=1, default=str))
         log(f"study {config.name!r}: {len(config.scenes)} scene(s), {len(config.cfas)} CFA(s), "
             f"{len(config.demosaics)} demosaic(s); {len(tasks)} evaluation task(s)"
             + (f", {reused} already done" if reused else "") + f"; running on {executor.description}")
