@@ -7,6 +7,8 @@ import argparse
 import math
 import sys
 
+from .argtypes import non_negative_int, positive_int
+
 HELP = "capture a spectral EXR with a CFA sensor (or the ideal XYZ sensor) into a raw .npz"
 
 DESCRIPTION = """\
@@ -47,26 +49,6 @@ def _non_negative_float(text: str) -> float:
     return v
 
 
-def _positive_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
-    return v
-
-
-def _non_negative_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"must be a non-negative integer, got {text!r}")
-    return v
-
-
 def _exposure(text: str):
     if text.strip().lower() == "auto":
         return "auto"
@@ -98,10 +80,10 @@ def add_arguments(parser) -> None:
                         help="mean luminance at which auto exposure is chosen (default 100)")
     parser.add_argument("--noise", choices=("off", "shot", "all"), default="all",
                         help="off: none; shot: photon noise only, no ADC; all (default): the full sensor")
-    parser.add_argument("--oversample", type=_positive_int, metavar="K",
+    parser.add_argument("--oversample", type=positive_int, metavar="K",
                         help="EXR pixels per sensor pixel along each axis (default: the sidecar's, else 1)")
-    parser.add_argument("--seed", type=_non_negative_int, default=0, help="temporal noise seed (default 0)")
-    parser.add_argument("--sensor-seed", type=_non_negative_int, default=None,
+    parser.add_argument("--seed", type=non_negative_int, default=0, help="temporal noise seed (default 0)")
+    parser.add_argument("--sensor-seed", type=non_negative_int, default=None,
                         help="fixed-pattern (DSNU/PRNU) seed: one seed is one sensor (default 0)")
     g = parser.add_argument_group("lens (defaults: f/4, T = 1, relative illumination and diffraction on)")
     g.add_argument("--f-number", type=_positive_float, metavar="N",
@@ -122,7 +104,7 @@ def add_arguments(parser) -> None:
     s.add_argument("--dsnu-e", type=_non_negative_float, metavar="E", help="rms, default 0")
     s.add_argument("--prnu-percent", type=_non_negative_float, metavar="PCT", help="rms, default 0")
     s.add_argument("--analog-gain", type=_positive_float, metavar="G", help="default 1")
-    s.add_argument("--adc-bits", type=_positive_int, metavar="BITS", help="default 12")
+    s.add_argument("--adc-bits", type=positive_int, metavar="BITS", help="default 12")
     s.add_argument("--black-level-dn", type=_non_negative_float, metavar="DN", help="default 64")
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from .argtypes import non_negative_int, positive_int
+
 HELP = "error against run time: render spp and POCS iterations against a high-quality reference"
 
 DESCRIPTION = """\
@@ -52,30 +54,6 @@ def _int_list(text: str) -> list[int]:
     return vals
 
 
-def _positive_int(text: str) -> int:
-    import argparse
-
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {n}")
-    return n
-
-
-def _non_negative_int(text: str) -> int:
-    import argparse
-
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
-    if n < 0:
-        raise argparse.ArgumentTypeError(f"must be at least 0, got {n}")
-    return n
-
-
 def _name_list(text: str) -> list[str]:
     if str(text).strip().lower() in ("", "none"):
         return []
@@ -86,15 +64,15 @@ def add_arguments(parser) -> None:
     parser.add_argument("scene", metavar="SCENE", help="a built-in scene (cfa-mitsuba list scenes) or FILE.xml")
     parser.add_argument("--out", metavar="DIR", default="results/convergence",
                         help="output directory (default: results/convergence)")
-    parser.add_argument("--width", type=_positive_int, metavar="W", help="EXR width in pixels")
-    parser.add_argument("--height", type=_positive_int, metavar="H", help="EXR height in pixels")
+    parser.add_argument("--width", type=positive_int, metavar="W", help="EXR width in pixels")
+    parser.add_argument("--height", type=positive_int, metavar="H", help="EXR height in pixels")
     parser.add_argument("--spp", type=_int_list, metavar="N,N,...",
                         help="increasing samples per pixel (rounded up to squares, as the stratified sampler does)")
-    parser.add_argument("--reference-spp", type=_positive_int, metavar="N",
+    parser.add_argument("--reference-spp", type=positive_int, metavar="N",
                         help="spp of each of the two reference renders (default 16x the scene's default)")
     parser.add_argument("--pocs-iterations", type=_int_list, metavar="N,N,...",
                         help="increasing POCS iteration counts (default 1,2,4,8,10,16,32)")
-    parser.add_argument("--pocs-reference", type=_positive_int, default=50, metavar="N",
+    parser.add_argument("--pocs-reference", type=positive_int, default=50, metavar="N",
                         help="iterations of the converged POCS, tolerance 0 (default 50)")
     parser.add_argument("--cfa", default="bayer", metavar="NAME|FILE.toml", help="CFA (default bayer)")
     parser.add_argument("--demosaic", default="bilinear", metavar="NAME",
@@ -104,16 +82,16 @@ def add_arguments(parser) -> None:
     parser.add_argument("--render-noise", choices=("off", "shot", "all"), default="off",
                         help="sensor noise in the render stage's captures (default off: the sensor's noise "
                              "realisation changes with any change of the signal, see --help's docs)")
-    parser.add_argument("--noise-seeds", type=_non_negative_int, default=4, metavar="N",
+    parser.add_argument("--noise-seeds", type=non_negative_int, default=4, metavar="N",
                         help="seeds for each metric's sensor-noise spread (default 4; 0: skip)")
-    parser.add_argument("--default-seeds", type=_non_negative_int, default=3, metavar="N",
+    parser.add_argument("--default-seeds", type=non_negative_int, default=3, metavar="N",
                         help="extra renders of the default spp with other seeds, for the rms deviation the check "
                              "uses (default 3; 0: skip)")
-    parser.add_argument("--seed", type=_non_negative_int, default=0, metavar="S",
+    parser.add_argument("--seed", type=non_negative_int, default=0, metavar="S",
                         help="render seed of the levels (the reference uses S+1 and S+2) and study seed (default 0)")
     parser.add_argument("--luminance", type=float, default=100.0, metavar="CD_M2",
                         help="mean scene luminance, cd/m^2 (default 100)")
-    parser.add_argument("--repeat", type=_positive_int, default=2, metavar="N",
+    parser.add_argument("--repeat", type=positive_int, default=2, metavar="N",
                         help="runs per level for timing, the fastest counts (default 2: the first compiles)")
     parser.add_argument("--variant", metavar="V", help="Mitsuba variant (default: the best available)")
     parser.add_argument("--formats", type=_name_list, default=["png", "svg"], metavar="png,svg",

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from .argtypes import positive_int
+
 HELP = "run a study from a TOML config: renders, captures, metrics, scores, report"
 
 DESCRIPTION = """\
@@ -20,22 +22,10 @@ Examples:
 """
 
 
-def _positive_int(text: str) -> int:
-    import argparse
-
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a whole number, got {text!r}") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {n}")
-    return n
-
-
 def add_arguments(parser) -> None:
     parser.add_argument("config", metavar="CONFIG.toml", help="the study config (see configs/)")
     parser.add_argument("--out", metavar="DIR", help="results directory (default: results/<config name>)")
-    parser.add_argument("--workers", type=_positive_int, metavar="N",
+    parser.add_argument("--workers", type=positive_int, metavar="N",
                         help="local worker processes (default: the config's 'workers', else 2)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="run on a Dask cluster, e.g. tcp://HOST:8786 (needs the 'dask' extra)")
