@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CfaMitsubaError
+from ..study.tasks import safe_label
 
 #: The paper's eight metrics in the order of its tables and radar plots.
 SCORED_METRICS = ("delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi")
@@ -34,12 +35,6 @@ SCORED_METRICS = ("delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "m
 METRIC_SCENES = {"delta-e": "macbeth", "mtf": "slanted-edge", "moire": "chirp", "achromatic": "gray-bar",
                  "scielab": "puppy", "ssim": "puppy", "mdsi": "puppy", "haarpsi": "puppy"}
 _COLUMNS = ("scene", "cfa", "demosaic", "luminance", "metric", "value", "unit")
-
-
-def safe_label(label: str) -> str:
-    """The folder name the study gives a CFA label under ``details/`` (TOML
-    CFAs are labelled by their name, which may hold any character)."""
-    return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in str(label))
 
 
 def lum_tag(luminance: float) -> str:

@@ -891,9 +891,10 @@ def write_outputs(result: ConvergenceResult, out_dir, *, formats=("png", "svg"))
     """Write ``convergence_<scene>.csv`` (tidy), ``.json`` (summary) and the
     plot in each of ``formats``; returns {kind: path}."""
     from ..io import atomic_output, check_writable_dir
+    from .tasks import safe_label
 
     out = check_writable_dir(out_dir)
-    stem = f"convergence_{_safe(result.plan.name)}"
+    stem = f"convergence_{safe_label(result.plan.name)}"
     paths = {"csv": out / f"{stem}.csv", "json": out / f"{stem}.json"}
     df = _frame(result.rows)
     with atomic_output(paths["csv"]) as tmp:
@@ -904,10 +905,6 @@ def write_outputs(result: ConvergenceResult, out_dir, *, formats=("png", "svg"))
         paths[fmt] = out / f"{stem}.{fmt}"
     plot_convergence(result, [paths[f] for f in formats])
     return paths
-
-
-def _safe(label: str) -> str:
-    return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in label)
 
 
 def _jsonable(obj):

@@ -21,7 +21,7 @@ many, or on a Dask cluster, and after an interruption.
 
 from __future__ import annotations
 
-__all__ = ["render_task", "evaluate_task", "task_seed", "load_scene_image", "metric_results", "metric_rows"]
+__all__ = ["render_task", "evaluate_task", "task_seed", "load_scene_image", "metric_results", "metric_rows", "safe_label"]
 
 import functools
 import hashlib
@@ -339,7 +339,7 @@ def evaluate_task(task: dict) -> dict:
                 "saturated_fraction": raw.meta.get("saturated_fraction"),
                 "seed": seed,
             }
-            _save_details(details_dir / task["scene"] / _safe(cfa_label) / method, lum_tag, results, out, extra)
+            _save_details(details_dir / task["scene"] / safe_label(cfa_label) / method, lum_tag, results, out, extra)
     if details_dir is not None:
         ideal_dir = details_dir / task["scene"] / "ideal"
         if not (ideal_dir / f"{lum_tag}.png").exists():
@@ -349,6 +349,8 @@ def evaluate_task(task: dict) -> dict:
     return {"rows": rows, "timing": timing, "failures": failures}
 
 
-def _safe(label: str) -> str:
-    """A file-name-safe form of a CFA label (TOML CFAs are labelled by name)."""
-    return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in label)
+def safe_label(label: str) -> str:
+    """The file-name-safe form of a label: the folder a CFA gets under
+    ``details/`` (TOML CFAs are labelled by their name, which may hold any
+    character); the report reads the same folders."""
+    return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in str(label))
