@@ -56,7 +56,7 @@ def study_dir(tmp_path_factory) -> Path:
         cfg = base / "study.toml"
         cfg.write_text(STUDY_TOML)
         out = base / "results"
-        run_study(load_config(cfg), out, workers=1, progress=False, report=False, log=lambda msg: None)
+        run_study(load_config(cfg), out, workers=1, progress=False, log=lambda msg: None)
         _STUDY["dir"] = out
     return _STUDY["dir"]
 

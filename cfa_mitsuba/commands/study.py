@@ -34,14 +34,26 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    import sys
+    import time
     from pathlib import Path
 
+    from ..report import build_report
     from ..study.config import load_config
-    from ..study.runner import run_study
+    from ..study.runner import run_study, timing_summary, write_timing
 
     config = load_config(args.config)
     out = Path(args.out) if args.out else Path("results") / config.name
-    result = run_study(config, out, workers=args.workers, scheduler=args.scheduler,
-                       progress=not args.quiet, report=False if args.no_report else None)
-    print(result.out_dir / ("metrics.csv" if args.no_report else "report.html"))
+    result = run_study(config, out, workers=args.workers, scheduler=args.scheduler, progress=not args.quiet)
+    report = not args.no_report and config.output.get("report", True)
+    if report:
+        t = time.perf_counter()
+        build_report(result.out_dir, formats=config.output.get("figures", ("png", "svg")),
+                     thumbnails=config.output.get("thumbnails", True), timing=result.timing)
+        phases = result.timing["phases"]
+        phases["report_s"] = time.perf_counter() - t
+        phases["total_s"] += phases["report_s"]
+        write_timing(result)
+    print(timing_summary(result), file=sys.stderr)
+    print(result.out_dir / ("report.html" if report else "metrics.csv"))
     return 0

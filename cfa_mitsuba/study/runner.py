@@ -1,5 +1,6 @@
 """The study runner: render each scene once, evaluate every (scene,
-luminance, CFA, demosaic), write the tables and the report.
+luminance, CFA, demosaic), write the tables.  The report is the next stage
+(:mod:`cfa_mitsuba.report`); ``cfa-mitsuba study`` builds it from these files.
 
     results/
       metrics.csv     tidy: scene, cfa, demosaic, luminance, metric, value, unit
@@ -8,7 +9,7 @@ luminance, CFA, demosaic), write the tables and the report.
       config.json     the validated config, as run
       details/        per evaluation: curves and tables (JSON), reduced
                       S-CIELAB maps (.npy), thumbnails (.png)
-      figures/, report.html   (cfa_mitsuba.report)
+      figures/, report.html   (cfa_mitsuba.report, built after the runner)
 
 Renders go through the shared render cache (outside the results), so a
 second study reuses them.  Each finished evaluation task is saved at once
@@ -19,7 +20,8 @@ again and ends with the same ``metrics.csv`` as an uninterrupted run.
 
 from __future__ import annotations
 
-__all__ = ["StudyResult", "run_study", "plan_study", "evaluate_renders", "write_tables"]
+__all__ = ["StudyResult", "run_study", "plan_study", "evaluate_renders", "write_tables", "write_timing",
+           "timing_summary"]
 
 import hashlib
 import json
@@ -185,12 +187,13 @@ def _run_tasks(executor, fn, items, desc, progress, on_result):
 
 
 def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, scheduler: str | None = None,
-              progress: bool = True, report: bool | None = None, log=None) -> StudyResult:
-    """Run a study end to end (see the module docstring for the outputs).
+              progress: bool = True, log=None) -> StudyResult:
+    """Run a study's renders and evaluations and write its tables (see the
+    module docstring for the outputs); ``timing_summary(result)`` is the
+    line to print at the end.
 
     ``workers``: local processes (default: the config's, else 2);
-    ``scheduler``: a Dask scheduler address instead; ``report``: build the
-    HTML report (default: the config's ``output.report``).
+    ``scheduler``: a Dask scheduler address instead.
     """
     from .executors import make_executor, thread_budget
 
@@ -275,18 +278,15 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         tmp.write_text(json.dumps({k: _range_pair(v) for k, v in ranges.items()}, indent=1))
 
     timing["phases"]["total_s"] = time.perf_counter() - t_start
-    if report if report is not None else config.output.get("report", True):
-        t = time.perf_counter()
-        from ..report import build_report
+    result = StudyResult(out, metrics, scores, timing, len(tasks), reused)
+    write_timing(result)
+    return result
 
-        build_report(out, formats=config.output.get("figures", ("png", "svg")),
-                     thumbnails=config.output.get("thumbnails", True), timing=timing)
-        timing["phases"]["report_s"] = time.perf_counter() - t
-    timing["phases"]["total_s"] = time.perf_counter() - t_start
-    with atomic_output(out / "timing.json") as tmp:
-        tmp.write_text(json.dumps(timing, indent=1))
-    log(_timing_text(timing, len(tasks), reused))
-    return StudyResult(out, metrics, scores, timing, len(tasks), reused)
+
+def write_timing(result: StudyResult) -> None:
+    """(Re)write ``timing.json`` from ``result.timing``."""
+    with atomic_output(result.out_dir / "timing.json") as tmp:
+        tmp.write_text(json.dumps(result.timing, indent=1))
 
 
 class _InProcess:
@@ -331,7 +331,9 @@ def _range_pair(r) -> list[float]:
     return [float(r.worst), float(r.best)] if hasattr(r, "worst") else [float(r[0]), float(r[1])]
 
 
-def _timing_text(timing: dict, n_tasks: int, reused: int) -> str:
+def timing_summary(result: StudyResult) -> str:
+    """The one line that says where a study's time went."""
+    timing, n_tasks, reused = result.timing, result.tasks_total, result.tasks_reused
     p, t = timing["phases"], timing["tasks"]
     parts = [f"render {p.get('render_s', 0):.1f} s", f"evaluate {p.get('evaluate_s', 0):.1f} s"]
     if "report_s" in p:

@@ -44,7 +44,7 @@ def run(seed: int, out: Path) -> pd.DataFrame:
     cfg = load_config(REPO / "configs" / "quick.toml")
     scenes = tuple(dataclasses.replace(s, render={**s.render, "seed": seed}) if seed else s for s in cfg.scenes)
     cfg = dataclasses.replace(cfg, scenes=scenes)
-    return run_study(cfg, out, workers=2, progress=False, report=False, log=lambda m: None).metrics
+    return run_study(cfg, out, workers=2, progress=False, log=lambda m: None).metrics
 
 
 def last_bit_change(reference: pd.Series, perturbations=(1, 2, 3)) -> pd.Series:
