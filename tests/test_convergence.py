@@ -12,6 +12,7 @@ import json
 import numpy as np
 import pytest
 
+from cfa_mitsuba.report.convergence import write_convergence
 from cfa_mitsuba.study import convergence as conv
 from conftest import assert_one_line_error, run_cli
 
@@ -88,7 +89,7 @@ def test_chart_renders_are_exact_at_every_spp(tmp_path):
     assert s["rates"]["render"]["radiance, image, median band"]["per_wall_time"] is None  # all below the floor
     dev = [r["error"] for r in res.rows if r["stage"] == "render" and r["quantity"] == "achromatic"]
     assert len(dev) == 2 and max(dev) < 1e-6
-    paths = conv.write_outputs(res, tmp_path, formats=("png",))
+    paths = write_convergence(res, tmp_path, formats=("png",))
     assert paths["png"].stat().st_size > 20_000
     assert "gray-bar" in conv.format_table(res)
 

@@ -101,7 +101,8 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     from ..errors import CfaMitsubaError
     from ..io import check_writable_dir
-    from ..study.convergence import DEFAULT_COMPARE_CFAS, format_table, make_plan, run_convergence, write_outputs
+    from ..report.convergence import write_convergence
+    from ..study.convergence import DEFAULT_COMPARE_CFAS, format_table, make_plan, run_convergence
 
     for f in args.formats:
         if f not in ("png", "svg"):
@@ -115,7 +116,7 @@ def run(args) -> int:
     )
     check_writable_dir(args.out)  # before minutes of rendering, not after
     result = run_convergence(plan)
-    paths = write_outputs(result, args.out, formats=tuple(args.formats))
+    paths = write_convergence(result, args.out, formats=tuple(args.formats))
     print(format_table(result))
     for kind in ("csv", "json", *args.formats):
         print(paths[kind])

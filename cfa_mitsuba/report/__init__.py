@@ -10,8 +10,9 @@ scores.csv, ranges.json, timing.json, config.json, details/) and writes
 The modules: :mod:`.results` (reading the directory), :mod:`.style`
 (colours, labels), :mod:`.figures_scores` (radar, ranks, luminance sweep),
 :mod:`.figures_detail` (MTF, moire, patches, S-CIELAB maps, gray bar,
-thumbnails), :mod:`.tables` (Tables 1-3), :mod:`.page` (the HTML) and
-:mod:`.build`.
+thumbnails), :mod:`.tables` (Tables 1-3), :mod:`.page` (the HTML),
+:mod:`.build`, and :mod:`.convergence` (the plot of ``cfa-mitsuba
+convergence``).
 """
 
 from .build import FIGURE_FORMATS, build_report  # noqa: F401
