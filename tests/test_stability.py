@@ -464,12 +464,17 @@ def _():
     return f"fit_colour_matrix(..., rcond=1e-4): rank 3, noise gain {fit.noise_gain.round(2).tolist()}"
 
 
-@case("monochrome-cfa-one-channel")
-def _():
+def _mono_cfa():
+    """A one-channel CFA (tile "W"), loaded from a TOML file as a user's is."""
     with tempfile.TemporaryDirectory() as d:
         p = Path(d) / "mono.toml"
         p.write_text('name = "mono"\ntile = "W"\n')
-        cfa = cm.sensor.get_cfa(str(p))
+        return cm.sensor.get_cfa(str(p))
+
+
+@case("monochrome-cfa-one-channel")
+def _():
+    cfa = _mono_cfa()
     oi, geo = optics("macbeth")
     img = cm.isp.process(cm.sensor.capture(oi, cfa, seed=1), "pocs")
     ideal = cm.isp.process(cm.sensor.capture_ideal(oi))
@@ -716,10 +721,7 @@ def _():
 
 @case("chirp-monochrome-camera-never-passes")
 def _():
-    with tempfile.TemporaryDirectory() as d:
-        p = Path(d) / "mono.toml"
-        p.write_text('name = "mono"\ntile = "W"\n')
-        cfa = cm.sensor.get_cfa(str(p))
+    cfa = _mono_cfa()
     oi, geo = optics("chirp")
     img = cm.isp.process(cm.sensor.capture(oi, cfa, seed=1), "bilinear")
     ideal = cm.isp.process(cm.sensor.capture_ideal(oi))
