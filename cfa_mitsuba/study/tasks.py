@@ -303,25 +303,19 @@ def evaluate_task(task: dict) -> dict:
         if method == "pocs" and pocs_iterations is not None:
             opts["iterations"] = pocs_iterations
         base = {"scene": task["scene"], "cfa": cfa_label, "demosaic": method, "luminance": lum}
-        t = time.perf_counter()
         try:
+            t = time.perf_counter()
             out = process(raw, method, **opts)
+            timing["process_s"] += time.perf_counter() - t
+            cam, scale = out.xyz, 1.0
+            if task.get("mean_match", True):
+                cam, scale = m.mean_match(cam, ideal.xyz, return_scale=True)
         except CfaMitsubaError as exc:
-            # e.g. a channel the scene white leaves dark: no output to measure.
+            # No output to measure (a channel the scene white leaves dark) or
+            # no scale for it (a black ideal interior): every metric of this
+            # output is unmeasurable.
             failures.extend({**base, "metric": name, "error": str(exc)} for name in task["metrics"])
             continue
-        finally:
-            timing["process_s"] += time.perf_counter() - t
-        cam = out.xyz
-        scale = 1.0
-        if task.get("mean_match", True):
-            try:
-                cam, scale = m.mean_match(cam, ideal.xyz, return_scale=True)
-            except CfaMitsubaError as exc:
-                # A black ideal image (no light in the interior) cannot set a
-                # scale: every metric of this output is unmeasurable.
-                failures.extend({**base, "metric": name, "error": str(exc)} for name in task["metrics"])
-                continue
         t = time.perf_counter()
         failed: list[dict] = []
         results = metric_results(task["metrics"], ideal.xyz, cam, white, geo, pitch, failed)
