@@ -172,9 +172,15 @@ def _is_horizontal(lum: np.ndarray) -> bool:
     return testv > testh
 
 
-def _polarity(work: np.ndarray) -> float:
+def _sides(work: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The flat columns at the two ends of an edge region (up to 5 each,
+    at most a quarter of its width): the dark and bright sides, in some order."""
     k = max(1, min(5, work.shape[1] // 4))
-    left, right = work[:, :k].mean(), work[:, -k:].mean()
+    return work[:, :k], work[:, -k:]
+
+
+def _polarity(work: np.ndarray) -> float:
+    left, right = (side.mean() for side in _sides(work))
     scale = max(abs(left), abs(right), 1e-300)
     if not abs(right - left) > 0.02 * scale:
         raise CfaMitsubaError(
@@ -195,8 +201,7 @@ def _require_edge_above_noise(work: np.ndarray, factor: float = 5.0) -> None:
     the step must exceed ``factor`` times that.
     """
     nlin = work.shape[0]
-    k = max(1, min(5, work.shape[1] // 4))
-    left, right = work[:, :k], work[:, -k:]
+    left, right = _sides(work)
     step = abs(right.mean() - left.mean())
     sigma = 0.5 * (left.std() + right.std())
     bin_noise = sigma / np.sqrt(max(1.0, nlin / 4.0))
@@ -329,8 +334,7 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
     nlin1 = int(np.floor(cycles / abs(slope) + 0.5))
     cos_angle = float(np.cos(np.arctan(slope)))
 
-    k = max(1, min(5, npix // 4))
-    dark, bright = sorted((work[:, :k].mean(), work[:, -k:].mean()))
+    dark, bright = sorted(side.mean() for side in _sides(work))
     # Michelson contrast is defined for non-negative signals: a dark side
     # below 0 (read noise about black in a linear camera image) counts as 0,
     # so the value stays in [0, 1] (not 1e16 or NaN as bright + dark -> 0).
