@@ -6,15 +6,34 @@ The stages, in the order data flows through them (DESIGN.md)::
 
     render -> io -> optics -> sensor -> isp -> metrics -> study -> report
 
-``import cfa_mitsuba as cm`` imports every stage, so ``cm.sensor.get_cfa``,
+``import cfa_mitsuba as cm`` makes every stage reachable (imported on first use), so ``cm.sensor.get_cfa``,
 ``cm.io.read_spectral_exr``, ``cm.isp.demosaic`` and ``cm.metrics.ssim`` work
 without further imports.  Mitsuba itself is imported only when something is
 rendered.
 """
 
-__version__ = "0.1.0"
+from ._version import __version__  # noqa: F401
+from .errors import CfaMitsubaError  # noqa: F401
 
-from . import errors, spectra, values  # noqa: E402,F401
-from . import render, io, optics, sensor, isp, metrics, study, report  # noqa: E402,F401
-from .errors import CfaMitsubaError  # noqa: E402,F401
-from .values import OpticalImage, RawImage, RenderedImage, SpectralImage  # noqa: E402,F401
+#: The stage subpackages and shared modules, imported on first use
+#: (``cm.sensor`` works without an import, and ``from cfa_mitsuba import
+#: __version__`` does not pull in the whole chain).
+_SUBMODULES = ("errors", "spectra", "values", "colorimetry", "render", "io", "optics", "sensor", "isp", "metrics",
+               "study", "report")
+_VALUES = ("OpticalImage", "RawImage", "RenderedImage", "SpectralImage")
+
+
+def __getattr__(name):
+    import importlib
+
+    if name in _SUBMODULES:
+        return importlib.import_module(f".{name}", __name__)
+    if name in _VALUES:
+        from . import values
+
+        return getattr(values, name)
+    raise AttributeError(f"module 'cfa_mitsuba' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted({*globals(), *_SUBMODULES, *_VALUES})

@@ -63,9 +63,12 @@ def test_black_ideal_interior_is_a_recorded_failure(tmp_path, monkeypatch):
         raise CfaMitsubaError("cannot mean-match: the reference image's interior mean is 0 (need > 0)")
 
     monkeypatch.setattr(metrics, "mean_match", refuse)
-    task = {"source": {"kind": "exr", "path": str(exr)}, "scene": "frame", "luminance": 100.0, "cfa": "bayer",
-            "demosaics": ["bilinear", "pocs"], "metrics": ["ssim", "haarpsi"], "optics": {}, "sensor": {},
-            "capture": {}, "isp": {}, "mean_match": True, "seed": 0, "details_dir": None}
+    from cfa_mitsuba.study.chain import ChainSettings
+    from cfa_mitsuba.study.conditions import Condition
+
+    task = {"source": {"kind": "exr", "path": str(exr)}, "scene": "frame", "condition": Condition(100.0),
+            "cfa": "bayer", "demosaics": ["bilinear", "pocs"], "metrics": ["ssim", "haarpsi"],
+            "chain": ChainSettings(), "details_dir": None}
     result = tasks.evaluate_task(task)
     assert result["rows"] == []
     assert len(result["failures"]) == 4

@@ -9,6 +9,9 @@ KINDS = ("scenes", "cfas", "demosaics", "metrics")
 
 def add_arguments(parser) -> None:
     parser.add_argument("kind", choices=KINDS, help="what to list")
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON array (for metrics: each record's name, scenes, inputs, unit, "
+                             "higher_is_better, scored, score_range, label, description)")
 
 
 def _rows(kind: str) -> list[tuple[str, str]]:
@@ -35,6 +38,17 @@ def _rows(kind: str) -> list[tuple[str, str]]:
 
 
 def run(args) -> int:
+    if getattr(args, "json", False):
+        import json
+
+        if args.kind == "metrics":
+            from ..metrics import METRICS, record_json
+
+            payload = [record_json(r) for r in METRICS.values()]
+        else:
+            payload = [{"name": n, "description": d} for n, d in _rows(args.kind)]
+        print(json.dumps(payload, ensure_ascii=False))
+        return 0
     rows = _rows(args.kind)
     width = max((len(n) for n, _ in rows), default=0)
     for name, text in rows:

@@ -51,9 +51,10 @@ def _floats(text: str, n: int, what: str):
 
 
 def add_arguments(parser) -> None:
-    from ..metrics import METRICS
+    from ..metrics import metric_names
 
-    parser.add_argument("name", choices=list(METRICS), metavar="NAME", help="metric: " + ", ".join(METRICS))
+    names = metric_names()
+    parser.add_argument("name", choices=list(names), metavar="NAME", help="metric: " + ", ".join(names))
     parser.add_argument("images", nargs="+", metavar="IMAGE", help="REF TEST (mtf: one IMAGE)")
     parser.add_argument("--input", choices=INPUTS, help="how to read the pixel values (default: from the file)")
     parser.add_argument("--samples-per-degree", type=float, metavar="N", help="S-CIELAB viewing: pixels per degree")
@@ -206,7 +207,7 @@ def run(args) -> int:
     import numpy as np
 
     from .. import metrics as cm
-    from ..errors import CfaMitsubaError, require
+    from ..errors import require
 
     _NOTICES.clear()
     info = cm.get_metric(args.name)
@@ -237,8 +238,9 @@ def run(args) -> int:
 
     if single:
         roi = _floats(args.roi, 4, "--roi") if args.roi else geo.get("roi")
-        result = cm.mtf(_to_linear(imgs[0], white), roi=roi, pixel_pitch_um=args.pixel_pitch_um)
-        return _emit(args, result, imgs)
+        inputs = cm.MetricInputs(white_xyz=white, geometry=geo, pixel_pitch_um=args.pixel_pitch_um,
+                                 test_linear=_to_linear(imgs[0], white))
+        return _emit(args, cm.evaluate("mtf", inputs, roi=roi), imgs)
 
     ref, test = imgs
     require(ref.data.shape[:2] == test.data.shape[:2],
@@ -250,33 +252,28 @@ def run(args) -> int:
             xyz_t, scale = cm.mean_match(xyz_t, xyz_r, return_scale=True)
             _notice(f"mean-matched the test image (x {scale:.6g})")
 
-    name = args.name
+    options = {"version": args.version}
     if info.inputs == "srgb8":
-        a, b = _to_codes(xyz_r, ref, white), _to_codes(xyz_t, test, white)
-        value = {"ssim": cm.ssim, "mdsi": cm.mdsi, "haarpsi": cm.haarpsi}[name](a, b)
-        result = cm.MetricResult(value, name=name, unit="", details={})
-    elif name == "delta-e":
-        result = cm.delta_e(xyz_r, xyz_t, white, patches=geo.get("patches"), version=args.version)
-    elif name == "scielab":
+        inputs = cm.MetricInputs(white_xyz=white, geometry=geo, reference_srgb8=_to_codes(xyz_r, ref, white),
+                                 test_srgb8=_to_codes(xyz_t, test, white))
+    else:
+        inputs = cm.MetricInputs(xyz_r, xyz_t, white, geometry=geo, pixel_pitch_um=args.pixel_pitch_um)
+    if args.name == "scielab":
         spd = args.samples_per_degree
-        if spd is None:
-            spd = xyz_r.shape[1] / args.fov_deg if args.fov_deg else geo.get("samples_per_degree")
-        require(spd is not None, "scielab needs the viewing geometry: --samples-per-degree N or --fov-deg DEG "
-                                 "(or --geometry with the sidecar's fov_deg)")
-        result = cm.scielab(xyz_r, xyz_t, white, samples_per_degree=spd, matrix=args.matrix, version=args.version)
-    elif name == "moire":
-        freq = geo.get("frequency_cy_per_deg")
+        if spd is None and args.fov_deg:
+            spd = xyz_r.shape[1] / args.fov_deg
+        require(spd is not None or geo.get("samples_per_degree") is not None,
+                "scielab needs the viewing geometry: --samples-per-degree N or --fov-deg DEG "
+                "(or --geometry with the sidecar's fov_deg)")
+        options.update(samples_per_degree=spd, matrix=args.matrix)
+    elif args.name == "moire":
         if args.frequency_cpd:
             lo, hi = _floats(args.frequency_cpd, 2, "--frequency-cpd")
-            freq = np.linspace(lo, hi, xyz_r.shape[1])
-        require(freq is not None, "moire needs the chirp's frequency map: --frequency-cpd LO,HI or --geometry SIDECAR.json")
-        result = cm.moire(xyz_r, xyz_t, white, frequency_cy_per_deg=freq, row=geo.get("row"),
-                          block=args.block, threshold=args.threshold)
-    elif name == "achromatic":
-        result = cm.achromatic(xyz_r, xyz_t, white, row=geo.get("row"), steps=geo.get("steps"))
-    else:  # pragma: no cover - registry and dispatch out of step
-        raise CfaMitsubaError(f"metric {name!r} has no command-line dispatch")
-    return _emit(args, result, imgs)
+            options["frequency_cy_per_deg"] = np.linspace(lo, hi, xyz_r.shape[1])
+        require(options.get("frequency_cy_per_deg") is not None or geo.get("frequency_cy_per_deg") is not None,
+                "moire needs the chirp's frequency map: --frequency-cpd LO,HI or --geometry SIDECAR.json")
+        options.update(block=args.block, threshold=args.threshold)
+    return _emit(args, cm.evaluate(args.name, inputs, **options), imgs)
 
 
 def _emit(args, result, imgs) -> int:

@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import spectra
+from .. import colorimetry, spectra
 from ..errors import CfaMitsubaError
 from ..values import SpectralImage
 from .atomic import atomic_output
@@ -94,20 +94,14 @@ def linear_srgb(data: np.ndarray, wavelengths, meta: dict) -> np.ndarray:
     (H, W, B) in W/(m^2 sr nm), scaled so that the scene's white diffuser
     (``meta['white_luminance_cd_m2']``) has Y = 1; without it, so that the
     image's mean is an 18 % grey.  No chromatic adaptation: D65 is both our
-    scenes' illuminant and sRGB's white."""
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        import colour
-
+    scenes' illuminant and sRGB's white.  The matrix is the one of
+    :mod:`cfa_mitsuba.colorimetry`."""
     xyz = spectra.xyz_from_radiance(data, wavelengths)
     white = meta.get("white_luminance_cd_m2")
     if not white or not np.isfinite(white) or white <= 0:
         mean_y = float(xyz[..., 1].mean())
         white = mean_y / 0.18 if mean_y > 0 else 1.0
-    m = np.asarray(colour.models.RGB_COLOURSPACE_sRGB.matrix_XYZ_to_RGB)
-    return (xyz / white) @ m.T
+    return colorimetry.xyz_to_linear(xyz, scale=float(white))
 
 
 def write_spectral_exr(path, image: SpectralImage, *, preview: bool = True) -> Path:

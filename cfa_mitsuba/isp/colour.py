@@ -41,12 +41,11 @@ __all__ = [
 ]
 
 import functools
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-from .. import spectra
+from .. import colorimetry, spectra
 from ..errors import CfaMitsubaError
 
 
@@ -298,32 +297,14 @@ def cfa_luminance_weights(cfa) -> np.ndarray:
 
 
 def xyz_to_srgb(xyz, white_xyz) -> np.ndarray:
-    """Display sRGB (IEC 61966-2-1), 0..1, of absolute XYZ.
-
-    ``xyz`` (..., 3) in cd/m^2 is divided by the white's luminance, adapted
-    (Bradford) from the white's chromaticity to sRGB's D65, converted and
-    encoded with colour-science's ``XYZ_to_sRGB``, then clipped to 0..1.
-    The scene white maps to (1, 1, 1) (to 1e-4: the standard's XYZ -> RGB
-    matrix has four decimals).
-    """
-    colour = spectra._colour()
+    """Display sRGB, 0..1, of absolute XYZ: the project's one encoding
+    (:func:`cfa_mitsuba.colorimetry.xyz_to_srgb`) with Bradford adaptation
+    from the scene white to sRGB's D65, so the scene white shows as (1, 1, 1)."""
     white = np.asarray(white_xyz, dtype=np.float64)
     if white.shape != (3,) or not np.all(np.isfinite(white)) or white[1] <= 0:
         raise CfaMitsubaError(f"white XYZ must be 3 finite values with Y > 0, got {white.tolist()}")
-    xy = white[:2] / white.sum()
-    rel = np.asarray(xyz, dtype=np.float64) / white[1]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        rgb = colour.XYZ_to_sRGB(rel, illuminant=xy, chromatic_adaptation_transform="Bradford")
-    return np.clip(rgb, 0.0, 1.0)
+    return colorimetry.xyz_to_srgb(xyz, white, adaptation="Bradford")
 
 
-def delta_e00(xyz_a, xyz_b, white_xyz) -> np.ndarray:
-    """CIEDE2000 between two absolute XYZ arrays (..., 3), CIELAB relative
-    to ``white_xyz`` (colour-science)."""
-    colour = spectra._colour()
-    white = np.asarray(white_xyz, dtype=np.float64)
-    xy = white[:2] / white.sum()
-    lab_a = colour.XYZ_to_Lab(np.asarray(xyz_a, float) / white[1], xy)
-    lab_b = colour.XYZ_to_Lab(np.asarray(xyz_b, float) / white[1], xy)
-    return colour.delta_E(lab_a, lab_b, method="CIE 2000")
+#: CIEDE2000 of two absolute XYZ arrays (kept here for the isp's users).
+delta_e00 = colorimetry.delta_e00

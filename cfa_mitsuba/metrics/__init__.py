@@ -20,12 +20,12 @@ mdsi           :func:`mdsi`            puppy         MDSI (lower)
 haarpsi        :func:`haarpsi`         puppy         HaarPSI (higher)
 =============  ======================  ============  =====================
 
+Each metric has one record (:mod:`.records`): scenes, inputs, unit, direction,
+scoring, default range, label; :func:`evaluate` computes any of them by name.
 Conventions and their sources: docs/metrics.md.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass
 
 from . import colour  # noqa: F401
 from ._result import MetricResult
@@ -37,57 +37,18 @@ from .mdsi import mdsi
 from .moire import moire
 from .mtf import find_edge_roi, mtf
 from .preprocess import mean_match
+from .records import (METRICS, NATURAL, MetricInputs, MetricRecord, evaluate, evaluate_many, get_metric,
+                      list_metrics, metric_names, metrics_for_scene, record_json, result_rows, scored_metrics)
 from .scielab import scielab, scielab_filters
 from .ssim import ssim
 
+#: The old name of a metric's registry entry.
+MetricInfo = MetricRecord
+
 __all__ = [
-    "MetricResult", "MetricInfo", "METRICS", "get_metric", "list_metrics",
+    "MetricResult", "MetricRecord", "MetricInfo", "MetricInputs", "METRICS", "NATURAL", "get_metric",
+    "list_metrics", "metric_names", "scored_metrics", "metrics_for_scene", "record_json", "evaluate",
+    "evaluate_many", "result_rows",
     "delta_e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi",
     "mean_match", "find_edge_roi", "scielab_filters", "scene_geometry", "colour",
 ]
-
-
-@dataclass(frozen=True)
-class MetricInfo:
-    """Registry entry: what a metric measures and how to read its number."""
-
-    name: str
-    function: object
-    scene: str
-    description: str
-    unit: str
-    higher_is_better: bool
-    inputs: str  # 'xyz' (absolute XYZ + white), 'srgb8' (code values), 'linear' (one image)
-
-
-METRICS: dict[str, MetricInfo] = {m.name: m for m in (
-    MetricInfo("delta-e", delta_e, "macbeth", "colour error: mean CIEDE2000 (and dE*ab 1976) over the 24 patches",
-               "dE00", False, "xyz"),
-    MetricInfo("scielab", scielab, "puppy", "S-CIELAB colour reproduction error (Zhang-Wandell), mean dE00",
-               "dE00", False, "xyz"),
-    MetricInfo("ssim", ssim, "puppy", "structural similarity (Wang 2004) of the 8-bit sRGB luma", "", True, "srgb8"),
-    MetricInfo("mtf", mtf, "slanted-edge", "ISO 12233 e-SFR: luminance MTF50, MTF at Nyquist, percent alias",
-               "cy/mm", True, "linear"),
-    MetricInfo("moire", moire, "chirp", "moire starting point: first frequency where block-mean C*ab > 25",
-               "cy/deg", True, "xyz"),
-    MetricInfo("achromatic", achromatic, "gray-bar", "achromatic reproduction error: mean |dL*| along the central row",
-               "L*", False, "xyz"),
-    MetricInfo("mdsi", mdsi, "puppy", "mean deviation similarity index (Nafchi 2016), 0 = identical", "", False, "srgb8"),
-    MetricInfo("haarpsi", haarpsi, "puppy", "Haar wavelet perceptual similarity (Reisenhofer 2018), 1 = identical",
-               "", True, "srgb8"),
-)}
-
-
-def get_metric(name: str) -> MetricInfo:
-    """The registry entry of a metric by its CLI name (``'delta-e'``, ...)."""
-    from ..errors import CfaMitsubaError
-
-    try:
-        return METRICS[name]
-    except KeyError:
-        raise CfaMitsubaError(f"unknown metric {name!r} (expected one of: {', '.join(METRICS)})") from None
-
-
-def list_metrics() -> list[tuple[str, str]]:
-    """(name, one-line description) of every metric, for ``cfa-mitsuba list metrics``."""
-    return [(m.name, f"[{m.scene}] {m.description}") for m in METRICS.values()]

@@ -247,7 +247,7 @@ def moire_curves(res: Results):
 
 def _patch_colours(res: Results, scene: str, lum: float, det: dict) -> np.ndarray:
     """sRGB (0-1) of each patch as the ideal sensor sees it, for the markers."""
-    from ..metrics.colour import xyz_to_srgb8
+    from ..colorimetry import xyz_to_srgb8
 
     xyz = np.asarray(det.get("xyz_reference") or [], dtype=float)
     ideal = res.detail(scene, None, None, lum) or {}

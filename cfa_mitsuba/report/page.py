@@ -14,7 +14,7 @@ import base64
 import html
 from pathlib import Path
 
-from .. import __version__
+from .._version import __version__
 from .results import Results
 from .style import cfa_styles, metric_info
 

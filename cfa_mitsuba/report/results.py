@@ -27,13 +27,14 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CfaMitsubaError
+from ..metrics import METRICS, NATURAL, scored_metrics
+from ..study.conditions import AXES
 from ..study.tasks import safe_label
 
-#: The paper's eight metrics in the order of its tables and radar plots.
-SCORED_METRICS = ("delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi")
+#: The paper's eight metrics in the order of its tables and radar plots (the metric records).
+SCORED_METRICS = scored_metrics()
 #: The built-in scene that feeds each metric (a user scene may feed the image metrics).
-METRIC_SCENES = {"delta-e": "macbeth", "mtf": "slanted-edge", "moire": "chirp", "achromatic": "gray-bar",
-                 "scielab": "puppy", "ssim": "puppy", "mdsi": "puppy", "haarpsi": "puppy"}
+METRIC_SCENES = {r.name: ("puppy" if NATURAL in r.scenes else r.scenes[0]) for r in METRICS.values()}
 _COLUMNS = ("scene", "cfa", "demosaic", "luminance", "metric", "value", "unit")
 
 
@@ -74,6 +75,11 @@ class Results:
     primary_luminance: float | None
     scored_here: bool = False
     notes: list = field(default_factory=list)
+    #: every row of metrics.csv, sweeps of any axis included (``metrics``
+    #: keeps the rows at the study's own values of every axis but luminance)
+    all_metrics: object = None
+    #: the axes other than luminance that a sweep varied, {axis: values}
+    swept_axes: dict = field(default_factory=dict)
 
     # -- what was measured -------------------------------------------------
     def has_metric(self, metric: str, luminance: float | None = None) -> bool:
@@ -170,6 +176,26 @@ def _read_metrics(path: Path):
     return m[np.isfinite(m["value"]) & np.isfinite(m["luminance"])].reset_index(drop=True)
 
 
+def split_sweeps(metrics):
+    """(rows at the study's own values of every axis but luminance, {axis:
+    values} of the other axes some sweep varied).  A row belongs to the
+    first part when its scene has a base row (``base`` column) with the same
+    values of those axes; tables without axis columns are all base."""
+    others = [a for a in AXES[1:] if a in metrics.columns]
+    if not others or "base" not in metrics.columns:
+        return metrics, {}
+    base_flag = metrics["base"].astype(str).str.lower().isin(("true", "1"))
+    keys = [tuple(str(v) for v in row) for row in metrics[others].itertuples(index=False)]
+    base_keys = {(sc, k) for sc, k, b in zip(metrics["scene"], keys, base_flag) if b}
+    keep = np.array([(sc, k) in base_keys for sc, k in zip(metrics["scene"], keys)], dtype=bool)
+    swept = {}
+    for a in others:
+        vals = list(dict.fromkeys(metrics.loc[~keep, a].tolist()))
+        if vals:
+            swept[a] = list(dict.fromkeys(metrics[a].tolist()))
+    return metrics[keep].reset_index(drop=True), swept
+
+
 def _base_luminances(metrics, config: dict, scores) -> list[float]:
     lums = [float(v) for v in (config.get("luminances") or [])]
     have = set(float(v) for v in metrics["luminance"].unique())
@@ -217,7 +243,8 @@ def load_results(out_dir) -> Results:
         raise CfaMitsubaError(f"{str(root)!r} is not a results directory (no metrics.csv)")
     _cached_json.cache_clear()
     notes = []
-    metrics = _read_metrics(mpath)
+    all_metrics = _read_metrics(mpath)
+    metrics, swept = split_sweeps(all_metrics)
     config = _read_json(root / "config.json") or {}
     if not (root / "config.json").is_file():
         notes.append("config.json is absent: the study's name, scenes and settings are taken from metrics.csv.")
@@ -282,4 +309,5 @@ def load_results(out_dir) -> Results:
         primary = 100.0 if 100.0 in base else base[0]
     return Results(root=root, metrics=metrics, scores=scores, ranges=ranges, timing=timing, config=config,
                    cfas=cfas, demosaics=demosaics, scenes=scenes, base_luminances=base,
-                   primary_luminance=primary, scored_here=scored_here, notes=notes)
+                   primary_luminance=primary, scored_here=scored_here, notes=notes, all_metrics=all_metrics,
+                   swept_axes=swept)

@@ -12,7 +12,7 @@ dashed line.
 
 from __future__ import annotations
 
-__all__ = ["MetricInfo", "METRIC_INFO", "metric_info", "cfa_styles", "demosaic_styles", "fmt_value"]
+__all__ = ["MetricInfo", "metric_info", "cfa_styles", "demosaic_styles", "fmt_value"]
 
 from dataclasses import dataclass
 
@@ -28,7 +28,8 @@ _DEMOSAIC_LINES = ("-", "--", "-.", ":", (0, (5, 1, 1, 1)), (0, (3, 1, 1, 1, 1, 
 
 @dataclass(frozen=True)
 class MetricInfo:
-    """How a metric is named, shown and read."""
+    """How a metric is named, shown and read: a view of its record
+    (:mod:`cfa_mitsuba.metrics.records`) with the unit as typeset."""
 
     short: str          # column / axis label
     long: str           # what it measures
@@ -38,35 +39,19 @@ class MetricInfo:
     paper: str          # the paper's name and section
 
 
-METRIC_INFO = {
-    "delta-e": MetricInfo("ΔE00", "colour error, mean CIEDE2000 over the 24 ColorChecker patches", "ΔE00", 2,
-                          False, "ΔE (s. 2.2.1, Fig 8)"),
-    "scielab": MetricInfo("S-CIELAB", "colour reproduction error, mean S-CIELAB ΔE00 over the image", "ΔE00", 2,
-                          False, "ΔEs (s. 2.2.2, Fig 10)"),
-    "ssim": MetricInfo("SSIM", "structural similarity of the 8-bit sRGB luma", "", 3, True,
-                       "SSIM (s. 2.2.3, Fig 10)"),
-    "mtf": MetricInfo("MTF50", "luminance MTF50 of the slanted edge (ISO 12233)", "cy/mm", 1, True,
-                      "MTF50 (s. 2.2.4, Figs 6, 11)"),
-    "moire": MetricInfo("MSP", "moiré starting point on the chirp", "cy/deg", 2, True,
-                        "MSP (s. 2.2.5, Figs 12-13)"),
-    "achromatic": MetricInfo("AR error", "achromatic reproduction error, mean |ΔL*| along the gray bar", "ΔL*", 3,
-                             False, "ΔR (s. 2.2.6, Fig 14)"),
-    "mdsi": MetricInfo("MDSI", "mean deviation similarity index (0 = identical)", "", 3, False,
-                       "MDSI (s. 2.2.7, Fig 15)"),
-    "haarpsi": MetricInfo("HaarPSI", "Haar wavelet perceptual similarity (1 = identical)", "", 3, True,
-                          "HaarPSI (s. 2.2.8, Fig 15)"),
-    "delta-e76": MetricInfo("ΔE*ab", "colour error, mean CIE 1976 ΔE*ab over the 24 patches", "ΔE*ab", 2, False,
-                            "—"),
-    "delta-l": MetricInfo("ΔL grey", "mean |ΔL*| over the six grey patches (the paper's Table 1 'Mean ΔL')",
-                          "ΔL*", 2, False, "Table 1"),
-    "scielab-interior": MetricInfo("S-CIELAB interior", "S-CIELAB mean ΔE00 away from the image border",
-                                   "ΔE00", 2, False, "—"),
-}
+#: Units as the report typesets them.
+_DISPLAY_UNITS = {"dE00": "ΔE00", "dEab": "ΔE*ab", "dE76": "ΔE*ab", "L*": "ΔL*"}
 
 
 def metric_info(name: str) -> MetricInfo:
-    """The display info of a metric; an unknown metric gets a plain one."""
-    return METRIC_INFO.get(name, MetricInfo(name, name, "", 3, True, "—"))
+    """The display info of a metric, from its record; an unknown metric gets a plain one."""
+    from ..metrics import METRICS
+
+    r = METRICS.get(name)
+    if r is None:
+        return MetricInfo(name, name, "", 3, True, "—")
+    return MetricInfo(r.label, r.description, _DISPLAY_UNITS.get(r.unit, r.unit), r.decimals, r.higher_is_better,
+                      r.paper)
 
 
 def fmt_value(metric: str, value) -> str:

@@ -24,8 +24,10 @@ from pathlib import Path
 
 from ..errors import CfaMitsubaError
 
-#: Metrics a user scene feeds (the image metrics of DESIGN.md).
-IMAGE_METRICS = ("scielab", "ssim", "mdsi", "haarpsi")
+from ..metrics import metrics_for_scene
+
+#: Metrics a user scene feeds (the image metrics of DESIGN.md), from the metric records.
+IMAGE_METRICS = metrics_for_scene("", natural=True)
 
 
 @dataclass(frozen=True)
@@ -45,12 +47,22 @@ class SceneSpec:
 
 @dataclass(frozen=True)
 class SweepSpec:
-    """Extra luminances for some metrics of one scene (paper: S-CIELAB and
-    SSIM on PUPPY at 3 ... 400 cd/m^2)."""
+    """Extra conditions for some metrics of some scenes: one list of values
+    per swept axis (:data:`~.conditions.AXES`), crossed (paper: S-CIELAB
+    and SSIM on PUPPY at 3 ... 400 cd/m^2).  ``metrics`` empty: every
+    metric each scene feeds."""
 
-    scene: str
+    scenes: tuple[str, ...]
     metrics: tuple[str, ...]
-    luminances: tuple[float, ...]
+    values: dict
+
+    @property
+    def scene(self) -> str:
+        return self.scenes[0]
+
+    @property
+    def luminances(self) -> tuple:
+        return tuple(self.values.get("luminance", ()))
 
 
 @dataclass(frozen=True)
@@ -79,6 +91,24 @@ class StudyConfig:
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
+
+    def chain_settings(self):
+        """The :class:`~.chain.ChainSettings` of this study (all but the axes)."""
+        from ..optics import OpticsParams
+        from ..sensor.params import SensorParams
+        from .chain import ChainSettings
+
+        return ChainSettings(
+            optics=OpticsParams(**self.optics), sensor=SensorParams(**self.sensor),
+            noise=self.capture.get("noise", "all"),
+            reference_luminance_cd_m2=float(self.capture.get("reference_luminance_cd_m2", 100.0)),
+            isp=dict(self.isp), mean_match=self.mean_match)
+
+    def base_condition(self, luminance: float | None = None):
+        """The study's own condition (no sweep) at ``luminance`` (default: the first)."""
+        lum = self.luminances[0] if luminance is None else luminance
+        return self.chain_settings().base_condition(luminance=lum, exposure=self.capture.get("exposure", "auto"),
+                                                    seed=self.seed)
 
 
 class _Checker:
@@ -210,6 +240,71 @@ def _dataclass_table(ck: _Checker, data, key: str, cls, extra: dict) -> dict:
     return {**params, **rest}
 
 
+def _axis_values(ck: _Checker, axis: str, value, key: str) -> tuple:
+    """A sweep's list of values for one axis, each checked as the axis needs."""
+    if not isinstance(value, list) or not value:
+        ck.fail(key, f"must be a non-empty list of values, got {_typename(value)}")
+    out = []
+    for i, v in enumerate(value):
+        k = f"{key}[{i}]"
+        if axis == "seed":
+            out.append(ck.integer(v, k, 0))
+        elif axis == "exposure":
+            out.append(v if v == "auto" else ck.number(v, k, positive=True))
+        elif axis == "read_noise_e":
+            out.append(ck.number(v, k, nonneg=True))
+        elif axis == "f_number":
+            out.append(ck.number(v, k, positive=True, maximum=1000.0))
+        else:
+            out.append(ck.number(v, k, positive=True))
+    if len(set(out)) != len(out):
+        ck.fail(key, "lists a value twice")
+    return tuple(out)
+
+
+def _sweeps(ck: _Checker, sweep_data, scenes) -> list[SweepSpec]:
+    """``[[sweep]]`` tables: ``scene`` or ``scenes``, ``metrics`` (default:
+    all each scene feeds) and one list per axis (``luminances`` is the old
+    name of ``luminance``); several axes in one table are crossed."""
+    from .conditions import AXES
+
+    if not isinstance(sweep_data, list):
+        ck.fail("sweep", "must be an array of tables ([[sweep]])")
+    out = []
+    for i, sw in enumerate(sweep_data):
+        key = f"sweep[{i}]"
+        ck.table(sw, key, {"scene": None, "scenes": None, "metrics": None, "luminances": None,
+                           **{a: None for a in AXES}})
+        if ("scene" in sw) == ("scenes" in sw):
+            ck.fail(f"{key}.scene", "give either scene = \"NAME\" or scenes = [...] (exactly one)")
+        names = ((ck.string(sw["scene"], f"{key}.scene"),) if "scene" in sw
+                 else ck.string_list(sw["scenes"], f"{key}.scenes"))
+        specs = []
+        for j, sname in enumerate(names):
+            spec = next((s for s in scenes if s.name == sname), None)
+            if spec is None:
+                where = f"{key}.scene" if "scene" in sw else f"{key}.scenes[{j}]"
+                ck.fail(where, f"{sname!r} is not one of this study's scenes")
+            specs.append(spec)
+        fed = [m for s in specs for m in s.metrics]
+        ms = ck.string_list(sw["metrics"], f"{key}.metrics") if "metrics" in sw else ()
+        for j, m in enumerate(ms):
+            if m not in fed:
+                ck.fail(f"{key}.metrics[{j}]", f"scene {', '.join(map(repr, names))} does not feed metric {m!r} "
+                                               f"(it feeds {', '.join(dict.fromkeys(fed))})")
+        if "luminances" in sw and "luminance" in sw:
+            ck.fail(f"{key}.luminances", "give luminance or its old name luminances, not both")
+        values = {}
+        for axis in AXES:
+            name = "luminances" if axis == "luminance" and "luminances" in sw else axis
+            if name in sw:
+                values[axis] = _axis_values(ck, axis, sw[name], f"{key}.{name}")
+        if not values:
+            ck.fail(key, f"sweeps no axis (give a list for one of: {', '.join(AXES)})")
+        out.append(SweepSpec(tuple(names), tuple(ms), values))
+    return out
+
+
 def parse_config(data: dict, *, where: str = "config", base: Path | None = None) -> StudyConfig:
     """Validate a config already parsed from TOML; see :func:`load_config`."""
     from .. import isp, render, sensor
@@ -265,7 +360,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
             ck.fail(f"scenes[{i}]", f"unknown scene {s!r} (known: {', '.join(known_scenes)}; "
                                     "user XML scenes go under [[custom_scenes]])")
         over = _render_overrides(ck, render_cfg.get(s, {}), f"render.{s}")
-        scenes.append(SceneSpec(s, None, over, tuple(render.get_scene(s).metrics)))
+        scenes.append(SceneSpec(s, None, over, metrics_for_scene(s)))
     custom = data.get("custom_scenes", [])
     if not isinstance(custom, list):
         ck.fail("custom_scenes", "must be an array of tables ([[custom_scenes]])")
@@ -306,25 +401,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
             ck.fail(f"demosaics[{i}]", f"unknown demosaicing method {d!r} (known: {', '.join(known_demosaics)})")
     luminances = ck.number_list(data.get("luminances", [100.0]), "luminances")
 
-    sweeps = []
-    sweep_data = data.get("sweep", [])
-    if not isinstance(sweep_data, list):
-        ck.fail("sweep", "must be an array of tables ([[sweep]])")
-    for i, sw in enumerate(sweep_data):
-        key = f"sweep[{i}]"
-        ck.table(sw, key, {"scene": None, "metrics": None, "luminances": None})
-        sname = ck.string(sw.get("scene"), f"{key}.scene")
-        spec = next((s for s in scenes if s.name == sname), None)
-        if spec is None:
-            ck.fail(f"{key}.scene", f"{sname!r} is not one of this study's scenes")
-        ms = ck.string_list(sw.get("metrics", list(spec.metrics)), f"{key}.metrics")
-        for j, m in enumerate(ms):
-            if m not in spec.metrics:
-                ck.fail(f"{key}.metrics[{j}]", f"scene {sname!r} does not feed metric {m!r} "
-                                               f"(it feeds {', '.join(spec.metrics)})")
-        if "luminances" not in sw:
-            ck.fail(f"{key}.luminances", "missing (required)")
-        sweeps.append(SweepSpec(sname, ms, ck.number_list(sw["luminances"], f"{key}.luminances")))
+    sweeps = tuple(_sweeps(ck, data.get("sweep", []), scenes))
 
     # --- optics / sensor / isp -----------------------------------------
     optics = _dataclass_table(ck, data.get("optics", {}), "optics", OpticsParams, {})

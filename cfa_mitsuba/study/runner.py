@@ -3,7 +3,10 @@ luminance, CFA, demosaic), write the tables.  The report is the next stage
 (:mod:`cfa_mitsuba.report`); ``cfa-mitsuba study`` builds it from these files.
 
     results/
-      metrics.csv     tidy: scene, cfa, demosaic, luminance, metric, value, unit
+      metrics.csv     tidy: scene, cfa, demosaic, the condition axes (luminance,
+                      f_number, pixel_pitch_um, exposure, read_noise_e,
+                      seed), base (a study condition, not only a sweep's),
+                      metric, value, unit
       scores.csv      the scored rows with normalised scores and ranks
       timing.json     where the time went
       config.json     the validated config, as run
@@ -30,15 +33,16 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .. import __version__
+from .._version import __version__
 from ..errors import CfaMitsubaError
 from ..io import atomic_output, check_writable_dir
+from ..metrics import scored_metrics
 from .config import StudyConfig
 from .tasks import evaluate_task, render_task
 
 #: Metrics that enter the scores (the paper's eight); other rows in
 #: metrics.csv (delta-l, delta-e76, scielab-interior) are reported only.
-SCORED_METRICS = ("delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi")
+SCORED_METRICS = scored_metrics()
 
 
 @dataclass
@@ -53,12 +57,23 @@ class StudyResult:
     tasks_reused: int = 0
 
 
-def _source(scene, render_common: dict) -> dict:
+def _source(scene, render_common: dict, cond=None) -> dict:
+    """The render a scene is evaluated on: its settings, plus the condition's
+    f-number for a 3D scene (thin-lens defocus; a chart's render does not
+    depend on it) when the condition sets one."""
     settings = {**render_common, **scene.render}
+    if cond is not None and cond.f_number is not None and _is_3d(scene):
+        settings["f_number"] = float(cond.f_number)
     src = {"kind": "cache", "scene": scene.name, "settings": settings}
     if scene.file:
         src["file"] = scene.file
     return src
+
+
+def _is_3d(scene) -> bool:
+    from .. import render
+
+    return bool(render.get_scene(scene.file or scene.name).is_3d)
 
 
 def _cfa_label(cfa: str) -> str:
@@ -69,34 +84,54 @@ def _cfa_label(cfa: str) -> str:
     return cfa
 
 
+def scene_conditions(config: StudyConfig, scene) -> dict:
+    """{Condition: (metrics, base)} of one scene: the base conditions (the
+    config's luminances, every metric the scene feeds) then each sweep's
+    crossed values; a condition reached twice evaluates the union of its
+    metrics.  ``base`` says whether the condition is one of the study's own
+    (scored) or only a sweep's."""
+    from .conditions import cross
+
+    plan: dict = {}
+    for lum in config.luminances:
+        plan[config.base_condition(lum)] = (list(scene.metrics), True)
+    for sw in config.sweeps:
+        if scene.name not in sw.scenes:
+            continue
+        wanted = [m for m in scene.metrics if not sw.metrics or m in sw.metrics]
+        values = dict(sw.values)
+        bases = [config.base_condition(lum) for lum in
+                 (values.pop("luminance") if "luminance" in values else config.luminances)]
+        for base in bases:
+            for cond in (cross(base, values) if values else [base]):
+                have, is_base = plan.setdefault(cond, ([], False))
+                have.extend(m for m in wanted if m not in have)
+    # luminance ascending, then the order the conditions were first named
+    order = {c: i for i, c in enumerate(plan)}
+    ordered = sorted(plan, key=lambda c: (c.luminance, order[c]))
+    return {c: ([m for m in scene.metrics if m in plan[c][0]], plan[c][1]) for c in ordered}
+
+
 def plan_study(config: StudyConfig, details_dir: str | None) -> tuple[list[dict], list[dict]]:
     """The render sources and the evaluation tasks of a study, in a fixed order."""
     render_common = dict(config.render)
-    sources = [_source(s, render_common) for s in config.scenes]
     labels = [_cfa_label(c) for c in config.cfas]
     if len(set(labels)) != len(labels):
         dup = next(lab for lab in labels if labels.count(lab) > 1)
         raise CfaMitsubaError(f"two CFAs of this study are both named {dup!r}")
-    tasks = []
-    for scene, src in zip(config.scenes, sources):
-        # luminance -> metrics evaluated there (the base set, plus sweeps)
-        plan: dict[float, list[str]] = {}
-        for lum in config.luminances:
-            plan[lum] = list(scene.metrics)
-        for sw in config.sweeps:
-            if sw.scene != scene.name:
-                continue
-            for lum in sw.luminances:
-                have = plan.setdefault(lum, [])
-                have.extend(m for m in sw.metrics if m not in have)
-        for lum in sorted(plan):
-            metrics = [m for m in scene.metrics if m in plan[lum]]
+    chain = config.chain_settings()
+    sources, tasks = [], []
+    for scene in config.scenes:
+        for cond, (metrics, base) in scene_conditions(config, scene).items():
+            src = _source(scene, render_common, cond)
+            if src not in sources:
+                sources.append(src)
+            tag = cond.label(config.base_condition(cond.luminance))
             for cfa, label in zip(config.cfas, labels):
                 tasks.append({
-                    "source": src, "scene": scene.name, "luminance": float(lum), "cfa": cfa, "cfa_label": label,
-                    "demosaics": list(config.demosaics), "metrics": metrics, "optics": dict(config.optics),
-                    "sensor": dict(config.sensor), "capture": dict(config.capture), "isp": dict(config.isp),
-                    "mean_match": config.mean_match, "seed": config.seed, "details_dir": details_dir,
+                    "source": src, "scene": scene.name, "condition": cond, "base": base, "cfa": cfa,
+                    "cfa_label": label, "demosaics": list(config.demosaics), "metrics": metrics, "chain": chain,
+                    "details_dir": details_dir, "details_tag": tag,
                 })
     return sources, tasks
 
@@ -115,45 +150,71 @@ def _progress(total: int, desc: str, enabled: bool):
                 smoothing=0.1)
 
 
+def metric_columns() -> list[str]:
+    """metrics.csv's columns: the keys, one per condition axis, ``base``,
+    then metric, value, unit."""
+    from .conditions import AXES
+
+    return ["scene", "cfa", "demosaic", *AXES, "base", "metric", "value", "unit"]
+
+
 def _order_rows(rows: list[dict], config_order: dict):
+    """The rows as a table in the study's order: scene, condition (the
+    plan's order: luminance ascending, then as named), CFA, demosaic, metric."""
     import pandas as pd
 
-    df = pd.DataFrame(rows, columns=["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit"])
+    df = pd.DataFrame(rows, columns=metric_columns())
     if df.empty:
         return df
+    keys = _condition_keys(df)
+    first = {k: i for i, k in reversed(list(enumerate(keys)))}  # rows come in the plan's order
+    df["_cond"] = [first[k] for k in keys]
     for col in ("scene", "cfa", "demosaic", "metric"):
         order = config_order.get(col)
         if order:
             extra = [v for v in df[col].unique() if v not in order]
             df[col] = pd.Categorical(df[col], categories=list(order) + sorted(extra), ordered=True)
-    df = df.sort_values(["scene", "luminance", "cfa", "demosaic", "metric"], kind="stable")
+    df = df.sort_values(["scene", "luminance", "_cond", "cfa", "demosaic", "metric"], kind="stable")
     for col in ("scene", "cfa", "demosaic", "metric"):
         df[col] = df[col].astype(str)
-    return df.reset_index(drop=True)
+    return df.drop(columns="_cond").reset_index(drop=True)
 
 
-def _scored_rows(metrics, base_luminances, builtin_scenes):
-    """The rows that enter the scores: the eight metrics at the base
-    luminances, each from one scene (the built-in scene that feeds it, else
-    the first other scene)."""
-    df = metrics[metrics["metric"].isin(SCORED_METRICS) & metrics["luminance"].isin(base_luminances)]
+def _render_label(src: dict) -> str:
+    """The name of a render in timing.json: the scene, with the f-number
+    when the condition set the render's aperture."""
+    f = src.get("settings", {}).get("f_number")
+    return src["scene"] if f is None else f"{src['scene']}@f{f:g}"
+
+
+def _condition_keys(df) -> list[tuple]:
+    from .conditions import AXES
+
+    return [tuple(str(v) for v in row) for row in df[list(AXES[1:])].itertuples(index=False)]
+
+
+def _scored_rows(metrics, builtin_scenes):
+    """The rows that enter the scores: the scored metrics at the study's own
+    (base) conditions, each from one scene (the built-in scene that feeds
+    it, else the first other scene)."""
+    import pandas as pd
+
+    df = metrics[metrics["metric"].isin(SCORED_METRICS) & metrics["base"].astype(bool)]
     keep = []
     for name, group in df.groupby("metric", sort=False):
         scenes = list(dict.fromkeys(group["scene"]))
         pick = next((s for s in scenes if s in builtin_scenes), scenes[0])
         keep.append(group[group["scene"] == pick])
-    import pandas as pd
-
     return pd.concat(keep).reset_index(drop=True) if keep else df
 
 
-def write_tables(out_dir: Path, metrics, *, ranges: dict, clip: bool, base_luminances, builtin_scenes):
+def write_tables(out_dir: Path, metrics, *, ranges: dict, clip: bool, builtin_scenes):
     """Write metrics.csv and scores.csv atomically; returns the scores."""
     from .scoring import score
 
     with atomic_output(out_dir / "metrics.csv") as tmp:
         metrics.to_csv(tmp, index=False, float_format="%.10g")
-    scored = _scored_rows(metrics, base_luminances, builtin_scenes)
+    scored = _scored_rows(metrics, builtin_scenes)
     scores = score(scored, ranges, clip=clip) if len(scored) else scored
     with atomic_output(out_dir / "scores.csv") as tmp:
         scores.to_csv(tmp, index=False, float_format="%.10g")
@@ -225,14 +286,15 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         # reached leaves nothing behind).
         work.mkdir(exist_ok=True)
         with atomic_output(out / "config.json") as tmp:
-            tmp.write_text(json.dumps(config.to_dict(), indent=1, default=str))
+            tmp.write_text(json.dumps({**config.to_dict(), "base_condition": config.base_condition().to_dict()},
+                                      indent=1, default=str))
         log(f"study {config.name!r}: {len(config.scenes)} scene(s), {len(config.cfas)} CFA(s), "
             f"{len(config.demosaics)} demosaic(s); {len(tasks)} evaluation task(s)"
             + (f", {reused} already done" if reused else "") + f"; running on {executor.description}")
         t = time.perf_counter()
 
         def got_render(src, summary):
-            render_info[src["scene"]] = summary
+            render_info[_render_label(src)] = summary
 
         need_render = sources if todo else []
         # Locally, renders run one at a time in this process with every core
@@ -269,11 +331,11 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     }
     metrics = _order_rows(rows, order)
     if not render_info:  # everything was reused: the chirp's geometry for the MSP range
-        render_info = {s["scene"]: render_task(s) for s in sources if s["scene"] == "chirp"}
+        render_info = {_render_label(s): render_task(s) for s in sources if s["scene"] == "chirp"}
     ranges = _study_ranges(config, render_info)
     builtin = {s.name for s in config.scenes if s.file is None}
     scores = write_tables(out, metrics, ranges=ranges, clip=config.clip_scores,
-                          base_luminances=config.luminances, builtin_scenes=builtin)
+                          builtin_scenes=builtin)
     with atomic_output(out / "ranges.json") as tmp:
         tmp.write_text(json.dumps({k: _range_pair(v) for k, v in ranges.items()}, indent=1))
 
@@ -323,7 +385,7 @@ def _write_failures(out: Path, failures: list[dict], log) -> None:
         pd.DataFrame(failures).to_csv(tmp, index=False)
     log(f"warning: {len(failures)} metric value(s) could not be measured; see {target}")
     for f in failures[:5]:
-        log(f"  {f['scene']}/{f['cfa']}/{f['demosaic']}/L{f['luminance']:g} {f['metric']}: {f['error']}")
+        log(f"  {f['scene']}/{f['cfa']}/{f['demosaic']}/L{float(f.get('luminance', 0)):g} {f['metric']}: {f['error']}")
 
 
 def _range_pair(r) -> list[float]:
@@ -353,6 +415,7 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
     ``metrics.csv``; returns the table.
     """
     from .. import io
+    from .chain import ChainSettings
     from .config import IMAGE_METRICS
     from .executors import make_executor
 
@@ -364,6 +427,7 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
     if not exrs:
         raise CfaMitsubaError(f"--renders: no .exr files in {str(rdir)!r}")
     out = check_writable_dir(out_dir)
+    chain = ChainSettings()
     tasks = []
     for exr in exrs:
         img = io.read_spectral_exr(exr)
@@ -374,9 +438,9 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
             level = float(lum) if lum is not None else float(meta.get("luminance_cd_m2") or 100.0)
             for cfa in cfas:
                 tasks.append({
-                    "source": {"kind": "exr", "path": str(exr.resolve())}, "scene": scene, "luminance": level,
-                    "cfa": cfa, "cfa_label": _cfa_label(cfa), "demosaics": list(demosaics), "metrics": metrics,
-                    "optics": {}, "sensor": {}, "capture": {}, "isp": {}, "mean_match": True, "seed": seed,
+                    "source": {"kind": "exr", "path": str(exr.resolve())}, "scene": scene,
+                    "condition": chain.base_condition(luminance=level, seed=seed), "cfa": cfa,
+                    "cfa_label": _cfa_label(cfa), "demosaics": list(demosaics), "metrics": metrics, "chain": chain,
                     "details_dir": None,
                 })
     rows, failures = [], []

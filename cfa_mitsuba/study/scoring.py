@@ -89,34 +89,39 @@ CHIRP_SAMPLES_PER_DEGREE = 25.0
 
 def default_ranges(*, chirp_samples_per_degree: float = CHIRP_SAMPLES_PER_DEGREE,
                    pixel_pitch_um: float | None = None) -> dict[str, ScoreRange]:
-    """Eq. 8's ranges for a study's geometry.
+    """Eq. 8's ranges for a study's geometry, from the metric records
+    (:data:`cfa_mitsuba.metrics.METRICS`, ``score_range``).
 
-    The paper's values, except:
+    The paper's values, except where a record's ``range_scaling`` says:
 
-    - ``moire``: its 20..150 is a pixel position on its chirp; ours is in true
-      cycles per degree, :func:`msp_range_cpd` at the chirp camera image's
-      samples per degree (default 25: 1.0..7.5 cy/deg);
-    - ``mtf``: 30..110 cy/mm as the paper (its 2.2 um pitch); with
-      ``pixel_pitch_um`` the range is moved to that pitch so that the same
-      cycles per pixel (0.066..0.242) score the same.
+    - ``moire`` (``'chirp_cy_px'``): the paper's 20..150 is a pixel position
+      on its chirp; ours is in true cycles per degree, :func:`msp_range_cpd`
+      at the chirp camera image's samples per degree (default 25: 1.0..7.5
+      cy/deg);
+    - ``mtf`` (``'pixel_pitch'``): 30..110 cy/mm as the paper (its 2.2 um
+      pitch); with ``pixel_pitch_um`` the range is moved to that pitch so
+      that the same cycles per pixel (0.066..0.242) score the same.
 
     The dE ranges apply to either dE formula (the paper's numbers).
     """
-    mtf = ScoreRange(30.0, 110.0, ("cy/mm",))
-    if pixel_pitch_um is not None:
-        require(np.isfinite(pixel_pitch_um) and pixel_pitch_um > 0, f"pixel pitch must be positive, got {pixel_pitch_um}")
-        k = PAPER_PIXEL_PITCH_UM / float(pixel_pitch_um)
-        mtf = ScoreRange(30.0 * k, 110.0 * k, ("cy/mm",))
-    return {
-        "delta-e": ScoreRange(6.0, 2.2, ("dE00", "dE76")),
-        "scielab": ScoreRange(9.5, 2.5, ("dE00", "dE76")),
-        "ssim": ScoreRange(0.0, 1.0, ("",)),
-        "mtf": mtf,
-        "moire": msp_range_cpd(chirp_samples_per_degree),
-        "achromatic": ScoreRange(1.0, 0.5, ("L*",)),
-        "mdsi": ScoreRange(0.5, 0.0, ("",)),
-        "haarpsi": ScoreRange(0.0, 1.0, ("",)),
-    }
+    from ..metrics import METRICS
+
+    out = {}
+    for r in METRICS.values():
+        if not r.scored:
+            continue
+        worst, best = r.score_range
+        units = tuple(r.range_units or (r.unit,))
+        if r.range_scaling == "chirp_cy_px":
+            out[r.name] = msp_range_cpd(chirp_samples_per_degree, worst_cy_px=worst, best_cy_px=best)
+            continue
+        if r.range_scaling == "pixel_pitch" and pixel_pitch_um is not None:
+            require(np.isfinite(pixel_pitch_um) and pixel_pitch_um > 0,
+                    f"pixel pitch must be positive, got {pixel_pitch_um}")
+            k = PAPER_PIXEL_PITCH_UM / float(pixel_pitch_um)
+            worst, best = worst * k, best * k
+        out[r.name] = ScoreRange(worst, best, units)
+    return out
 
 
 #: :func:`default_ranges` for our default renders (chirp 25 px/deg; MTF50 in

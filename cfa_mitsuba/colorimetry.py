@@ -1,0 +1,240 @@
+"""The colour maths of every stage, in one module: sRGB code values, linear
+RGB, CIE XYZ, CIELAB, chromaticity, the CIE 1976 / CIEDE2000 colour
+differences and the one sRGB encoding used for metrics, previews, thumbnails
+and the processed images (a shared leaf: it imports no stage).
+
+The sRGB <-> XYZ conversion is IEC 61966-2-1 with its 4-digit matrix and the
+white point given by the matrix's row sums, (95.05, 100, 108.9): the
+convention ISETCam's reference values were produced with
+(shared/reference/README.md, s. 3).  The transfer functions, CIELAB and the
+colour differences come from colour-science (exact CIE constants
+216/24389 and 24389/27; ISETCam under Octave uses the rounded 0.008856 /
+7.787, a 2e-7 relative difference).
+
+XYZ here may be on any absolute scale (our camera images have Y in cd/m^2);
+CIELAB is always taken relative to a white point given on the same scale.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "SRGB_TO_XYZ",
+    "XYZ_TO_SRGB",
+    "SRGB_WHITE_XYZ",
+    "RGB2GRAY_WEIGHTS",
+    "srgb8_to_srgb",
+    "srgb_to_linear",
+    "linear_to_srgb",
+    "linear_to_xyz",
+    "xyz_to_linear",
+    "srgb8_to_xyz",
+    "xyz_to_srgb8",
+    "xyz_to_lab",
+    "xyz_to_xy",
+    "lightness",
+    "delta_e_1976",
+    "delta_e_2000",
+    "rgb_to_gray",
+    "xyz_to_srgb",
+    "delta_e00",
+]
+
+import numpy as np
+
+from .errors import require, require_finite
+
+#: IEC 61966-2-1 linear sRGB -> XYZ (Y of white = 1), the standard's 4 digits.
+SRGB_TO_XYZ = np.array([
+    [0.4124, 0.3576, 0.1805],
+    [0.2126, 0.7152, 0.0722],
+    [0.0193, 0.1192, 0.9505],
+])
+XYZ_TO_SRGB = np.linalg.inv(SRGB_TO_XYZ)
+#: The white of that matrix on the 0..100 scale: 100 x row sums = (95.05, 100, 108.9).
+SRGB_WHITE_XYZ = 100.0 * SRGB_TO_XYZ.sum(axis=1)
+#: MATLAB ``rgb2gray`` weights, unrounded (reference README s. 3).
+RGB2GRAY_WEIGHTS = np.array([0.298936021293775, 0.587043074451121, 0.114020904255103])
+
+for _a in (SRGB_TO_XYZ, XYZ_TO_SRGB, SRGB_WHITE_XYZ, RGB2GRAY_WEIGHTS):
+    _a.flags.writeable = False
+
+
+def as_white(white_xyz) -> np.ndarray:
+    """A white point (Xw, Yw, Zw), finite and positive."""
+    w = require_finite(white_xyz, "white point").reshape(-1)
+    require(w.size == 3, f"white point must have 3 values (X, Y, Z), got {w.size}")
+    require(bool(np.all(w > 0)), f"white point must be positive, got {w.tolist()}")
+    return w
+
+
+def _colour():
+    import warnings
+
+    # colour-science warns at import about optional packages it does not need here.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        import colour
+
+    return colour
+
+
+def srgb8_to_srgb(codes) -> np.ndarray:
+    """8-bit sRGB code values (0..255) to encoded sRGB in 0..1."""
+    return np.asarray(codes, dtype=np.float64) / 255.0
+
+
+def srgb_to_linear(srgb) -> np.ndarray:
+    """IEC 61966-2-1 decoding (EOTF; 0.04045, 12.92, 2.4): encoded 0..1 -> linear 0..1.
+
+    Examples
+    --------
+    >>> float(srgb_to_linear(0.5))  # doctest: +ELLIPSIS
+    0.2140...
+    """
+    colour = _colour()
+
+    return np.asarray(colour.models.eotf_sRGB(np.asarray(srgb, dtype=np.float64)), dtype=np.float64)
+
+
+def linear_to_srgb(linear) -> np.ndarray:
+    """IEC 61966-2-1 encoding (inverse EOTF): linear 0..1 -> encoded 0..1 (not clipped)."""
+    colour = _colour()
+
+    return np.asarray(colour.models.eotf_inverse_sRGB(np.asarray(linear, dtype=np.float64)), dtype=np.float64)
+
+
+def linear_to_xyz(rgb, *, scale: float = 100.0) -> np.ndarray:
+    """Linear sRGB (white = 1) to XYZ with the 4-digit matrix; white Y = ``scale``."""
+    return scale * np.asarray(rgb, dtype=np.float64) @ SRGB_TO_XYZ.T
+
+
+def xyz_to_linear(xyz, *, scale: float = 100.0) -> np.ndarray:
+    """XYZ (white Y = ``scale``) to linear sRGB (white = 1), not clipped."""
+    return (np.asarray(xyz, dtype=np.float64) / scale) @ XYZ_TO_SRGB.T
+
+
+def srgb8_to_xyz(codes, *, scale: float = 100.0) -> np.ndarray:
+    """8-bit sRGB codes to XYZ (white (95.05, 100, 108.9) x ``scale`` / 100).
+
+    Examples
+    --------
+    >>> srgb8_to_xyz([255, 255, 255]).round(4).tolist()
+    [95.05, 100.0, 108.9]
+    """
+    return linear_to_xyz(srgb_to_linear(srgb8_to_srgb(codes)), scale=scale)
+
+
+def xyz_to_srgb(xyz, white_xyz, *, adaptation: str | None = None) -> np.ndarray:
+    """Absolute XYZ to encoded sRGB in 0..1: the project's one sRGB encoding.
+
+    The white's luminance ``white_xyz[1]`` maps to 1; linear values (the
+    4-digit IEC 61966-2-1 matrix) are clipped to 0..1 before encoding.
+    ``adaptation`` None: no chromatic adaptation (the metrics' convention,
+    meant for D65 scenes as in the paper, and ISETCam's); ``'Bradford'`` (or
+    any colour-science transform name): the white's chromaticity is first
+    adapted to sRGB's D65, so a scene under another light shows its white as
+    white (previews, thumbnails, processed images).
+
+    Examples
+    --------
+    >>> xyz_to_srgb([95.05, 100.0, 108.9], [95.05, 100.0, 108.9]).round(6).tolist()
+    [1.0, 1.0, 1.0]
+    """
+    w = as_white(white_xyz)
+    xyz = np.asarray(xyz, dtype=np.float64)
+    if adaptation is not None:
+        colour = _colour()
+        d65 = SRGB_WHITE_XYZ / SRGB_WHITE_XYZ[1]
+        xyz = w[1] * colour.adaptation.chromatic_adaptation_VonKries(xyz / w[1], w / w[1], d65, transform=adaptation)
+    lin = np.clip(xyz_to_linear(xyz, scale=w[1]), 0.0, 1.0)
+    return linear_to_srgb(lin)
+
+
+def xyz_to_srgb8(xyz, white_xyz, *, quantize: bool = True) -> np.ndarray:
+    """Absolute XYZ to 8-bit sRGB code values (float64, 0..255):
+    ``255 x`` :func:`xyz_to_srgb` (no adaptation), rounded when ``quantize``
+    (an 8-bit image, as ISETCam's SSIM sees it).
+
+    Examples
+    --------
+    >>> xyz_to_srgb8([[20.0, 21.0, 22.0]], [95.05, 100.0, 108.9]).tolist()
+    [[128.0, 126.0, 124.0]]
+    """
+    codes = 255.0 * xyz_to_srgb(xyz, white_xyz)
+    return np.round(codes) if quantize else codes
+
+
+def xyz_to_lab(xyz, white_xyz, *, constants: str = "cie") -> np.ndarray:
+    """CIE 1976 L*a*b* of XYZ relative to ``white_xyz`` (same scale as ``xyz``).
+
+    ``constants``: ``'cie'`` (default; CIE 015 exact 216/24389 and 24389/27,
+    via colour-science) or ``'isetcam'`` (the rounded 0.008856 / 7.787 / 903.3
+    of ISETCam's ``ieXYZ2LAB`` fallback, to reproduce its numbers; the two
+    differ only for colours darker than about L* = 8).
+
+    Examples
+    --------
+    >>> xyz_to_lab([95.05, 100.0, 108.9], [95.05, 100.0, 108.9]).round(10).tolist()
+    [100.0, 0.0, 0.0]
+    """
+    colour = _colour()
+
+    require(constants in ("cie", "isetcam"), f"unknown CIELAB constants {constants!r} (expected 'cie' or 'isetcam')")
+    w = as_white(white_xyz)
+    xyz = np.asarray(xyz, dtype=np.float64)
+    if constants == "isetcam":
+        t = xyz / w
+        small = t <= 0.008856
+        f = np.where(small, 7.787 * t + 16.0 / 116.0, np.cbrt(np.where(small, 1.0, t)))
+        ty = t[..., 1]
+        lum = np.where(ty > 0.008856, 116.0 * f[..., 1] - 16.0, 903.3 * ty)
+        return np.stack([lum, 500.0 * (f[..., 0] - f[..., 1]), 200.0 * (f[..., 1] - f[..., 2])], axis=-1)
+    with colour.utilities.domain_range_scale("reference"):
+        return np.asarray(colour.XYZ_to_Lab(xyz / w[1], illuminant=colour.XYZ_to_xy(w / w[1])), dtype=np.float64)
+
+
+def lightness(y, white_y: float) -> np.ndarray:
+    """CIE 1976 L* of luminance ``y`` relative to the white's ``white_y``."""
+    colour = _colour()
+
+    require(white_y > 0, f"white luminance must be positive, got {white_y}")
+    with colour.utilities.domain_range_scale("reference"):
+        return np.asarray(colour.colorimetry.lightness_CIE1976(100.0 * np.asarray(y, dtype=np.float64) / white_y), dtype=np.float64)
+
+
+def xyz_to_xy(xyz) -> np.ndarray:
+    """CIE 1931 xy chromaticity (black maps to the D65-free convention of colour: (0, 0))."""
+    colour = _colour()
+
+    return np.asarray(colour.XYZ_to_xy(np.asarray(xyz, dtype=np.float64)), dtype=np.float64)
+
+
+def delta_e_1976(lab1, lab2) -> np.ndarray:
+    """CIE 1976 colour difference: Euclidean distance in L*a*b* (the paper's dE*ab)."""
+    d = np.asarray(lab1, dtype=np.float64) - np.asarray(lab2, dtype=np.float64)
+    return np.sqrt(np.sum(d * d, axis=-1))
+
+
+def delta_e_2000(lab1, lab2) -> np.ndarray:
+    """CIEDE2000 (Sharma, Wu & Dalal 2005; kL = kC = kH = 1), via colour-science.
+
+    Examples
+    --------
+    >>> round(float(delta_e_2000([50, 2.6772, -79.7751], [50, 0, -82.7485])), 4)
+    2.0425
+    """
+    colour = _colour()
+
+    return np.asarray(colour.delta_E(np.asarray(lab1, dtype=np.float64), np.asarray(lab2, dtype=np.float64),
+                                     method="CIE 2000"), dtype=np.float64)
+
+
+def rgb_to_gray(rgb) -> np.ndarray:
+    """Luma with MATLAB's ``rgb2gray`` weights, unrounded (ISETCam's SSIM input)."""
+    return np.asarray(rgb, dtype=np.float64) @ RGB2GRAY_WEIGHTS
+
+
+def delta_e00(xyz_a, xyz_b, white_xyz) -> np.ndarray:
+    """CIEDE2000 between two absolute XYZ arrays (..., 3), CIELAB relative to
+    ``white_xyz`` (same scale): :func:`delta_e_2000` of :func:`xyz_to_lab`."""
+    return delta_e_2000(xyz_to_lab(xyz_a, white_xyz), xyz_to_lab(xyz_b, white_xyz))

@@ -1,0 +1,223 @@
+"""The camera chain, wired once: scene radiance + condition -> optical image
+-> raw mosaic -> processed image -> metrics, against the ideal XYZ sensor.
+
+The study's evaluation tasks, the convergence study and the benchmarks all
+run through :class:`CameraChain`; settings travel as frozen dataclasses
+(:class:`ChainSettings`, :class:`~.conditions.Condition`).
+
+The optical image does not depend on the CFA or the demosaic, so a chain
+computes it once per (scene, optics-relevant condition) and keeps it, with
+the ideal sensor's image per luminance and exposure, for every CFA and
+demosaic evaluated in the same process (:class:`_Memo`, a small LRU: a
+puppy-sized optical image is about 0.2 GB).
+"""
+
+from __future__ import annotations
+
+__all__ = ["ChainSettings", "CameraChain", "Evaluation"]
+
+import os
+import time
+from collections import OrderedDict
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .conditions import Condition
+
+#: Set to 1 to recompute the optical image for every capture (what the
+#: study did before the chain shared it): for benchmarks/bench_study.py only.
+NO_MEMO_ENV = "CFA_MITSUBA_NO_OPTICS_MEMO"
+
+
+@dataclass(frozen=True)
+class ChainSettings:
+    """Everything after the render that is not a study axis.
+
+    ``optics`` and ``sensor`` are :class:`~cfa_mitsuba.optics.OpticsParams`
+    and :class:`~cfa_mitsuba.sensor.params.SensorParams` (their f-number,
+    pitch and read noise are replaced by the condition's); ``noise`` is
+    'off', 'shot' or 'all'; ``reference_luminance_cd_m2`` is where 'auto'
+    exposure is chosen; ``isp`` the processing options (white balance,
+    white preserving, pocs_iterations) as sorted (key, value) pairs;
+    ``mean_match`` scales each camera output to the ideal's mean (ISETCam).
+    """
+
+    optics: object = None
+    sensor: object = None
+    noise: str = "all"
+    reference_luminance_cd_m2: float = 100.0
+    isp: tuple = ()
+    mean_match: bool = True
+
+    def __post_init__(self):
+        from ..optics import OpticsParams
+        from ..sensor.params import SensorParams
+
+        if self.optics is None:
+            object.__setattr__(self, "optics", OpticsParams())
+        if self.sensor is None:
+            object.__setattr__(self, "sensor", SensorParams())
+        if isinstance(self.isp, dict):
+            object.__setattr__(self, "isp", tuple(sorted(self.isp.items())))
+
+    def base_condition(self, *, luminance: float = 100.0, exposure="auto", seed: int = 0) -> Condition:
+        """The condition these settings describe (optics f-number, sensor
+        pitch and read noise) at ``luminance``."""
+        return Condition(luminance=float(luminance), f_number=self.optics.f_number,
+                         pixel_pitch_um=self.sensor.pixel_pitch_um, exposure=exposure,
+                         read_noise_e=self.sensor.read_noise_e, seed=int(seed))
+
+    def for_condition(self, cond: Condition):
+        """(OpticsParams, SensorParams) with the condition's values applied."""
+        optics = replace(self.optics, f_number=cond.f_number)
+        sensor = self.sensor.with_(pixel_pitch_um=cond.pixel_pitch_um, read_noise_e=cond.read_noise_e)
+        return optics, sensor
+
+    def isp_options(self, method: str) -> dict:
+        opts = dict(self.isp)
+        iterations = opts.pop("pocs_iterations", None)
+        if method == "pocs" and iterations is not None:
+            opts["iterations"] = iterations
+        return opts
+
+
+@dataclass
+class Evaluation:
+    """One camera output measured: the processed image, its metric results
+    and what the report's details need."""
+
+    demosaic: str
+    processed: object
+    results: dict
+    failures: list
+    mean_match_scale: float
+    timing: dict = field(default_factory=dict)
+
+
+class _Memo:
+    """A small least-recently-used map (the optical and ideal images)."""
+
+    def __init__(self, size: int):
+        self.size, self.items = size, OrderedDict()
+
+    def get(self, key, make):
+        if key in self.items:
+            self.items.move_to_end(key)
+            return self.items[key]
+        value = make()
+        self.items[key] = value
+        while len(self.items) > self.size:
+            self.items.popitem(last=False)
+        return value
+
+
+#: Per process: shared by every chain (tasks of one worker reuse it).
+_OPTICAL = _Memo(2)
+_IDEAL = _Memo(4)
+
+
+class CameraChain:
+    """The chain after the render for one set of :class:`ChainSettings`.
+
+    ``scene_key`` (any hashable, e.g. the render's cache key or a file path)
+    names a scene image so its optical image can be reused; None disables
+    reuse for that call.
+    """
+
+    def __init__(self, settings: ChainSettings | None = None):
+        self.settings = settings or ChainSettings()
+        self.timing = {"optics_s": 0.0, "capture_s": 0.0, "process_s": 0.0, "metrics_s": 0.0}
+
+    def _timed(self, stage: str, fn, *args, **kwargs):
+        t = time.perf_counter()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            self.timing[stage] += time.perf_counter() - t
+
+    def optical(self, scene_image, cond: Condition, scene_key=None):
+        """The sensor-plane irradiance of ``scene_image`` (a SpectralImage, or
+        a function returning one, called only when not already computed)
+        under ``cond``."""
+        from ..optics import compute_optics
+
+        optics, sensor = self.settings.for_condition(cond)
+
+        def make():
+            image = scene_image() if callable(scene_image) else scene_image
+            return compute_optics(image, optics, pixel_pitch_um=sensor.pixel_pitch_um,
+                                  fill_factor=sensor.fill_factor)
+
+        if scene_key is None or os.environ.get(NO_MEMO_ENV) == "1":
+            return self._timed("optics_s", make)
+        key = (scene_key, optics, sensor.pixel_pitch_um, sensor.fill_factor)
+        return self._timed("optics_s", _OPTICAL.get, key, make)
+
+    def ideal(self, oi, cond: Condition, scene_key=None):
+        """The ideal sensor's processed image (XYZ, noise off, no mosaic)."""
+        from ..isp import process
+        from ..sensor import capture_ideal
+
+        _, sensor = self.settings.for_condition(cond)
+
+        def make():
+            raw = capture_ideal(oi, luminance_cd_m2=cond.luminance, sensor=sensor, exposure_s=cond.exposure)
+            return process(raw)
+
+        if scene_key is None or os.environ.get(NO_MEMO_ENV) == "1":
+            return self._timed("optics_s", make)
+        key = (scene_key, *self.settings.for_condition(cond), cond.luminance, cond.exposure)
+        return self._timed("optics_s", _IDEAL.get, key, make)
+
+    def capture(self, oi, cfa, cond: Condition, seed: int, *, noise: str | None = None):
+        """The raw mosaic of ``cfa`` (a name, TOML path or CFA) under ``cond``
+        (``noise`` overrides the settings' noise mode)."""
+        from ..sensor import capture
+
+        _, sensor = self.settings.for_condition(cond)
+        return self._timed("capture_s", capture, oi, cfa, luminance_cd_m2=cond.luminance, exposure_s=cond.exposure,
+                           noise=noise or self.settings.noise, seed=seed, sensor=sensor,
+                           reference_luminance_cd_m2=self.settings.reference_luminance_cd_m2)
+
+    def process(self, raw, method: str, **options):
+        from ..isp import process
+
+        opts = {**self.settings.isp_options(method), **options}
+        return self._timed("process_s", process, raw, method, **opts)
+
+    def inputs(self, ideal, cam_xyz, cond: Condition):
+        """The :class:`~cfa_mitsuba.metrics.MetricInputs` of a camera output."""
+        from .. import metrics as m
+
+        geo = m.scene_geometry(ideal.meta, ideal.xyz.shape)
+        return m.MetricInputs(ideal.xyz, cam_xyz, np.asarray(ideal.white_xyz, dtype=np.float64), geometry=geo,
+                              pixel_pitch_um=cond.pixel_pitch_um)
+
+    def measure(self, ideal, processed, metric_names, cond: Condition) -> tuple[dict, list, float]:
+        """(results, failures, mean-match scale) of one processed image.
+        Raises CfaMitsubaError when the output cannot be mean-matched."""
+        from .. import metrics as m
+
+        cam, scale = processed.xyz, 1.0
+        if self.settings.mean_match:
+            cam, scale = m.mean_match(cam, ideal.xyz, return_scale=True)
+        failures: list = []
+        results = self._timed("metrics_s", m.evaluate_many, metric_names, self.inputs(ideal, cam, cond), failures)
+        return results, failures, float(scale)
+
+    def evaluate(self, scene_image, cfa, demosaics, metric_names, cond: Condition, seed: int, scene_key=None):
+        """Yield (raw, ideal, Evaluation | CfaMitsubaError) per demosaic: the whole chain for one CFA."""
+        from ..errors import CfaMitsubaError
+
+        oi = self.optical(scene_image, cond, scene_key)
+        ideal = self.ideal(oi, cond, scene_key)
+        raw = self.capture(oi, cfa, cond, seed)
+        for method in demosaics:
+            try:
+                out = self.process(raw, method)
+                results, failures, scale = self.measure(ideal, out, metric_names, cond)
+            except CfaMitsubaError as exc:
+                yield raw, ideal, method, exc
+                continue
+            yield raw, ideal, method, Evaluation(method, out, results, failures, scale)

@@ -1,0 +1,143 @@
+"""The house rules, checked on the source (ast), not by importing it:
+
+- no import cycle anywhere in the package (imports inside functions count:
+  a cycle hidden in a function is still a cycle);
+- data flows one way: render -> optics -> sensor -> isp -> metrics -> study
+  -> report (-> design), commands on top; io, spectra, values, colorimetry,
+  errors and the version are shared leaves that import no stage;
+- no source file over 500 lines (package, tests, benchmarks).
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+PACKAGE = REPO / "cfa_mitsuba"
+
+#: Stage order; a module may import its own stage, an earlier one, or a leaf.
+STAGES = {"render": 1, "optics": 2, "sensor": 3, "isp": 4, "metrics": 5, "study": 6, "report": 7, "design": 8,
+          "commands": 9, "cli": 9, "__main__": 9}
+LEAVES = {"errors", "spectra", "values", "colorimetry", "_version", "io", "data"}
+
+
+def _module_name(path: Path) -> str:
+    rel = path.relative_to(REPO).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def _modules() -> dict[str, Path]:
+    return {_module_name(p): p for p in PACKAGE.rglob("*.py")}
+
+
+def _resolve(mod: str, is_pkg: bool, node: ast.ImportFrom) -> str:
+    if node.level == 0:
+        return node.module or ""
+    base = mod.split(".") if is_pkg else mod.split(".")[:-1]
+    base = base[: len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def import_graph(modules: dict[str, Path]) -> dict[str, set[str]]:
+    """{module: modules it imports} inside the package.  ``from X import Y``
+    is an edge to X.Y when that is a module, else to X; the implicit import
+    of parent packages is not an edge (every submodule would otherwise form a
+    cycle with its package's ``__init__``)."""
+    graph: dict[str, set[str]] = {m: set() for m in modules}
+    for mod, path in modules.items():
+        is_pkg = path.name == "__init__.py"
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            targets = []
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                base = _resolve(mod, is_pkg, node)
+                for a in node.names:
+                    full = f"{base}.{a.name}"
+                    targets.append(full if full in modules else base)
+            for t in targets:
+                if t in modules and t != mod:
+                    graph[mod].add(t)
+    return graph
+
+
+def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    """One import cycle as a list of modules, or None (iterative DFS)."""
+    state: dict[str, int] = {}
+    for start in sorted(graph):
+        if state.get(start):
+            continue
+        stack = [(start, iter(sorted(graph[start])))]
+        path = [start]
+        state[start] = 1
+        while stack:
+            node, children = stack[-1]
+            child = next(children, None)
+            if child is None:
+                state[node] = 2
+                stack.pop()
+                path.pop()
+            elif state.get(child) == 1:
+                return path[path.index(child):] + [child]
+            elif not state.get(child):
+                state[child] = 1
+                path.append(child)
+                stack.append((child, iter(sorted(graph[child]))))
+    return None
+
+
+def _stage(mod: str):
+    parts = mod.split(".")
+    if len(parts) < 2:
+        return None  # the package root (lazy attribute access only)
+    top = parts[1]
+    if top in LEAVES:
+        return 0
+    return STAGES.get(top)
+
+
+def test_the_walker_finds_a_planted_cycle_and_a_backward_import():
+    g = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": set()}
+    assert find_cycle(g) == ["a", "b", "c", "a"]
+    assert find_cycle({"a": {"b"}, "b": set()}) is None
+    # the resolver maps relative imports as Python does
+    node = ast.parse("from ..metrics import colour").body[0]
+    assert _resolve("cfa_mitsuba.study.tasks", False, node) == "cfa_mitsuba.metrics"
+    node = ast.parse("from . import records").body[0]
+    assert _resolve("cfa_mitsuba.metrics", True, node) == "cfa_mitsuba.metrics"
+    assert _stage("cfa_mitsuba.study.tasks") > _stage("cfa_mitsuba.metrics.ssim") > _stage("cfa_mitsuba.io.exr")
+
+
+def test_no_import_cycle():
+    graph = import_graph(_modules())
+    assert len(graph) > 50
+    cycle = find_cycle(graph)
+    assert cycle is None, "import cycle: " + " -> ".join(cycle)
+
+
+def test_no_stage_imports_a_later_one():
+    bad = []
+    for mod, targets in import_graph(_modules()).items():
+        mine = _stage(mod)
+        if mine is None:
+            continue
+        for t in targets:
+            theirs = _stage(t)
+            if theirs is None:
+                bad.append(f"{mod} -> {t} (a module outside the stage map)")
+            elif theirs > mine or (mine == 0 and theirs != 0):
+                bad.append(f"{mod} -> {t}")
+    assert not bad, "backward stage imports:\n" + "\n".join(sorted(bad))
+
+
+@pytest.mark.parametrize("folder", ["cfa_mitsuba", "tests", "benchmarks"])
+def test_no_source_file_over_500_lines(folder):
+    long = [(str(p.relative_to(REPO)), n) for p in (REPO / folder).rglob("*.py")
+            if (n := len(p.read_text().splitlines())) > 500]
+    assert not long, f"files over 500 lines: {long}"
