@@ -162,3 +162,25 @@ def cfa_legend(fig, styles: dict, cfas, *, extra=(), ncol: int | None = None, to
     H = fig.get_figheight()
     fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 1.0 - top_in / H), ncol=ncol or min(n, 7),
                handlelength=2.4, columnspacing=1.2, borderaxespad=0.0)
+
+
+#: What each chart-fed metric needs, for the note of a figure the study did not run.
+_NOT_RUN = {
+    "delta-e": "the ColorChecker (macbeth: ΔE00, Table 1, Figs 8-9)",
+    "mtf": "the slanted edge (MTF50, Figs 6, 11)",
+    "moire": "the chirp (MSP, Fig 13)",
+    "achromatic": "the gray bar (AR error, Fig 14)",
+}
+
+
+def no_details(section, title, res, metric, what):
+    """The Absent note of a detail figure: the study ran no scene for
+    ``metric``, or its details files are missing."""
+    from .style import metric_info
+
+    scene = res.scene_for(metric)
+    if scene is None:
+        return Absent(section, title, _NOT_RUN.get(metric, f"a scene for {metric_info(metric).short}"),
+                      not_in_study=True)
+    return Absent(section, title, f"'{metric}' was measured on {scene!r} but its details "
+                  f"(details/{scene}/<cfa>/<demosaic>/L*.json) are missing: rerun the study to rebuild them")

@@ -132,6 +132,19 @@ class Results:
         rec = d.get(metric) if isinstance(d, dict) else None
         return rec if isinstance(rec, dict) else None
 
+    def detail_pairs(self, metric: str, lum: float):
+        """[(cfa, demosaic, detail record)] of ``metric`` at ``lum`` in study order."""
+        scene = self.scene_for(metric)
+        out = []
+        if scene is None:
+            return scene, out
+        for d in self.demosaics:
+            for c in self.cfas:
+                rec = self.metric_detail(metric, scene, c, d, lum)
+                if rec is not None:
+                    out.append((c, d, rec))
+        return scene, out
+
     def scielab_map(self, scene: str, cfa: str, demosaic: str, luminance: float):
         p = self.detail_path(scene, cfa, demosaic, luminance, ".scielab.npy")
         try:
