@@ -1,7 +1,11 @@
 """Shared test fixtures.
 
-Renders go to one cache per test session (shared by the xdist workers, safe
-because cache writes are atomic), never to the user's ~/.cache.
+Renders go to a fresh cache for each test run (shared by that run's xdist
+workers, safe because cache writes are atomic), never to the user's
+~/.cache nor to a cache that a previous run or another checkout filled: a
+render that a code or data change should have invalidated cannot pass on a
+warm cache.  ``CFA_MITSUBA_TEST_CACHE=DIR`` reuses DIR on purpose (a
+developer's quick reruns).
 """
 
 from __future__ import annotations
@@ -17,11 +21,17 @@ REPO = Path(__file__).resolve().parents[1]
 REFERENCE = REPO.parent / "shared" / "reference"
 
 
+@pytest.hookimpl(trylast=True)  # after the tmp_path plugin has set up its factory
 def pytest_configure(config):
-    if "CFA_MITSUBA_CACHE" not in os.environ:
-        factory = config._tmp_path_factory if hasattr(config, "_tmp_path_factory") else None
-        base = Path(factory.getbasetemp()).parent if factory else Path("/tmp")
-        os.environ["CFA_MITSUBA_CACHE"] = str(base / "cfa-mitsuba-test-cache")
+    if hasattr(config, "workerinput"):
+        return  # an xdist worker: the controller set the cache before starting it
+    chosen = os.environ.get("CFA_MITSUBA_TEST_CACHE", "").strip()
+    if chosen:
+        os.environ["CFA_MITSUBA_CACHE"] = chosen
+        return
+    # this run's own temporary directory (pytest-of-USER/pytest-N: new for every run)
+    base = Path(config._tmp_path_factory.getbasetemp())
+    os.environ["CFA_MITSUBA_CACHE"] = str(base / "cfa-mitsuba-test-cache")
 
 
 @pytest.fixture(scope="session")

@@ -141,3 +141,17 @@ def test_no_source_file_over_500_lines(folder):
     long = [(str(p.relative_to(REPO)), n) for p in (REPO / folder).rglob("*.py")
             if (n := len(p.read_text().splitlines())) > 500]
     assert not long, f"files over 500 lines: {long}"
+
+
+def test_the_render_cache_of_this_run_is_its_own():
+    """conftest points the render cache at this run's temporary directory
+    (fresh every run), unless CFA_MITSUBA_TEST_CACHE asks for another."""
+    import os
+
+    cache = Path(os.environ["CFA_MITSUBA_CACHE"])
+    if os.environ.get("CFA_MITSUBA_TEST_CACHE"):
+        assert cache == Path(os.environ["CFA_MITSUBA_TEST_CACHE"].strip())
+        return
+    assert cache.name == "cfa-mitsuba-test-cache"
+    assert cache.parent.name.startswith("pytest-") and cache.parent.name[len("pytest-"):].isdigit(), cache
+    assert cache.parent != Path.home() / ".cache"

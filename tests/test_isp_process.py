@@ -171,8 +171,12 @@ def test_cli_writes_png_exr_npz(cli, raw_file, tmp_path):
         assert set(z.files) == {"xyz", "srgb", "white_xyz", "meta"}
         assert np.allclose(z["xyz"], exr.data, rtol=1e-6, atol=1e-4)  # EXR is float32
         assert np.allclose(z["white_xyz"][1], 100.0)
-        # 0.2 / 0.7 grey checks on the absolute scale: Y = 20 and 70 cd/m^2 away from the edges
-        assert abs(np.median(z["xyz"][..., 1]) - 45.0) < 25.5
+        # 0.2 / 0.7 grey checks on the absolute scale: Y = 20 and 70 cd/m^2 inside two checks
+        # away from the image border (measured 17.9 and 70.2 with POCS at 4 iterations on rgbw1:
+        # 5 x 4 px checks leave demosaicking overshoot in every pixel)
+        y = z["xyz"][..., 1]
+        assert y[5:7, 6:9].mean() == pytest.approx(20.0, abs=3.0)
+        assert y[5:7, 11:14].mean() == pytest.approx(70.0, abs=3.0)
 
 
 def test_cli_bad_input_is_one_line(cli, raw_file, tmp_path):

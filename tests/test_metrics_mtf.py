@@ -36,7 +36,7 @@ def test_orientation_and_polarity_do_not_matter(transform):
     img = {"horizontal": img.T, "mirrored": img[:, ::-1], "negative_slope_horizontal": img[::-1].T,
            "bright_left": 1.0 - img}[transform]
     r = cm.mtf(img)
-    assert float(r) == pytest.approx(MTF50_TIMES_SIGMA / 1.2, rel=0.01)
+    assert float(r) == pytest.approx(MTF50_TIMES_SIGMA / 1.2, rel=1e-3)  # measured 0.023 % off
     assert r.details["orientation"] == ("horizontal" if "horizontal" in transform else "vertical")
 
 

@@ -182,7 +182,8 @@ def test_mtf_matches_sfrmat(eid):
             if not isinstance(want, dict) or "mtf50" not in want:
                 continue
             mine = r.details["records"][rec]
-            assert mine["mtf50_cy_px"] == pytest.approx(want["mtf50"], rel=0.01), (e["variant"], rec)
+            # measured: 0.14 % at worst (the README allows 1 %); 0.3 % catches a real change
+            assert mine["mtf50_cy_px"] == pytest.approx(want["mtf50"], rel=0.003), (e["variant"], rec)
             sfr = np.interp(e["value"]["sfr_freqs"], mine["freq_cy_px"], mine["mtf"])
             assert np.max(np.abs(sfr - want["sfr_at"])) <= 0.01, (e["variant"], rec)
     noisy = "noise" in eid

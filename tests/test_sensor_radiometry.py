@@ -58,9 +58,11 @@ def test_uniform_field_electrons_match_the_hand_calculation():
     got = {"G": e[16, 24], "R": e[16, 25], "B": e[17, 24]}  # GRBG tile, even row/col is G
     for i, ch in enumerate("RGB"):
         print(f"{ch}: hand {expect[i]:.2f} e-, pipeline {got[ch]:.2f} e-, {100 * (got[ch] / expect[i] - 1):+.4f} %")
-        assert got[ch] == pytest.approx(expect[i], rel=0.005)
+        # measured -0.019 ... -0.026 % (relative illumination 1 - 6e-5 and the band-box photon
+        # conversion); 0.05 % catches a wrong factor anywhere in the chain
+        assert got[ch] == pytest.approx(expect[i], rel=5e-4)
     # electrons_per_radiance predicts the same electrons for any spectrum
-    np.testing.assert_allclose(raw.electrons_per_radiance @ rad, expect, rtol=0.005)
+    np.testing.assert_allclose(raw.electrons_per_radiance @ rad, expect, rtol=5e-4)
 
 
 def test_auto_exposure_on_a_uniform_field_is_exact():
