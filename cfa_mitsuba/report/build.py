@@ -22,6 +22,7 @@ _MAX_EMBED_PNG = 900_000
 
 def _figure_functions(res: Results, thumbnails: bool):
     from . import figures_detail as fd
+    from . import figures_sweep as fsw
     from . import figures_scores as fs
 
     yield fs.radar_per_demosaic
@@ -34,6 +35,11 @@ def _figure_functions(res: Results, thumbnails: bool):
     yield fd.moire_curves
     yield fd.gray_bar_profiles
     yield fs.luminance_sweep
+    for axis in res.swept_axes:
+        def by_axis(r, axis=axis):
+            return fsw.axis_sweep(r, axis)
+        by_axis.__name__ = f"axis_sweep[{axis}]"
+        yield by_axis
     if thumbnails and res.primary_luminance is not None:
         for scene in res.scenes:
             def sheet(r, scene=scene):

@@ -1,0 +1,106 @@
+"""A metric against any swept study axis (f-number, pixel pitch, exposure,
+read noise, noise seed): one figure per axis that a ``[[sweep]]`` varied,
+one row per (scene, metric), one column per demosaic, a line per CFA.
+
+Luminance has its own figure (:func:`.figures_scores.luminance_sweep`, the
+paper's sweep); here every other axis is drawn at the scores' luminance,
+the other axes held at the study's own values.
+"""
+
+from __future__ import annotations
+
+__all__ = ["axis_sweep", "axis_rows"]
+
+import numpy as np
+
+from ..study.conditions import AXES, AXIS_UNITS
+from .figure import Absent, ReportFigure, cfa_legend, legend_rows, panel_grid
+from .results import SCORED_METRICS, Results
+from .style import cfa_styles, metric_info
+
+_LABELS = {"f_number": "f-number", "pixel_pitch_um": "pixel pitch", "exposure": "exposure time",
+           "read_noise_e": "read noise", "seed": "noise seed (realisation)"}
+
+
+def axis_rows(res: Results, axis: str):
+    """The rows of metrics.csv where ``axis`` varies and every other axis but
+    luminance keeps its study value (per scene), at the primary luminance."""
+    m = res.all_metrics if res.all_metrics is not None else res.metrics
+    if axis not in m.columns:
+        return m.iloc[0:0]
+    others = [a for a in AXES[1:] if a != axis and a in m.columns]
+    base = res.metrics
+    keep = np.zeros(len(m), dtype=bool)
+    for scene, g in base.groupby("scene", sort=False):
+        ref = {a: str(g[a].iloc[0]) for a in others}
+        sel = (m["scene"] == scene).to_numpy().copy()
+        for a, v in ref.items():
+            sel &= (m[a].astype(str) == v).to_numpy()
+        keep |= sel
+    if res.primary_luminance is not None:
+        keep &= (m["luminance"] == res.primary_luminance).to_numpy()
+    return m[keep]
+
+
+def axis_sweep(res: Results, axis: str):
+    title = f"Metrics against {_LABELS.get(axis, axis)}"
+    m = axis_rows(res, axis)
+    pairs = [(s, k) for (s, k), g in m.groupby(["scene", "metric"], sort=False)
+             if g[axis].astype(str).nunique() > 1 and k in SCORED_METRICS]
+    if not pairs:
+        return Absent("sweep", title, f"a sweep of {axis} ([[sweep]] {axis} = [...])", not_in_study=True)
+    pairs.sort(key=lambda p: (SCORED_METRICS.index(p[1]), p[0]))
+    dems = [d for d in res.demosaics if d in set(m["demosaic"])]
+    cst = cfa_styles(res.cfas)
+    rows, cols = len(pairs), len(dems)
+    ncol = min(len(res.cfas), 7)
+    fig, axes = panel_grid(rows, cols, 2.7, 2.0, left=0.95, right=0.15,
+                           top=0.35 + 0.2 * legend_rows(len(res.cfas), ncol), bottom=0.5, wspace=0.15, hspace=0.35,
+                           width=6.0)
+    numeric = axis != "exposure" or not (m[axis].astype(str) == "auto").any()
+    drawn = []
+    unit = AXIS_UNITS.get(axis, "")
+    for r, (scene, metric) in enumerate(pairs):
+        info = metric_info(metric)
+        g = m[(m["scene"] == scene) & (m["metric"] == metric)]
+        levels = sorted(g[axis].astype(float).unique()) if numeric else list(dict.fromkeys(g[axis].astype(str)))
+        share = None
+        for c, d in enumerate(dems):
+            ax = axes[r * cols + c]
+            if share is not None:
+                ax.sharey(share)
+            share = share or ax
+            for cfa in res.cfas:
+                gc = g[(g["demosaic"] == d) & (g["cfa"] == cfa)]
+                if not len(gc):
+                    continue
+                x = gc[axis].astype(float) if numeric else gc[axis].astype(str).map(levels.index)
+                order = np.argsort(np.asarray(x, dtype=float))
+                st = cst[cfa]
+                ax.plot(np.asarray(x, dtype=float)[order], gc["value"].to_numpy()[order], color=st["color"],
+                        marker=st["marker"], linestyle="none" if axis == "seed" else st["linestyle"],
+                        linewidth=1.2, markersize=3.5)
+                if cfa not in drawn:
+                    drawn.append(cfa)
+            if not numeric:
+                ax.set_xticks(range(len(levels)))
+                ax.set_xticklabels(levels, fontsize=7)
+            if r == 0:
+                ax.set_title(d)
+            if r == rows - 1:
+                ax.set_xlabel(f"{_LABELS.get(axis, axis)}" + (f" ({unit})" if unit else ""))
+            if c == 0:
+                u = f" ({info.unit})" if info.unit else ""
+                better = "higher" if info.higher_better else "lower"
+                ax.set_ylabel(f"{info.short}{u}\n{scene}, {better} is better")
+            else:
+                ax.tick_params(labelleft=False)
+    cfa_legend(fig, cst, [c for c in res.cfas if c in drawn], ncol=ncol)
+    lum = f" at {res.primary_luminance:g} cd/m²" if res.primary_luminance is not None else ""
+    cap = (f"Each scored metric that a sweep measured at several values of {_LABELS.get(axis, axis)}{lum}, "
+           "every other axis at the study's own value. "
+           + ("Each point is one noise realisation of the same camera: their spread is the noise of the value."
+              if axis == "seed" else
+              "The f-number sets both the diffraction OTF and, for a 3D scene, the thin-lens defocus of its "
+              "render." if axis == "f_number" else ""))
+    return ReportFigure(f"sweep-{axis}", "sweep", title, cap, fig)
