@@ -26,6 +26,8 @@ warnings.simplefilter("ignore")
 import cfa_mitsuba as cm  # noqa: E402
 from cfa_mitsuba import spectra  # noqa: E402
 from cfa_mitsuba.isp.colour import electrons_per_radiance_of, white_response  # noqa: E402
+from cfa_mitsuba.study.chain import CameraChain, ChainSettings  # noqa: E402
+from cfa_mitsuba.study.conditions import Condition  # noqa: E402
 
 WL = spectra.DEFAULT_WAVELENGTHS
 D65 = spectra.illuminant("D65", WL)
@@ -67,8 +69,11 @@ def pipeline_table():
         r, c = divmod(k, 6)
         img[r * p:(r + 1) * p, c * p:(c + 1) * p] = refl[k] * WHITE
     scene = cm.SpectralImage(img, WL.copy(), {"white_radiance": WHITE.tolist(), "fov_deg": 5.0})
-    oi = cm.optics.compute_optics(scene)
-    ideal = cm.isp.process(cm.sensor.capture(oi, "ideal"))
+    # the study's camera chain, noise off, at the chart's own mean luminance
+    chain = CameraChain(ChainSettings(noise="off"))
+    cond = Condition(luminance=float(spectra.luminance_cd_m2(img, WL).mean()))
+    oi = chain.optical(scene, cond)
+    ideal = chain.ideal(oi, cond)
 
     def centres(x):
         m = p // 3
@@ -80,10 +85,10 @@ def pipeline_table():
     print("| CFA | " + " | ".join(f"{m} mean / max" for m in methods) + " | grey row (patches 19-24) max, bilinear |")
     print("|---|" + "---|" * len(methods) + "---|")
     for name in cm.sensor.list_cfas():
-        raw = cm.sensor.capture(oi, name, noise="off")
+        raw = chain.capture(oi, name, cond, seed=0)
         cells, grey = [], None
         for m in methods:
-            de = cm.isp.delta_e00(centres(cm.isp.process(raw, m).xyz), ref, ideal.white_xyz)
+            de = cm.colorimetry.delta_e00(centres(chain.process(raw, m).xyz), ref, ideal.white_xyz)
             cells.append(f"{de.mean():.2f} / {de.max():.2f}")
             grey = de[18:].max() if grey is None else grey
         print(f"| {name} | " + " | ".join(cells) + f" | {grey:.2f} |")
