@@ -59,10 +59,12 @@ def test_quick_study_writes_everything(quick):
 
 
 def test_quick_study_matches_stored_values(quick):
-    """Every value within its stored tolerance (4 sigma of the render noise,
-    tests/data/make_quick_expected.py says how it was measured)."""
+    """Every value of the first noise realisation within its stored tolerance
+    (4 sigma of the render noise, tests/data/make_quick_expected.py says how
+    it was measured); metrics.csv's means are checked against it below."""
     out, _, _ = quick
-    got = pd.read_csv(out / "metrics.csv")
+    every = pd.read_csv(out / "metrics_realisations.csv")
+    got = every[every["realisation"] == 0]
     exp = pd.read_csv(REPO / "tests" / "data" / "quick_expected.csv", comment="#")
     merged = exp.merge(got, on=KEYS, how="outer", suffixes=("_exp", "_got"), indicator=True)
     missing = merged[merged["_merge"] != "both"]
@@ -70,6 +72,29 @@ def test_quick_study_matches_stored_values(quick):
     dev = (merged["value_got"] - merged["value_exp"]).abs()
     bad = merged[dev > merged["tolerance"]]
     assert bad.empty, "values outside tolerance:\n" + bad[KEYS + ["value_exp", "value_got", "tolerance"]].to_string()
+
+
+def test_quick_study_means_and_intervals(quick):
+    """metrics.csv: the mean of the realisations with its 95 % t interval."""
+    from scipy.stats import t
+
+    out, _, _ = quick
+    every = pd.read_csv(out / "metrics_realisations.csv")
+    means = pd.read_csv(out / "metrics.csv")
+    assert {"value", "ci_low", "ci_high", "n"} <= set(means.columns)
+    assert (means["n"] == 3).all()
+    g = every.groupby(KEYS)["value"]
+    check = means.set_index(KEYS)
+    m, sd = g.mean(), g.std(ddof=1)
+    assert np.allclose(check.loc[m.index, "value"], m, rtol=1e-9)
+    half = t.ppf(0.975, 2) * sd / np.sqrt(3)
+    assert np.allclose(check.loc[m.index, "ci_high"] - check.loc[m.index, "value"], half, rtol=1e-6, atol=1e-12)
+    assert (means["ci_low"] <= means["value"]).all() and (means["value"] <= means["ci_high"]).all()
+    scores = pd.read_csv(out / "scores.csv")
+    for col in ("total_rank_best", "total_rank_worst", "demosaic_rank_best", "mean_score_ci_low"):
+        assert col in scores.columns
+    assert (scores["total_rank_best"] <= scores["total_rank"]).all()
+    assert (scores["total_rank"] <= scores["total_rank_worst"]).all()
 
 
 def _tasks_done(out: Path) -> int:

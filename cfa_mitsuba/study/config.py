@@ -28,6 +28,9 @@ from ..metrics import metrics_for_scene
 
 #: Metrics a user scene feeds (the image metrics of DESIGN.md), from the metric records.
 IMAGE_METRICS = metrics_for_scene("", natural=True)
+#: Noise realisations of every capture unless a config says otherwise (each
+#: value is their mean with a 95 % interval: study/intervals.py).
+DEFAULT_SEEDS = 3
 
 
 @dataclass(frozen=True)
@@ -86,6 +89,8 @@ class StudyConfig:
     mean_match: bool
     ranges: dict
     clip_scores: bool
+    seeds: int
+    range_policy: str
     output: dict
     workers: int | None
 
@@ -310,6 +315,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
     from .. import isp, render, sensor
     from ..optics import OpticsParams
     from ..sensor.params import NOISE_MODES, SensorParams
+    from .ranking import DEFAULT_POLICY, POLICIES
     from .scoring import DEFAULT_RANGES
 
     ck = _Checker(where)
@@ -317,7 +323,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
     top = {
         "name": None, "description": None, "seed": None, "scenes": None, "custom_scenes": None, "cfas": None,
         "demosaics": None, "luminances": None, "sweep": None, "render": None, "optics": None, "sensor": None,
-        "isp": None, "mean_match": None, "normalisation": None, "output": None, "workers": None,
+        "isp": None, "mean_match": None, "normalisation": None, "output": None, "workers": None, "seeds": None,
     }
     ck.table(data, "", top)
     for required in ("scenes", "cfas", "demosaics"):
@@ -329,6 +335,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
     if not isinstance(description, str):
         ck.fail("description", "must be a string")
     seed = ck.integer(data.get("seed", 0), "seed", 0)
+    seeds = ck.integer(data.get("seeds", DEFAULT_SEEDS), "seeds", 1)
     workers = data.get("workers")
     if workers is not None:
         workers = ck.integer(workers, "workers", 1)
@@ -426,8 +433,9 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
 
     # --- normalisation --------------------------------------------------
     norm = data.get("normalisation", {})
-    ck.table(norm, "normalisation", {"clip": None, "ranges": None})
+    ck.table(norm, "normalisation", {"clip": None, "ranges": None, "policy": None})
     clip = ck.boolean(norm.get("clip", True), "normalisation.clip")
+    policy = ck.string(norm.get("policy", DEFAULT_POLICY), "normalisation.policy", POLICIES)
     ranges_in = norm.get("ranges", {})
     ck.table(ranges_in, "normalisation.ranges", {m: None for m in DEFAULT_RANGES})
     ranges = {}
@@ -456,7 +464,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         name=name, description=description, path=None, seed=seed, scenes=tuple(scenes), cfas=tuple(cfas),
         demosaics=demosaics, luminances=luminances, sweeps=tuple(sweeps), render=render_common,
         optics=optics, sensor=sensor_all, capture=capture, isp=isp_opts, mean_match=mean_match,
-        ranges=ranges, clip_scores=clip, output=output, workers=workers,
+        ranges=ranges, clip_scores=clip, output=output, workers=workers, seeds=seeds, range_policy=policy,
     )
 
 

@@ -23,7 +23,7 @@ again and ends with the same ``metrics.csv`` as an uninterrupted run.
 
 from __future__ import annotations
 
-__all__ = ["StudyResult", "run_study", "plan_study", "evaluate_renders", "write_tables", "write_timing",
+__all__ = ["StudyResult", "run_study", "plan_study", "evaluate_renders", "write_timing",
            "timing_summary"]
 
 import hashlib
@@ -38,6 +38,7 @@ from ..errors import CfaMitsubaError
 from ..io import atomic_output, check_writable_dir
 from ..metrics import scored_metrics
 from .config import StudyConfig
+from .tables import mean_table, order_rows, write_tables
 from .tasks import evaluate_task, render_task
 
 #: Metrics that enter the scores (the paper's eight); other rows in
@@ -127,11 +128,12 @@ def plan_study(config: StudyConfig, details_dir: str | None) -> tuple[list[dict]
             if src not in sources:
                 sources.append(src)
             tag = cond.label(config.base_condition(cond.luminance))
-            for cfa, label in zip(config.cfas, labels):
+            for i, (cfa, label) in enumerate(zip(config.cfas, labels)):
                 tasks.append({
                     "source": src, "scene": scene.name, "condition": cond, "base": base, "cfa": cfa,
                     "cfa_label": label, "demosaics": list(config.demosaics), "metrics": metrics, "chain": chain,
-                    "details_dir": details_dir, "details_tag": tag,
+                    "details_dir": details_dir, "details_tag": tag, "realisations": config.seeds,
+                    "ideal_rows": i == 0,
                 })
     return sources, tasks
 
@@ -150,36 +152,6 @@ def _progress(total: int, desc: str, enabled: bool):
                 smoothing=0.1)
 
 
-def metric_columns() -> list[str]:
-    """metrics.csv's columns: the keys, one per condition axis, ``base``,
-    then metric, value, unit."""
-    from .conditions import AXES
-
-    return ["scene", "cfa", "demosaic", *AXES, "base", "metric", "value", "unit"]
-
-
-def _order_rows(rows: list[dict], config_order: dict):
-    """The rows as a table in the study's order: scene, condition (the
-    plan's order: luminance ascending, then as named), CFA, demosaic, metric."""
-    import pandas as pd
-
-    df = pd.DataFrame(rows, columns=metric_columns())
-    if df.empty:
-        return df
-    keys = _condition_keys(df)
-    first = {k: i for i, k in reversed(list(enumerate(keys)))}  # rows come in the plan's order
-    df["_cond"] = [first[k] for k in keys]
-    for col in ("scene", "cfa", "demosaic", "metric"):
-        order = config_order.get(col)
-        if order:
-            extra = [v for v in df[col].unique() if v not in order]
-            df[col] = pd.Categorical(df[col], categories=list(order) + sorted(extra), ordered=True)
-    df = df.sort_values(["scene", "luminance", "_cond", "cfa", "demosaic", "metric"], kind="stable")
-    for col in ("scene", "cfa", "demosaic", "metric"):
-        df[col] = df[col].astype(str)
-    return df.drop(columns="_cond").reset_index(drop=True)
-
-
 def _render_label(src: dict) -> str:
     """The name of a render in timing.json: the scene, with the f-number
     when the condition set the render's aperture."""
@@ -187,43 +159,10 @@ def _render_label(src: dict) -> str:
     return src["scene"] if f is None else f"{src['scene']}@f{f:g}"
 
 
-def _condition_keys(df) -> list[tuple]:
-    from .conditions import AXES
-
-    return [tuple(str(v) for v in row) for row in df[list(AXES[1:])].itertuples(index=False)]
-
-
-def _scored_rows(metrics, builtin_scenes):
-    """The rows that enter the scores: the scored metrics at the study's own
-    (base) conditions, each from one scene (the built-in scene that feeds
-    it, else the first other scene)."""
-    import pandas as pd
-
-    df = metrics[metrics["metric"].isin(SCORED_METRICS) & metrics["base"].astype(bool)]
-    keep = []
-    for name, group in df.groupby("metric", sort=False):
-        scenes = list(dict.fromkeys(group["scene"]))
-        pick = next((s for s in scenes if s in builtin_scenes), scenes[0])
-        keep.append(group[group["scene"] == pick])
-    return pd.concat(keep).reset_index(drop=True) if keep else df
-
-
-def write_tables(out_dir: Path, metrics, *, ranges: dict, clip: bool, builtin_scenes):
-    """Write metrics.csv and scores.csv atomically; returns the scores."""
-    from .scoring import score
-
-    with atomic_output(out_dir / "metrics.csv") as tmp:
-        metrics.to_csv(tmp, index=False, float_format="%.10g")
-    scored = _scored_rows(metrics, builtin_scenes)
-    scores = score(scored, ranges, clip=clip) if len(scored) else scored
-    with atomic_output(out_dir / "scores.csv") as tmp:
-        scores.to_csv(tmp, index=False, float_format="%.10g")
-    return scores
-
-
-def _study_ranges(config: StudyConfig, render_info: dict) -> dict:
-    """Score ranges: the paper's (scoring.default_ranges) with the MSP range
-    for this study's chirp sampling and pixel pitch, then the config's."""
+def _paper_ranges(config: StudyConfig, render_info: dict) -> dict:
+    """The paper's score ranges (scoring.default_ranges) with the MSP range
+    for this study's chirp sampling and pixel pitch (the config's own
+    ranges are applied on top of the policy's, in tables.write_tables)."""
     from .scoring import default_ranges
 
     pitch = float(config.sensor.get("pixel_pitch_um", 2.2))
@@ -232,9 +171,7 @@ def _study_ranges(config: StudyConfig, render_info: dict) -> dict:
     if chirp and chirp.get("width") and chirp.get("fov_deg"):
         k = int(chirp.get("oversample") or 1)
         kwargs["chirp_samples_per_degree"] = float(chirp["width"]) / k / float(chirp["fov_deg"])
-    ranges = dict(default_ranges(**kwargs))
-    ranges.update(config.ranges)
-    return ranges
+    return dict(default_ranges(**kwargs))
 
 
 def _run_tasks(executor, fn, items, desc, progress, on_result):
@@ -329,15 +266,17 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         "scene": [s.name for s in config.scenes], "cfa": [_cfa_label(c) for c in config.cfas],
         "demosaic": list(config.demosaics), "metric": list(SCORED_METRICS),
     }
-    metrics = _order_rows(rows, order)
+    realisations = order_rows(rows, order)
+    ideal = order_rows([r for task in tasks for r in done[_task_id(task)].get("ideal_rows", [])], order)
     if not render_info:  # everything was reused: the chirp's geometry for the MSP range
         render_info = {_render_label(s): render_task(s) for s in sources if s["scene"] == "chirp"}
-    ranges = _study_ranges(config, render_info)
     builtin = {s.name for s in config.scenes if s.file is None}
-    scores = write_tables(out, metrics, ranges=ranges, clip=config.clip_scores,
-                          builtin_scenes=builtin)
+    metrics, scores, ranges, constant = write_tables(
+        out, realisations, ideal, paper_ranges=_paper_ranges(config, render_info), overrides=dict(config.ranges),
+        policy=config.range_policy, clip=config.clip_scores, builtin_scenes=builtin)
     with atomic_output(out / "ranges.json") as tmp:
-        tmp.write_text(json.dumps({k: _range_pair(v) for k, v in ranges.items()}, indent=1))
+        tmp.write_text(json.dumps({**{k: _range_pair(v) for k, v in ranges.items()},
+                                   "_policy": config.range_policy, "_constant": constant}, indent=1))
 
     timing["phases"]["total_s"] = time.perf_counter() - t_start
     result = StudyResult(out, metrics, scores, timing, len(tasks), reused)
@@ -455,7 +394,8 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
         _run_tasks(executor, evaluate_task, tasks, "evaluate", progress, got)
     order = {"scene": [], "cfa": [_cfa_label(c) for c in cfas], "demosaic": list(demosaics),
              "metric": list(SCORED_METRICS)}
-    metrics = _order_rows(rows, order)
+    realisations = order_rows(rows, order)
+    metrics = mean_table(realisations)
     with atomic_output(out / "metrics.csv") as tmp:
         metrics.to_csv(tmp, index=False, float_format="%.10g")
     _write_failures(out, failures, log)

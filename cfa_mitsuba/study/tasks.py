@@ -37,6 +37,14 @@ def task_seed(study_seed: int, *parts) -> int:
     return int.from_bytes(hashlib.sha256(text.encode()).digest()[:4], "little")
 
 
+def realisation_seeds(study_seed: int, scene: str, cfa: str, luminance: float, n: int) -> list[int]:
+    """The noise seeds of ``n`` realisations of one capture: the first is the
+    task's own seed (:func:`task_seed`), the others add the realisation's
+    index to its identity, so adding realisations never changes the first."""
+    first = task_seed(study_seed, scene, cfa, luminance)
+    return [first] + [task_seed(study_seed, scene, cfa, luminance, i) for i in range(1, int(n))]
+
+
 #: One render at a time per process: Mitsuba's variant is process-global, and
 #: a Dask worker runs several tasks in threads of one process; each render
 #: already uses the process's whole thread budget.
@@ -137,7 +145,9 @@ def evaluate_task(task: dict) -> dict:
     ``task`` keys: ``source`` (see :func:`load_scene_image`), ``scene``,
     ``condition`` (:class:`~.conditions.Condition`), ``cfa``, ``cfa_label``,
     ``demosaics``, ``metrics``, ``chain`` (:class:`~.chain.ChainSettings`),
-    ``details_dir`` (or None), ``details_tag`` (the file stem of its details).
+    ``details_dir`` (or None), ``details_tag`` (the file stem of its details),
+    ``realisations`` (noise realisations of each capture, default 1; rows
+    carry ``realisation`` 0, 1, ...; details are kept of the first).
 
     Returns ``{"rows": [...], "timing": {...}, "failures": [...]}``: a
     metric that could not be measured on one camera output is a failure
@@ -148,40 +158,51 @@ def evaluate_task(task: dict) -> dict:
     cond = task["condition"]
     chain = CameraChain(task["chain"])
     scene_key = json.dumps(task["source"], sort_keys=True)
-    seed = task_seed(cond.seed, task["scene"], task["cfa"], cond.luminance)
     cfa_label = task.get("cfa_label", task["cfa"])
     details_dir = Path(task["details_dir"]) if task.get("details_dir") else None
     tag = task.get("details_tag") or f"L{cond.luminance:g}"
     rows, failures = [], []
     raw = ideal = None
+
     def image():
         return load_scene_image(task["source"])
 
-    for raw, ideal, method, ev in chain.evaluate(image, task["cfa"], task["demosaics"], task["metrics"], cond, seed,
-                                                 scene_key):
-        base = {"scene": task["scene"], "cfa": cfa_label, "demosaic": method,
-                **condition_columns(cond, ideal.meta), "base": bool(task.get("base", True))}
-        if not hasattr(ev, "results"):
-            # No output to measure (a channel the scene white leaves dark) or
-            # no scale for it (a black ideal interior): every metric of this
-            # output is unmeasurable.
-            failures.extend({**base, "metric": name, "error": str(ev)} for name in task["metrics"])
-            continue
-        rows.extend({**base, **r} for r in _result_rows(ev.results))
-        failures.extend({**base, **f} for f in ev.failures)
-        if details_dir is not None:
-            isp_meta = ev.processed.meta.get("isp", {})
-            extra = {
-                "mean_match_scale": ev.mean_match_scale,
-                "condition_number": isp_meta.get("condition_number"),
-                "noise_gain_xyz": isp_meta.get("noise_gain_xyz"),
-                "fit_rank": isp_meta.get("fit_rank"),
-                "exposure_s": float(raw.exposure_s),
-                "saturated_fraction": raw.meta.get("saturated_fraction"),
-                "seed": seed,
-            }
-            _save_details(details_dir / task["scene"] / safe_label(cfa_label) / method, tag, ev.results,
-                          ev.processed, extra)
+    for i, seed in enumerate(realisation_seeds(cond.seed, task["scene"], task["cfa"], cond.luminance,
+                                               int(task.get("realisations", 1)))):
+        for raw, ideal, method, ev in chain.evaluate(image, task["cfa"], task["demosaics"], task["metrics"], cond,
+                                                     seed, scene_key):
+            base = {"scene": task["scene"], "cfa": cfa_label, "demosaic": method,
+                    **condition_columns(cond, ideal.meta), "base": bool(task.get("base", True)), "realisation": i}
+            if not hasattr(ev, "results"):
+                # No output to measure (a channel the scene white leaves dark) or
+                # no scale for it (a black ideal interior): every metric of this
+                # output is unmeasurable.
+                failures.extend({**base, "metric": name, "error": str(ev)} for name in task["metrics"])
+                continue
+            rows.extend({**base, **r} for r in _result_rows(ev.results))
+            failures.extend({**base, **f} for f in ev.failures)
+            if details_dir is not None and i == 0:  # curves and thumbnails of the first realisation
+                isp_meta = ev.processed.meta.get("isp", {})
+                extra = {
+                    "mean_match_scale": ev.mean_match_scale,
+                    "condition_number": isp_meta.get("condition_number"),
+                    "noise_gain_xyz": isp_meta.get("noise_gain_xyz"),
+                    "fit_rank": isp_meta.get("fit_rank"),
+                    "exposure_s": float(raw.exposure_s),
+                    "saturated_fraction": raw.meta.get("saturated_fraction"),
+                    "seed": seed,
+                }
+                _save_details(details_dir / task["scene"] / safe_label(cfa_label) / method, tag, ev.results,
+                              ev.processed, extra)
+    ideal_rows = []
+    if task.get("ideal_rows") and ideal is not None:
+        # the ideal sensor against itself: the anchor of the 'ideal' range policy
+        from .. import metrics as m
+
+        got = m.evaluate_many(task["metrics"], chain.inputs(ideal, ideal.xyz, cond), [])
+        base = {"scene": task["scene"], "cfa": "ideal", "demosaic": "none", **condition_columns(cond, ideal.meta),
+                "base": bool(task.get("base", True)), "realisation": 0}
+        ideal_rows = [{**base, **r} for r in _result_rows(got)]
     if details_dir is not None and ideal is not None:
         ideal_dir = details_dir / task["scene"] / "ideal"
         if not (ideal_dir / f"{tag}.png").exists():
@@ -190,7 +211,7 @@ def evaluate_task(task: dict) -> dict:
             mtf_only = [n for n in task["metrics"] if n in ("mtf",)]
             ideal_results = m.evaluate_many(mtf_only, chain.inputs(ideal, ideal.xyz, cond))
             _save_details(ideal_dir, tag, ideal_results, ideal, {"white_xyz": list(map(float, ideal.white_xyz))})
-    return {"rows": rows, "timing": chain.timing, "failures": failures}
+    return {"rows": rows, "timing": chain.timing, "failures": failures, "ideal_rows": ideal_rows}
 
 
 def _result_rows(results: dict) -> list[dict]:

@@ -44,7 +44,9 @@ def run(seed: int, out: Path) -> pd.DataFrame:
     cfg = load_config(REPO / "configs" / "quick.toml")
     scenes = tuple(dataclasses.replace(s, render={**s.render, "seed": seed}) if seed else s for s in cfg.scenes)
     cfg = dataclasses.replace(cfg, scenes=scenes)
-    return run_study(cfg, out, workers=2, progress=False, log=lambda m: None).metrics
+    run_study(cfg, out, workers=2, progress=False, log=lambda m: None)
+    every = pd.read_csv(out / "metrics_realisations.csv")
+    return every[every["realisation"] == 0].reset_index(drop=True)
 
 
 def last_bit_change(reference: pd.Series, perturbations=(1, 2, 3)) -> pd.Series:
@@ -53,7 +55,7 @@ def last_bit_change(reference: pd.Series, perturbations=(1, 2, 3)) -> pd.Series:
     in this process, task by task, exactly as the study does."""
     import dataclasses
 
-    from cfa_mitsuba.study import runner, tasks
+    from cfa_mitsuba.study import chain, runner, tasks
     from cfa_mitsuba.study.config import load_config
 
     cfg = load_config(REPO / "configs" / "quick.toml")
@@ -72,13 +74,13 @@ def last_bit_change(reference: pd.Series, perturbations=(1, 2, 3)) -> pd.Series:
             return dataclasses.replace(img, data=d.astype(np.float64))
 
         tasks.load_scene_image = load
-        tasks._optical.cache_clear()
-        tasks._ideal.cache_clear()
+        chain._OPTICAL.items.clear()
+        chain._IDEAL.items.clear()
         try:
-            rows = [r for t in plan for r in tasks.evaluate_task(t)["rows"]]
+            rows = [r for t in plan for r in tasks.evaluate_task({**t, "realisations": 1})["rows"]]
         finally:
             tasks.load_scene_image = original
-        return pd.DataFrame(rows).set_index(KEYS)["value"]
+        return pd.DataFrame(rows).query("realisation == 0").set_index(KEYS)["value"]
 
     base = evaluate(0)
     same = base.reindex(reference.index)

@@ -1,0 +1,148 @@
+"""A study's tables, from the rows its tasks returned.
+
+    metrics_realisations.csv   one row per noise realisation (``realisation`` 0, 1, ...)
+    metrics.csv                one row per (scene, cfa, demosaic, condition, metric):
+                               the mean over realisations, ``ci_low``, ``ci_high`` (95 %), ``n``
+    ideal.csv                  the ideal sensor measured against itself (the anchor of
+                               the ``ideal`` range policy)
+    scores.csv                 the scored rows under the study's range policy, with
+                               score and rank intervals (:mod:`.ranking`)
+    policies.csv               for each range policy: per metric the scores clipped and
+                               whether it is constant across the CFAs, and each CFA's rank
+"""
+
+from __future__ import annotations
+
+__all__ = ["metric_columns", "order_rows", "scored_rows", "write_tables", "KEY_COLUMNS"]
+
+from pathlib import Path
+
+from ..io import atomic_output
+from ..metrics import scored_metrics
+from .conditions import AXES
+
+#: The columns that identify a value (one per condition axis included).
+KEY_COLUMNS = ["scene", "cfa", "demosaic", *AXES, "base", "metric"]
+
+
+def metric_columns(*, realisations: bool = False) -> list[str]:
+    """metrics.csv's columns: the keys, one per condition axis, ``base``,
+    the metric, its mean ``value`` with ``ci_low``, ``ci_high``, ``n``, and
+    ``unit``; per realisation: ``realisation`` and ``value``, ``unit``."""
+    if realisations:
+        return [*KEY_COLUMNS[:-1], "realisation", "metric", "value", "unit"]
+    return [*KEY_COLUMNS, "value", "ci_low", "ci_high", "n", "unit"]
+
+
+def order_rows(rows, config_order: dict, columns: list[str] | None = None):
+    """The rows as a table in the study's order: scene, condition (the
+    plan's order: luminance ascending, then as named), CFA, demosaic,
+    (realisation), metric."""
+    import pandas as pd
+
+    df = pd.DataFrame(rows, columns=columns or metric_columns(realisations=True))
+    if df.empty:
+        return df
+    keys = _condition_keys(df)
+    first = {k: i for i, k in reversed(list(enumerate(keys)))}  # rows come in the plan's order
+    df["_cond"] = [first[k] for k in keys]
+    for col in ("scene", "cfa", "demosaic", "metric"):
+        order = config_order.get(col)
+        if order:
+            extra = [v for v in df[col].unique() if v not in order]
+            df[col] = pd.Categorical(df[col], categories=list(order) + sorted(extra), ordered=True)
+    by = ["scene", "luminance", "_cond", "cfa", "demosaic", "metric"]
+    if "realisation" in df.columns:
+        by.insert(-1, "realisation")
+    df = df.sort_values(by, kind="stable")
+    for col in ("scene", "cfa", "demosaic", "metric"):
+        df[col] = df[col].astype(str)
+    return df.drop(columns="_cond").reset_index(drop=True)
+
+
+def _condition_keys(df) -> list[tuple]:
+    return [tuple(str(v) for v in row) for row in df[list(AXES[1:])].itertuples(index=False)]
+
+
+def mean_table(realisations):
+    """metrics.csv from the per-realisation table (the order kept)."""
+    from .intervals import aggregate
+
+    if realisations.empty:
+        import pandas as pd
+
+        return pd.DataFrame(columns=metric_columns())
+    keyed = realisations.assign(exposure=realisations["exposure"].astype(str),
+                                f_number=realisations["f_number"].astype(float))
+    agg = aggregate(keyed, KEY_COLUMNS, "value").drop(columns=["std"])
+    unit = keyed.drop_duplicates(KEY_COLUMNS)[KEY_COLUMNS + ["unit"]]
+    out = agg.merge(unit, on=KEY_COLUMNS, how="left")
+    return out[metric_columns()]
+
+
+def scored_rows(metrics, builtin_scenes):
+    """The rows that enter the scores: the scored metrics at the study's own
+    (base) conditions, each from one scene (the built-in scene that feeds
+    it, else the first other scene)."""
+    import pandas as pd
+
+    df = metrics[metrics["metric"].isin(scored_metrics()) & metrics["base"].astype(bool)]
+    keep = []
+    for name, group in df.groupby("metric", sort=False):
+        scenes = list(dict.fromkeys(group["scene"]))
+        pick = next((s for s in scenes if s in builtin_scenes), scenes[0])
+        keep.append(group[group["scene"] == pick])
+    return pd.concat(keep).reset_index(drop=True) if keep else df
+
+
+def _ideal_values(ideal, scored) -> dict:
+    """{metric: the ideal sensor's value} on the scene and luminance each
+    scored metric is taken from."""
+    out = {}
+    if ideal is None or ideal.empty:
+        return out
+    base = ideal[ideal["base"].astype(str).str.lower().isin(("true", "1"))]
+    for metric, g in scored.groupby("metric", sort=False):
+        sel = base[(base["metric"] == metric) & (base["scene"] == g["scene"].iloc[0])
+                   & base["luminance"].isin(g["luminance"].unique())]
+        if len(sel):
+            out[metric] = float(sel["value"].mean())
+    return out
+
+
+def write_tables(out_dir: Path, realisations, ideal, *, paper_ranges: dict, overrides: dict, policy: str,
+                 clip: bool, builtin_scenes) -> tuple:
+    """Write every table of the module docstring atomically; returns
+    (metrics, scores, ranges, constant metrics)."""
+    import pandas as pd
+
+    from .ranking import policy_ranges, policy_summary, score_realisations
+    from .scoring import ScoreRange
+
+    def save(name, df):
+        with atomic_output(out_dir / name) as tmp:
+            df.to_csv(tmp, index=False, float_format="%.10g")
+
+    save("metrics_realisations.csv", realisations)
+    metrics = mean_table(realisations)
+    save("metrics.csv", metrics)
+    if ideal is not None:
+        save("ideal.csv", ideal)
+    scored_real = scored_rows(realisations, builtin_scenes)
+    scored_mean = scored_rows(metrics, builtin_scenes)
+    ranges, constant, scores = dict(paper_ranges), [], scored_mean.iloc[0:0]
+    if len(scored_real):
+        ideal_vals = _ideal_values(ideal, scored_mean)
+        ranges, constant = policy_ranges(policy, scored_mean, paper_ranges, ideal_vals)
+        for m, (worst, best) in overrides.items():  # the config's own ranges win
+            ranges[m] = ScoreRange(worst, best, ())
+            if m in constant and worst != best:
+                constant.remove(m)
+        cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
+        scores = score_realisations(scored_real[cols], ranges, clip=clip, constant=constant)
+        clipping, ranks = policy_summary(scored_mean, paper_ranges, ideal_vals, clip)
+        clipping["scope"] = "clipping"
+        ranks["scope"] = "rank"
+        save("policies.csv", pd.concat([clipping, ranks], ignore_index=True))
+    save("scores.csv", scores)
+    return metrics, scores, ranges, constant
