@@ -39,7 +39,7 @@ from .. import spectra
 from ..errors import CfaMitsubaError
 from ..values import SpectralImage
 from .atomic import atomic_output
-from .sidecar import json_default, read_sidecar, sidecar_path
+from .sidecar import json_default, sidecar_path
 
 #: Units of the band values, as our metadata states them.
 SPECTRAL_UNITS = "W/(m^2 sr nm)"
@@ -151,62 +151,44 @@ def write_spectral_exr(path, image: SpectralImage, *, preview: bool = True) -> P
     return p
 
 
-def _decode(value):
-    return value.decode() if isinstance(value, bytes) else value
-
-
-def read_spectral_exr(path) -> SpectralImage:
+def read_spectral_exr(path, *, illuminant=None) -> SpectralImage:
     """Read a JCGT spectral EXR into a :class:`SpectralImage`.
 
-    Bands are the ``S0`` channels sorted by wavelength (nm).  ``meta`` is the
-    sidecar JSON beside the file (``X.json`` for ``X.exr``) when present, else
-    the ``cfaMitsuba`` header attribute, else a minimal dict; its
-    ``wavelengths`` always match the file.  NaN or infinite values are
-    refused with a :class:`CfaMitsubaError` naming their count.
+    Bands are the ``S0`` channels sorted by wavelength (nm), in W/(m^2 sr
+    nm) after the file's ``emissiveUnits`` (:mod:`.jcgt`).  ``meta`` is the
+    sidecar JSON beside the file (``X.json`` for ``X.exr``) when present,
+    else the ``cfaMitsuba`` header attribute.  A file with neither (written
+    by another tool) is read as it says: its light is ``illuminant`` (an
+    :class:`~cfa_mitsuba.io.illuminant.Illuminant`, from a flag), else the
+    file's ``illuminant`` attribute, else D65, and it sets the white
+    reference; a reflective file (``T.`` channels), or one whose bands reach
+    outside 360..830 nm, is put on the default band grid (reflectance x the
+    light, at a mean luminance of 100 cd/m^2).  How it was read is said in
+    :class:`~cfa_mitsuba.io.cube.ReadNotice` warnings.  NaN or infinite
+    values are refused with a :class:`CfaMitsubaError` naming their count.
     """
-    p = Path(path)
-    if not p.exists():
-        raise CfaMitsubaError(f"no such file: {str(p)!r}")
-    if p.is_dir():
-        raise CfaMitsubaError(f"{str(p)!r} is a directory, not a spectral EXR")
-    import OpenEXR
+    import warnings
 
-    try:
-        with OpenEXR.File(str(p), separate_channels=True) as f:
-            header = {k: _decode(v) for k, v in f.header().items()}
-            bands = []
-            for name, ch in f.channels().items():
-                wl = parse_spectral_channel(name)
-                if wl is not None:
-                    bands.append((wl, name, np.asarray(ch.pixels, dtype=np.float64)))
-    except CfaMitsubaError:
-        raise
-    except Exception as exc:  # OpenEXR raises plain exceptions on bad files
-        raise CfaMitsubaError(f"{str(p)!r} is not a readable OpenEXR file: {' '.join(str(exc).split())}") from None
-    if not bands:
-        raise CfaMitsubaError(f"{str(p)!r} has no emissive spectral channels (S0.<wavelength>nm): not a spectral EXR")
-    bands.sort(key=lambda t: t[0])
-    wl = np.array([b[0] for b in bands])
-    if np.any(np.diff(wl) <= 0):
-        raise CfaMitsubaError(f"{str(p)!r}: two spectral channels have the same wavelength")
-    data = np.stack([b[2] for b in bands], axis=-1)
+    from .cube import ReadNotice
+    from .jcgt import our_meta, read_exr_cube
+
+    p = Path(path)
+    cube, header = read_exr_cube(p)
+    side = sidecar_path(p)
+    meta = dict(our_meta(p, header))
+    if meta and cube.quantity == "radiance":
+        data = np.asarray(cube.data, dtype=np.float64) * cube.scale
+        wl = np.asarray(cube.wavelengths, dtype=np.float64)
+        if illuminant is not None:
+            cube.notices.append(f"{p.name}: --illuminant ignored: the file's metadata gives its white")
+    else:
+        data, wl, foreign = _foreign(p, cube, illuminant)
+        meta = {**meta, **foreign}
+    for note in cube.notices:
+        warnings.warn(note, ReadNotice, stacklevel=2)
     bad = int(data.size - np.count_nonzero(np.isfinite(data)))
     if bad:
         raise CfaMitsubaError(f"{str(p)!r} contains {bad} NaN or infinite value(s) in its spectral channels")
-
-    side = sidecar_path(p)
-    if side.exists():
-        meta = read_sidecar(side)
-    else:
-        raw = header.get(_META_ATTRIBUTE)
-        try:
-            meta = json.loads(raw) if isinstance(raw, str) else {}
-        except ValueError:
-            meta = {}
-        if not isinstance(meta, dict):
-            meta = {}
-    if not meta:
-        meta = {"units": SPECTRAL_UNITS if header.get("emissiveUnits", _EMISSIVE_UNITS) == _EMISSIVE_UNITS else header.get("emissiveUnits")}
     if "wavelengths" in meta and len(meta["wavelengths"]) != wl.size:
         raise CfaMitsubaError(
             f"{str(side if side.exists() else p)!r} lists {len(meta['wavelengths'])} wavelengths "
@@ -216,3 +198,46 @@ def read_spectral_exr(path) -> SpectralImage:
     meta.setdefault("height", int(data.shape[0]))
     meta.setdefault("width", int(data.shape[1]))
     return SpectralImage(data, wl, meta)
+
+
+#: Mean luminance given to a reflective file lit by its illuminant (cd/m^2),
+#: the render stage's default.
+_REFLECTIVE_LUMINANCE_CD_M2 = 100.0
+
+
+def _foreign(p: Path, cube, illuminant) -> tuple[np.ndarray, np.ndarray, dict]:
+    """Radiance, wavelengths and metadata of a spectral EXR another tool wrote."""
+    from .cube import choose_illuminant, cube_to_radiance, white_radiance
+
+    grid_ok = cube.quantity == "radiance"
+    if grid_ok:
+        try:
+            spectra.validate_wavelengths(cube.wavelengths)
+        except CfaMitsubaError:
+            grid_ok = False
+    if grid_ok:  # the file's own bands, as stored
+        data = np.asarray(cube.data, dtype=np.float64) * cube.scale  # NaN refused below; negatives by capture
+        wl = np.asarray(cube.wavelengths, dtype=np.float64)
+        light, said = choose_illuminant(cube, illuminant, "--illuminant")
+        white, note = white_radiance(light, cube, data, wl)
+        cube.notices += [said] + ([note] if note else [])
+        label = light.label
+    else:
+        wl = np.asarray(spectra.DEFAULT_WAVELENGTHS, dtype=np.float64)
+        data, white, label, notices = cube_to_radiance(cube, wl, illuminant, "--illuminant")
+        cube.notices[:] = notices + [f"{p.name}: put on the band grid {wl[0]:g}-{wl[-1]:g} nm, "
+                                     f"{wl.size} bands (box means of the linearly interpolated channels)"]
+        if cube.quantity == "reflectance":
+            factor = _REFLECTIVE_LUMINANCE_CD_M2 / max(float(spectra.luminance_cd_m2(data, wl).mean()), 1e-300)
+            data, white = data * factor, white * factor
+            cube.notices.append(f"{p.name}: reflectance x illuminant scaled to a mean luminance of "
+                                f"{_REFLECTIVE_LUMINANCE_CD_M2:g} cd/m^2")
+    meta = {
+        "units": SPECTRAL_UNITS,
+        "source_quantity": cube.quantity,
+        "illuminant": label,
+        "white_radiance": [float(v) for v in white],
+        "white_luminance_cd_m2": float(spectra.luminance_cd_m2(white, wl)),
+        "read_notices": list(cube.notices),
+    }
+    return data, wl, meta
