@@ -13,6 +13,7 @@ from __future__ import annotations
 
 __all__ = ["read_envi"]
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -62,7 +63,9 @@ def read_envi(path, wavelengths=None) -> SourceCube:
                            "the header has no 'wavelength' list: pass --wavelengths")
     check_memory((rows, cols, n), where)
     try:
-        data = np.asarray(img.load())
+        with warnings.catch_warnings():  # spectral warns of NaN; check_values refuses them in one line
+            warnings.simplefilter("ignore")
+            data = np.asarray(img.load())
     except MemoryError:
         raise CfaMitsubaError(f"{where}: too large for memory") from None
     except Exception as exc:  # a data file shorter than the header says

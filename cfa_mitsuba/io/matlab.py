@@ -9,7 +9,7 @@ the horizontal field of view in degrees, ``scene.distance`` in m,
 ``scene.illuminant.data.photons`` the light on a perfect reflector);
 otherwise the only 3-D numeric variable is the cube and a vector called
 ``wavelengths``, ``wavelength``, ``wave``, ``wl``, ``lambda`` or ``bands``
-with one entry per band gives its wavelengths.  A cube is (rows, columns,
+gives its wavelengths (one per band, else refused).  A cube is (rows, columns,
 bands) as MATLAB indexes it; v7.3 files store it transposed, which is undone.
 """
 
@@ -150,7 +150,7 @@ def read_mat(path, *, cube_var: str | None = None, wave_var: str | None = None,
         raise CfaMitsubaError(f"{where}: {cube_var} is {'x'.join(map(str, shape))}, not a rows x columns x bands cube")
     if wavelengths is None:
         if wave_var is None:
-            found = [n for n in _WAVE_NAMES if mat.shape(n) is not None and int(np.prod(mat.shape(n))) == shape[2]]
+            found = [n for n in _WAVE_NAMES if mat.shape(n) is not None]
             wave_var = found[0] if found else None
         wavelengths = _vector(mat, wave_var, where) if wave_var else None
     wl = check_wavelengths(wavelengths, shape[2], where, "pass --mat-wavelengths NAME or --wavelengths")
