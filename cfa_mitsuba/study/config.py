@@ -215,6 +215,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
     from .. import isp, render, sensor
     from ..optics import OpticsParams
     from ..sensor.params import NOISE_MODES, SensorParams
+    from .measured_scenes import image_scene_spec
     from .scoring import DEFAULT_RANGES
 
     ck = _Checker(where)
@@ -271,10 +272,13 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         ck.fail("custom_scenes", "must be an array of tables ([[custom_scenes]])")
     for i, c in enumerate(custom):
         key = f"custom_scenes[{i}]"
+        if isinstance(c, dict) and "image" in c:  # a measured spectral image (study/measured_scenes.py)
+            scenes.append(image_scene_spec(ck, c, key, base, [*known_scenes, *(s.name for s in scenes)]))
+            continue
         ck.table(c, key, {"name": None, "file": None, **_RENDER_KEYS})
         cname = ck.string(c.get("name"), f"{key}.name")
         if "file" not in c:
-            ck.fail(f"{key}.file", "missing (the scene's Mitsuba XML file)")
+            ck.fail(f"{key}.file", "missing (the scene's Mitsuba XML file, or image = a measured spectral image)")
         f = base / ck.string(c["file"], f"{key}.file")
         if not f.is_file():
             ck.fail(f"{key}.file", f"no such file {str(f)!r}")
