@@ -14,8 +14,12 @@ Layout written here (research/mitsuba-spectral.md s. 6):
 - ``cfaMitsuba``: our JSON metadata (the render settings and scene geometry,
   the same content as the sidecar).
 
-The reader accepts any file of this layout: emissive ``S0`` channels with any
-number format and SI-prefixed metre or hertz unit, sorted by wavelength.
+The reader accepts any file of this layout, as it says (:mod:`.jcgt`):
+emissive ``S0`` channels with any number format and SI-prefixed metre or
+hertz unit, sorted by wavelength, in the unit ``emissiveUnits`` names;
+reflective ``T.`` channels lit by an illuminant; bands outside 360..830 nm
+cropped onto the band grid.  A file without our metadata gets its light
+from the caller or the file, with a notice (:class:`~.cube.ReadNotice`).
 """
 
 from __future__ import annotations

@@ -62,7 +62,7 @@ def _order(files: list[Path], wavelengths, where: str) -> tuple[list[Path], np.n
         raise CfaMitsubaError(f"{where}: band(s) missing: {names} (found {len(num)} of {last - first + 1})")
     if wavelengths is not None:
         return files, np.asarray(wavelengths, dtype=np.float64), "from --wavelengths"
-    return files, CAVE_FIRST_NM + CAVE_STEP_NM * np.arange(CAVE_BANDS), "CAVE layout (01..31 = 400..700 nm)"
+    return files, CAVE_FIRST_NM + CAVE_STEP_NM * np.arange(CAVE_BANDS), "CAVE layout: 01..31 = 400..700 nm"
 
 
 def _read_png(path: Path, where: str) -> tuple[np.ndarray, int]:

@@ -23,15 +23,19 @@ from __future__ import annotations
 __all__ = ["IMAGE_KEYS", "image_scene_spec"]
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import CfaMitsubaError
+
+if TYPE_CHECKING:
+    from .config import SceneSpec
 
 #: The keys of an image entry (``name`` and ``image`` required).
 IMAGE_KEYS = ("name", "image", "illuminant", "quantity", "wavelengths", "fov", "distance", "oversample", "mat_cube",
               "mat_wavelengths")
 
 
-def image_scene_spec(ck, entry: dict, key: str, base: Path, taken) -> "SceneSpec":
+def image_scene_spec(ck, entry: dict, key: str, base: Path, taken) -> SceneSpec:
     """Check one ``[[custom_scenes]]`` entry with an ``image`` key (``ck`` is
     the config's checker, ``taken`` the scene names already used) and
     return its :class:`~cfa_mitsuba.study.config.SceneSpec`."""
