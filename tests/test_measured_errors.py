@@ -117,3 +117,9 @@ def test_wavelengths_flag_must_match_the_folder(tmp_path):
     proc = run_cli("render", folder, "--wavelengths", "400:700:100", "--out", tmp_path / "o", "--no-cache",
                    check_rc=0)
     assert "relative radiance" in proc.stderr and (tmp_path / "o" / "four.exr").exists()
+
+
+def test_measured_flags_refused_for_a_built_in_scene(tmp_path):
+    proc = run_cli("render", "macbeth", "--illuminant", "A", "--out", tmp_path / "o")
+    assert_one_line_error(proc, "--illuminant apply to measured spectral images", "not to 'macbeth'")
+    assert not (tmp_path / "o").exists()

@@ -34,10 +34,22 @@ def add_measured_arguments(parser) -> None:
     g.add_argument("--mat-wavelengths", metavar="VAR", help="MATLAB variable holding the wavelengths in nm")
 
 
+_FLAGS = ("illuminant", "quantity", "wavelengths", "distance", "mat_cube", "mat_wavelengths")
+
+
 def is_measured(args) -> bool:
+    """Whether SCENE is a measured image; the measured-image flags are
+    refused with any other scene (they would silently do nothing)."""
+    from ..errors import CfaMitsubaError
     from ..render.measured import is_measured_image
 
-    return is_measured_image(args.scene)
+    if is_measured_image(args.scene):
+        return True
+    given = [f"--{k.replace('_', '-')}" for k in _FLAGS if getattr(args, k, None) is not None]
+    if given:
+        raise CfaMitsubaError(f"{', '.join(given)} apply to measured spectral images (a .exr, .hdr or .mat file, "
+                              f"or a folder of PNGs), not to {args.scene!r}")
+    return False
 
 
 def run_measured(args) -> int:

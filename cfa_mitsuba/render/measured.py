@@ -42,7 +42,12 @@ _CODE_VERSION = "1"
 
 def is_measured_image(scene) -> bool:
     """Whether ``scene`` names a measured image (a .exr, .hdr or .mat file,
-    or a folder) rather than a built-in scene or a Mitsuba XML."""
+    or a folder) rather than a built-in scene or a Mitsuba XML; a built-in
+    name wins over a folder of that name in the working directory."""
+    from .registry import list_scenes
+
+    if not isinstance(scene, (str, Path)) or str(scene) in {n for n, _ in list_scenes()}:
+        return False
     return is_measured_path(scene)
 
 
