@@ -83,6 +83,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--oversample", type=positive_int, metavar="K",
                         help="EXR pixels per sensor pixel along each axis (default: the sidecar's, else 1)")
     parser.add_argument("--seed", type=non_negative_int, default=0, help="temporal noise seed (default 0)")
+    parser.add_argument("--illuminant", metavar="NAME|FILE.csv",
+                        help="light of an EXR without our sidecar (another tool's): its white reference, and the light "
+                             "of a reflective (T.) file; a colour-science name or a CSV of nm,power (default: the "
+                             "file's 'illuminant' attribute, else D65; stderr says which)")
     parser.add_argument("--sensor-seed", type=non_negative_int, default=None,
                         help="fixed-pattern (DSNU/PRNU) seed: one seed is one sensor (default 0)")
     g = parser.add_argument_group("lens (defaults: f/4, T = 1, relative illumination and diffraction on)")
@@ -161,7 +165,10 @@ def run(args) -> int:
         except ImportError:  # the render stage's reader (cfa_mitsuba/io/exr.py)
             raise CfaMitsubaError("reading spectral EXRs needs cfa_mitsuba.io.read_spectral_exr, "
                                   "which this installation lacks") from None
-        scene = read_spectral_exr(args.exr)
+        from ..io.illuminant import resolve_illuminant
+
+        light = resolve_illuminant(args.illuminant) if args.illuminant else None
+        scene = read_spectral_exr(args.exr, illuminant=light)
         oi = compute_optics(scene, optics, pixel_pitch_um=sensor.pixel_pitch_um, oversample=args.oversample,
                             fill_factor=sensor.fill_factor)
         if ideal:

@@ -6,6 +6,8 @@ import os
 import sys
 from pathlib import Path
 
+from . import render_measured
+
 HELP = "render a scene to a spectral EXR (JCGT layout) and a sidecar JSON"
 
 DESCRIPTION = """\
@@ -19,7 +21,9 @@ Renders are cached (~/.cache/cfa-mitsuba, or $CFA_MITSUBA_CACHE) by a hash of
 everything that determines them; --luminance only rescales, so it reuses the
 cache.  The Mitsuba variant is cuda_ad_spectral > llvm_ad_spectral >
 scalar_spectral, whichever runs here first; $CFA_MITSUBA_THREADS caps the
-render's threads."""
+render's threads.
+
+""" + render_measured.EPILOG
 
 
 def add_arguments(parser) -> None:
@@ -41,6 +45,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--max-depth", type=int, metavar="N", help="path length of a 3D scene (2: direct light only)")
     parser.add_argument("--preview", action="store_true", help="also write DIR/<name>.png, an sRGB preview")
     parser.add_argument("--no-cache", action="store_true", help="render even if a cached render exists, and do not store it")
+    render_measured.add_measured_arguments(parser)
 
 
 def _check_out(out: Path) -> None:
@@ -70,6 +75,8 @@ def run(args) -> int:
     from ..io import check_writable_dir, write_sidecar, write_spectral_exr
     from ..render import engine, variant
 
+    if render_measured.is_measured(args):  # a measured spectral image: converted, not rendered
+        return render_measured.run_measured(args)
     settings = dict(width=args.width, height=args.height, spp=args.spp, luminance=args.luminance,
                     variant=args.variant, seed=args.seed, bands=args.bands, oversample=args.oversample,
                     fov=args.fov, max_depth=args.max_depth)

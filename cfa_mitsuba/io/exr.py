@@ -14,8 +14,12 @@ Layout written here (research/mitsuba-spectral.md s. 6):
 - ``cfaMitsuba``: our JSON metadata (the render settings and scene geometry,
   the same content as the sidecar).
 
-The reader accepts any file of this layout: emissive ``S0`` channels with any
-number format and SI-prefixed metre or hertz unit, sorted by wavelength.
+The reader accepts any file of this layout, as it says (:mod:`.jcgt`):
+emissive ``S0`` channels with any number format and SI-prefixed metre or
+hertz unit, sorted by wavelength, in the unit ``emissiveUnits`` names;
+reflective ``T.`` channels lit by an illuminant; bands outside 360..830 nm
+cropped onto the band grid.  A file without our metadata gets its light
+from the caller or the file, with a notice (:class:`~.cube.ReadNotice`).
 """
 
 from __future__ import annotations
@@ -30,7 +34,6 @@ __all__ = [
 ]
 
 import json
-import re
 from pathlib import Path
 
 import numpy as np
@@ -39,7 +42,8 @@ from .. import colorimetry, spectra
 from ..errors import CfaMitsubaError
 from ..values import SpectralImage
 from .atomic import atomic_output
-from .sidecar import json_default, read_sidecar, sidecar_path
+from .channels import parse_spectral_channel  # noqa: F401  (re-exported: the layout's reader and writer)
+from .sidecar import json_default, sidecar_path
 
 #: Units of the band values, as our metadata states them.
 SPECTRAL_UNITS = "W/(m^2 sr nm)"
@@ -48,17 +52,6 @@ _EMISSIVE_UNITS = "W.m^-2.sr^-1"
 #: Name of our JSON header attribute (shared with io.images).
 _META_ATTRIBUTE = "cfaMitsuba"
 
-# JCGT 2021, s. 3: S<stokes>.<value><SI prefix><m|Hz>, comma as decimal mark.
-_CHANNEL_RE = re.compile(
-    r"^S0\.(?P<value>\d*,?\d*(?:[Ee][+-]?\d+)?)(?P<prefix>Y|Z|E|P|T|G|M|k|h|da|d|c|m|u|n|p)?(?P<unit>m|Hz)$"
-)
-# SI prefix -> power of ten relative to the unit.
-_PREFIX_EXP = {
-    "Y": 24, "Z": 21, "E": 18, "P": 15, "T": 12, "G": 9, "M": 6, "k": 3, "h": 2,
-    "da": 1, None: 0, "d": -1, "c": -2, "m": -3, "u": -6, "n": -9, "p": -12,
-}
-
-
 def spectral_channel_name(wavelength_nm: float) -> str:
     """JCGT channel name of an unpolarised emissive band.
 
@@ -66,27 +59,6 @@ def spectral_channel_name(wavelength_nm: float) -> str:
     'S0.400,000000nm'
     """
     return "S0." + f"{float(wavelength_nm):.6f}".replace(".", ",") + "nm"
-
-
-def parse_spectral_channel(name: str) -> float | None:
-    """Wavelength in nm of a JCGT ``S0`` channel name, or None if ``name`` is
-    not one (other Stokes components, reflective ``T.`` channels, R/G/B).
-
-    >>> parse_spectral_channel('S0.550,0nm'), parse_spectral_channel('S0.5.5E-7m')
-    (550.0, None)
-    >>> parse_spectral_channel('S0.0,55um')
-    550.0
-    """
-    m = _CHANNEL_RE.match(name)
-    if m is None or not any(ch.isdigit() for ch in m["value"]):
-        return None
-    value = float(m["value"].replace(",", "."))
-    exp = _PREFIX_EXP[m["prefix"]]
-    if m["unit"] == "Hz":
-        hertz = value * 10.0**exp
-        return spectra.LIGHT_SPEED_M_S / hertz * 1e9 if hertz > 0 else None
-    # Scale by an exact power of ten so that 'S0.400,000000nm' gives 400.0 exactly.
-    return value * 10.0 ** (exp + 9) if exp + 9 >= 0 else value / 10.0 ** (-(exp + 9))
 
 
 def linear_srgb(data: np.ndarray, wavelengths, meta: dict) -> np.ndarray:
@@ -145,62 +117,44 @@ def write_spectral_exr(path, image: SpectralImage, *, preview: bool = True) -> P
     return p
 
 
-def _decode(value):
-    return value.decode() if isinstance(value, bytes) else value
-
-
-def read_spectral_exr(path) -> SpectralImage:
+def read_spectral_exr(path, *, illuminant=None) -> SpectralImage:
     """Read a JCGT spectral EXR into a :class:`SpectralImage`.
 
-    Bands are the ``S0`` channels sorted by wavelength (nm).  ``meta`` is the
-    sidecar JSON beside the file (``X.json`` for ``X.exr``) when present, else
-    the ``cfaMitsuba`` header attribute, else a minimal dict; its
-    ``wavelengths`` always match the file.  NaN or infinite values are
-    refused with a :class:`CfaMitsubaError` naming their count.
+    Bands are the ``S0`` channels sorted by wavelength (nm), in W/(m^2 sr
+    nm) after the file's ``emissiveUnits`` (:mod:`.jcgt`).  ``meta`` is the
+    sidecar JSON beside the file (``X.json`` for ``X.exr``) when present,
+    else the ``cfaMitsuba`` header attribute.  A file with neither (written
+    by another tool) is read as it says: its light is ``illuminant`` (an
+    :class:`~cfa_mitsuba.io.illuminant.Illuminant`, from a flag), else the
+    file's ``illuminant`` attribute, else D65, and it sets the white
+    reference; a reflective file (``T.`` channels), or one whose bands reach
+    outside 360..830 nm, is put on the default band grid (reflectance x the
+    light, at a mean luminance of 100 cd/m^2).  How it was read is said in
+    :class:`~cfa_mitsuba.io.cube.ReadNotice` warnings.  NaN or infinite
+    values are refused with a :class:`CfaMitsubaError` naming their count.
     """
-    p = Path(path)
-    if not p.exists():
-        raise CfaMitsubaError(f"no such file: {str(p)!r}")
-    if p.is_dir():
-        raise CfaMitsubaError(f"{str(p)!r} is a directory, not a spectral EXR")
-    import OpenEXR
+    import warnings
 
-    try:
-        with OpenEXR.File(str(p), separate_channels=True) as f:
-            header = {k: _decode(v) for k, v in f.header().items()}
-            bands = []
-            for name, ch in f.channels().items():
-                wl = parse_spectral_channel(name)
-                if wl is not None:
-                    bands.append((wl, name, np.asarray(ch.pixels, dtype=np.float64)))
-    except CfaMitsubaError:
-        raise
-    except Exception as exc:  # OpenEXR raises plain exceptions on bad files
-        raise CfaMitsubaError(f"{str(p)!r} is not a readable OpenEXR file: {' '.join(str(exc).split())}") from None
-    if not bands:
-        raise CfaMitsubaError(f"{str(p)!r} has no emissive spectral channels (S0.<wavelength>nm): not a spectral EXR")
-    bands.sort(key=lambda t: t[0])
-    wl = np.array([b[0] for b in bands])
-    if np.any(np.diff(wl) <= 0):
-        raise CfaMitsubaError(f"{str(p)!r}: two spectral channels have the same wavelength")
-    data = np.stack([b[2] for b in bands], axis=-1)
+    from .cube import ReadNotice
+    from .jcgt import our_meta, read_exr_cube
+
+    p = Path(path)
+    cube, header = read_exr_cube(p)
+    side = sidecar_path(p)
+    meta = dict(our_meta(p, header))
+    if meta and cube.quantity == "radiance":
+        data = np.asarray(cube.data, dtype=np.float64) * cube.scale
+        wl = np.asarray(cube.wavelengths, dtype=np.float64)
+        if illuminant is not None:
+            cube.notices.append(f"{p.name}: --illuminant ignored: the file's metadata gives its white")
+    else:
+        data, wl, foreign = _foreign(p, cube, illuminant)
+        meta = {**meta, **foreign}
+    for note in cube.notices:
+        warnings.warn(note, ReadNotice, stacklevel=2)
     bad = int(data.size - np.count_nonzero(np.isfinite(data)))
     if bad:
         raise CfaMitsubaError(f"{str(p)!r} contains {bad} NaN or infinite value(s) in its spectral channels")
-
-    side = sidecar_path(p)
-    if side.exists():
-        meta = read_sidecar(side)
-    else:
-        raw = header.get(_META_ATTRIBUTE)
-        try:
-            meta = json.loads(raw) if isinstance(raw, str) else {}
-        except ValueError:
-            meta = {}
-        if not isinstance(meta, dict):
-            meta = {}
-    if not meta:
-        meta = {"units": SPECTRAL_UNITS if header.get("emissiveUnits", _EMISSIVE_UNITS) == _EMISSIVE_UNITS else header.get("emissiveUnits")}
     if "wavelengths" in meta and len(meta["wavelengths"]) != wl.size:
         raise CfaMitsubaError(
             f"{str(side if side.exists() else p)!r} lists {len(meta['wavelengths'])} wavelengths "
@@ -210,3 +164,46 @@ def read_spectral_exr(path) -> SpectralImage:
     meta.setdefault("height", int(data.shape[0]))
     meta.setdefault("width", int(data.shape[1]))
     return SpectralImage(data, wl, meta)
+
+
+#: Mean luminance given to a reflective file lit by its illuminant (cd/m^2),
+#: the render stage's default.
+_REFLECTIVE_LUMINANCE_CD_M2 = 100.0
+
+
+def _foreign(p: Path, cube, illuminant) -> tuple[np.ndarray, np.ndarray, dict]:
+    """Radiance, wavelengths and metadata of a spectral EXR another tool wrote."""
+    from .cube import choose_illuminant, cube_to_radiance, white_radiance
+
+    grid_ok = cube.quantity == "radiance"
+    if grid_ok:
+        try:
+            spectra.validate_wavelengths(cube.wavelengths)
+        except CfaMitsubaError:
+            grid_ok = False
+    if grid_ok:  # the file's own bands, as stored
+        data = np.asarray(cube.data, dtype=np.float64) * cube.scale  # NaN refused below; negatives by capture
+        wl = np.asarray(cube.wavelengths, dtype=np.float64)
+        light, said = choose_illuminant(cube, illuminant, "--illuminant")
+        white, note = white_radiance(light, cube, data, wl)
+        cube.notices += [said] + ([note] if note else [])
+        label = light.label
+    else:
+        wl = np.asarray(spectra.DEFAULT_WAVELENGTHS, dtype=np.float64)
+        data, white, label, notices = cube_to_radiance(cube, wl, illuminant, "--illuminant")
+        cube.notices[:] = notices + [f"{p.name}: put on the band grid {wl[0]:g}-{wl[-1]:g} nm, "
+                                     f"{wl.size} bands (box means of the linearly interpolated channels)"]
+        if cube.quantity == "reflectance":
+            factor = _REFLECTIVE_LUMINANCE_CD_M2 / max(float(spectra.luminance_cd_m2(data, wl).mean()), 1e-300)
+            data, white = data * factor, white * factor
+            cube.notices.append(f"{p.name}: reflectance x illuminant scaled to a mean luminance of "
+                                f"{_REFLECTIVE_LUMINANCE_CD_M2:g} cd/m^2")
+    meta = {
+        "units": SPECTRAL_UNITS,
+        "source_quantity": cube.quantity,
+        "illuminant": label,
+        "white_radiance": [float(v) for v in white],
+        "white_luminance_cd_m2": float(spectra.luminance_cd_m2(white, wl)),
+        "read_notices": list(cube.notices),
+    }
+    return data, wl, meta

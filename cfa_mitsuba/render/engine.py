@@ -48,6 +48,7 @@ from ..values import SpectralImage
 from . import variant as _variant
 from .integrator import PLUGIN_NAME
 from .light import BAND_INSET, CENTRE_INSET
+from .measured import is_measured_image, measured_cached, measured_image
 from .registry import Built, RenderConfig, Scene, get_scene
 
 #: ISETCam's default mean scene luminance (cd/m^2).
@@ -430,6 +431,8 @@ def render(scene, **settings) -> SpectralImage:
     :func:`resolve_settings`.  Returns a :class:`SpectralImage` whose
     ``meta`` is the sidecar (docs/scenes.md lists its keys).
     """
+    if is_measured_image(scene):  # a measured spectral image: converted, not rendered
+        return measured_image(scene, **settings)
     sc, cfg = resolve_settings(scene, **settings)
     return scale_to_luminance(_render_canonical(sc, cfg), cfg.luminance_cd_m2)
 
@@ -445,6 +448,8 @@ def render_cached(scene, *, cache=None, **settings) -> SpectralImage:
     """
     from ..io.cache import RenderCache, hash_key
 
+    if is_measured_image(scene):  # a measured spectral image: converted once, cached like a render
+        return measured_cached(scene, cache=cache, **settings)
     sc, cfg = resolve_settings(scene, **settings)
     store = cache if isinstance(cache, RenderCache) else RenderCache(cache)
     key = hash_key(_key_fields(sc, cfg))

@@ -315,6 +315,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
     from .. import isp, render, sensor
     from ..optics import OpticsParams
     from ..sensor.params import NOISE_MODES, SensorParams
+    from .measured_scenes import image_scene_spec
     from .ranking import DEFAULT_POLICY, POLICIES
     from .scoring import DEFAULT_RANGES
 
@@ -373,10 +374,14 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         ck.fail("custom_scenes", "must be an array of tables ([[custom_scenes]])")
     for i, c in enumerate(custom):
         key = f"custom_scenes[{i}]"
+        if isinstance(c, dict) and "image" in c:  # a measured spectral image (study/measured_scenes.py)
+            name, image, opts = image_scene_spec(ck, c, key, base, [*known_scenes, *(s.name for s in scenes)])
+            scenes.append(SceneSpec(name, image, opts, IMAGE_METRICS))
+            continue
         ck.table(c, key, {"name": None, "file": None, **_RENDER_KEYS})
         cname = ck.string(c.get("name"), f"{key}.name")
         if "file" not in c:
-            ck.fail(f"{key}.file", "missing (the scene's Mitsuba XML file)")
+            ck.fail(f"{key}.file", "missing (the scene's Mitsuba XML file, or image = a measured spectral image)")
         f = base / ck.string(c["file"], f"{key}.file")
         if not f.is_file():
             ck.fail(f"{key}.file", f"no such file {str(f)!r}")
