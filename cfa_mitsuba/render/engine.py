@@ -42,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import limits as _limits
 from .. import spectra
 from ..errors import CfaMitsubaError
 from ..values import SpectralImage
@@ -148,6 +149,7 @@ def resolve_settings(scene, *, width=None, height=None, spp=None, luminance=None
     if depth > 1 and not sc.is_3d:
         raise CfaMitsubaError(f"max_depth (--max-depth) applies to 3D scenes; {sc.name!r} is a chart seen directly")
     wl = _wavelengths(bands)
+    _limits.check_render(w, h, n, len(wl))  # samples, film size, memory: before Mitsuba loads
     v = _variant.choose_variant(variant)
     return sc, RenderConfig(width=w, height=h, spp=n, seed=s, wavelengths=wl, variant=v, oversample=k,
                             fov_deg=f, max_depth=depth, luminance_cd_m2=lum)
