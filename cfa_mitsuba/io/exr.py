@@ -40,6 +40,7 @@ from ..errors import CfaMitsubaError
 from ..values import SpectralImage
 from .atomic import atomic_output
 from .sidecar import json_default, read_sidecar, sidecar_path
+from .validate import check_sidecar, load_json_text
 
 #: Units of the band values, as our metadata states them.
 SPECTRAL_UNITS = "W/(m^2 sr nm)"
@@ -199,12 +200,8 @@ def read_spectral_exr(path) -> SpectralImage:
         meta = read_sidecar(side)
     else:
         raw = header.get(_META_ATTRIBUTE)
-        try:
-            meta = json.loads(raw) if isinstance(raw, str) else {}
-        except ValueError:
-            meta = {}
-        if not isinstance(meta, dict):
-            meta = {}
+        what = f"{str(p)!r}'s {_META_ATTRIBUTE} attribute"
+        meta = check_sidecar(load_json_text(raw, what), what) if isinstance(raw, str) else {}
     if not meta:
         meta = {"units": SPECTRAL_UNITS if header.get("emissiveUnits", _EMISSIVE_UNITS) == _EMISSIVE_UNITS else header.get("emissiveUnits")}
     if "wavelengths" in meta and len(meta["wavelengths"]) != wl.size:
