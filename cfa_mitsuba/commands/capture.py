@@ -161,6 +161,9 @@ def run(args) -> int:
         except ImportError:  # the render stage's reader (cfa_mitsuba/io/exr.py)
             raise CfaMitsubaError("reading spectral EXRs needs cfa_mitsuba.io.read_spectral_exr, "
                                   "which this installation lacks") from None
+        from ..limits import check_capture_file
+
+        check_capture_file(args.exr)  # memory, from the EXR's header, before the cube is read
         scene = read_spectral_exr(args.exr)
         oi = compute_optics(scene, optics, pixel_pitch_um=sensor.pixel_pitch_um, oversample=args.oversample,
                             fill_factor=sensor.fill_factor)
