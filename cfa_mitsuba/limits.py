@@ -47,6 +47,8 @@ small machine.
 from __future__ import annotations
 
 __all__ = [
+    "MAX_SIDE",
+    "MAX_SPP",
     "MAX_SAMPLES",
     "MAX_FILM_VALUES",
     "FILM_EXTRA_CHANNELS",
@@ -70,6 +72,9 @@ from pathlib import Path
 
 from .errors import CfaMitsubaError
 
+#: Largest render width or height (pixels) and spp the settings accept.
+MAX_SIDE = 32768
+MAX_SPP = 1 << 20
 #: Mitsuba's wavefront limit: samples of one render pass (width x height x spp).
 MAX_SAMPLES = 2**32 - 1
 #: Dr.Jit's array limit: values in the film (width x height x channels).

@@ -130,9 +130,9 @@ def resolve_settings(scene, *, width=None, height=None, spp=None, luminance=None
     first bad setting.
     """
     sc = scene if isinstance(scene, Scene) else get_scene(scene)
-    w = _positive_int(sc.width if width is None else width, "width", maximum=32768)
-    h = _positive_int(sc.height if height is None else height, "height", maximum=32768)
-    n = _positive_int(sc.spp if spp is None else spp, "spp", maximum=1 << 20)
+    w = _positive_int(sc.width if width is None else width, "width", maximum=_limits.MAX_SIDE)
+    h = _positive_int(sc.height if height is None else height, "height", maximum=_limits.MAX_SIDE)
+    n = _positive_int(sc.spp if spp is None else spp, "spp", maximum=_limits.MAX_SPP)
     # The stratified sampler needs a square count (s x s strata per pixel);
     # round up here, as Mitsuba would, so the recorded spp is the true one.
     n = math.isqrt(n - 1) + 1
