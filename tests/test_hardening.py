@@ -267,7 +267,7 @@ def test_npz_without_xyz_refused_by_metric(tmp_path, inputs):
 
 
 @pytest.mark.parametrize("change, needle", [
-    ("negative-qe", "spectra must be finite and non-negative"),
+    ("negative-qe", "spectra of channel 0 is negative"),
     ("qe-above-1", "quantum efficiency must lie in 0..1"),
     ("negative-exposure", "exposure_s must be a positive number of seconds, got -0.01"),
     ("zero-gain", "dn_per_electron must be positive"),

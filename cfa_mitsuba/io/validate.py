@@ -283,8 +283,11 @@ def check_raw_arrays(d: dict, settings: dict, where: str) -> None:
         fail("wavelengths must be positive, finite and strictly ascending")
     for key in ("spectra", "electrons_per_radiance", "white_radiance"):
         a = np.asarray(d[key], dtype=np.float64)
-        if not np.all(np.isfinite(a)) or np.any(a < 0):
-            fail(f"{key} must be finite and non-negative (min {np.nanmin(a) if a.size else 0:g})")
+        for bad, what in ((~np.isfinite(a), "is not finite"), (a < 0, "is negative")):
+            if np.any(bad):
+                at = np.argwhere(bad)[0]
+                where_ = f" of channel {int(at[0])}" if a.ndim == 2 else ""
+                fail(f"{key}{where_} {what} ({a[tuple(at)]:g}); it must be finite and non-negative")
     pattern = np.asarray(d["pattern"])
     channels = [str(c) for c in np.asarray(d["channels"]).reshape(-1)]
     if pattern.ndim != 2 or pattern.size == 0 or pattern.dtype.kind not in "US":
