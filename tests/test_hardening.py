@@ -145,13 +145,21 @@ def test_memory_refusal_is_fast_and_before_mitsuba(tmp_path):
     assert "needs about" in proc.stdout and "mitsuba imported: False" in proc.stdout, proc.stdout + proc.stderr
     import os
 
+    import resource
+
     env = {**os.environ, "CFA_MITSUBA_MEMORY_LIMIT": "100M"}
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "cfa_mitsuba", "render", "macbeth", "--out", str(tmp_path / "o")],
                           capture_output=True, text=True, cwd=REPO, env=env)
     elapsed = time.perf_counter() - t
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     assert_one_line_error(proc, "needs about", "105 MB available")
-    assert elapsed < 2.0, elapsed
+    # The whole command, interpreter start included, takes 0.8 s on an idle machine; its CPU time is
+    # what the refusal costs (wall time on a shared CI machine also measures the neighbours).
+    assert cpu < 2.0, cpu
+    assert elapsed < 10.0, elapsed
     assert not (tmp_path / "o").exists()
 
 
