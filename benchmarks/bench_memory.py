@@ -1,4 +1,4 @@
-"""Peak memory against cfa_mitsuba.limits' estimate, at the paper's size
+"""Peak memory against cfa_mitsuba.io.limits' estimate, at the paper's size
 (issue 15: the estimate within 25 % of the measured peak).
 
     python benchmarks/bench_memory.py [--spp 16] [--scene puppy]
@@ -32,7 +32,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from cfa_mitsuba import limits  # noqa: E402
+from cfa_mitsuba.io import limits  # noqa: E402
 
 _PEAK = "import resource, sys; print('PEAK', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, file=sys.stderr)"
 

@@ -4,7 +4,7 @@ is spent, outputs stay where the user said.
 One test per row of the issue's table (the scene-XML rows are the user-XML
 module's): each bad input gives exit 2, one line on stderr, no traceback and
 no file left behind; the memory refusals use ``CFA_MITSUBA_MEMORY_LIMIT``
-(cfa_mitsuba.limits) to make a small machine.  docs/stability.md, section
+(cfa_mitsuba.io.limits) to make a small machine.  docs/stability.md, section
 11, lists every row with its message.
 """
 
@@ -123,7 +123,7 @@ def test_render_above_2_32_samples_refused(tmp_path, args, needle):
 
 def test_render_at_the_sample_limit_is_accepted():
     """The limit is Mitsuba's wavefront: 2^32 - 1 samples pass, 2^32 do not."""
-    from cfa_mitsuba import limits
+    from cfa_mitsuba.io import limits
 
     limits.check_render(1, 1, 2**32 - 1, 1)
     limits.check_render(4096, 1024, 1023, 1)
@@ -171,7 +171,7 @@ def test_capture_and_process_memory_refused_from_headers(tmp_path, inputs, monke
 
 
 def test_limits_read_the_environment_and_the_machine(monkeypatch):
-    from cfa_mitsuba import limits
+    from cfa_mitsuba.io import limits
 
     monkeypatch.delenv(limits.MEMORY_ENV, raising=False)
     have, source = limits.available_memory_bytes()

@@ -161,7 +161,7 @@ def run(args) -> int:
         except ImportError:  # the render stage's reader (cfa_mitsuba/io/exr.py)
             raise CfaMitsubaError("reading spectral EXRs needs cfa_mitsuba.io.read_spectral_exr, "
                                   "which this installation lacks") from None
-        from ..limits import check_capture_file
+        from ..io.exr import check_capture_file
 
         check_capture_file(args.exr)  # memory, from the EXR's header, before the cube is read
         scene = read_spectral_exr(args.exr)

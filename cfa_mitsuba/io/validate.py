@@ -30,7 +30,7 @@ __all__ = [
     "check_sidecar",
     "numpy_arrays",
     "check_raw_arrays",
-    "exr_size",
+    "check_process_file",
     "safe_name",
 ]
 
@@ -198,7 +198,7 @@ def numpy_arrays(path, expect: str) -> dict:
     (pickled) array, and arrays whose declared size (as float64, as every
     reader converts them) does not fit in the memory available.
     """
-    from .. import limits
+    from . import limits
 
     p = Path(path)
     kind = _kind(p)
@@ -233,20 +233,21 @@ def numpy_arrays(path, expect: str) -> dict:
     return arrays
 
 
-def exr_size(path) -> tuple[int, int, int]:
-    """(height, width, spectral bands) of an EXR from its header alone."""
-    import OpenEXR
+def check_process_file(raw_path) -> None:
+    """Refuse to process a raw file whose mosaic (its header-declared shape)
+    needs more memory than there is (:func:`.limits.estimate_process_bytes`)."""
+    from . import limits
 
-    from .exr import parse_spectral_channel
-
-    try:
-        with OpenEXR.File(str(path), header_only=True) as f:  # the header is the file's: read it while open
-            header = f.header()
-            (x0, y0), (x1, y1) = (tuple(int(v) for v in c) for c in header["dataWindow"])
-            bands = sum(1 for c in header.get("channels", ()) if parse_spectral_channel(c.name) is not None)
-    except Exception as exc:  # OpenEXR raises plain exceptions on bad files
-        raise CfaMitsubaError(f"{str(path)!r} is not a readable OpenEXR file: {' '.join(str(exc).split())[:200]}") from None
-    return y1 - y0 + 1, x1 - x0 + 1, bands
+    path = Path(raw_path)
+    if not path.is_file():
+        return
+    arrays = numpy_arrays(path, "npz")
+    shape = arrays.get("raw", ((0, 0), None))[0]
+    channels = arrays.get("channels", ((3,), None))[0]
+    if len(shape) >= 2:
+        c = int(channels[0]) if channels else 1
+        limits.require_memory(limits.estimate_process_bytes(shape[0], shape[1], c),
+                              f"processing {str(path)!r} ({shape[1]} x {shape[0]} pixels, {c} channels)")
 
 
 # ------------------------------------------------------------- raw files

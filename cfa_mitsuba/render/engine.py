@@ -42,7 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import limits as _limits
+from ..io import limits as _limits
 from .. import spectra
 from ..errors import CfaMitsubaError
 from ..values import SpectralImage

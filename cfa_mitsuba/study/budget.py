@@ -3,7 +3,7 @@
 Each scene's render (width x height x spp x bands, from the config's
 overrides over the scene's defaults) must be within the renderer's limits
 and, like the study's largest evaluation task on that render, fit in the
-memory available (:mod:`cfa_mitsuba.limits`).  A refusal names the config
+memory available (:mod:`cfa_mitsuba.io.limits`).  A refusal names the config
 key (``render.macbeth.width``, ``custom_scenes[0].spp``), not a
 command-line option, and comes before ``config.json`` or anything else is
 written.
@@ -19,7 +19,7 @@ __all__ = ["check_scenes"]
 
 import math
 
-from .. import limits
+from ..io import limits
 from ..errors import CfaMitsubaError
 
 

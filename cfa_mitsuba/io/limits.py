@@ -61,8 +61,6 @@ __all__ = [
     "estimate_process_bytes",
     "estimate_task_bytes",
     "check_render",
-    "check_capture_file",
-    "check_process_file",
 ]
 
 import math
@@ -70,7 +68,7 @@ import os
 import re
 from pathlib import Path
 
-from .errors import CfaMitsubaError
+from ..errors import CfaMitsubaError
 
 #: Largest render width or height (pixels) and spp the settings accept.
 MAX_SIDE = 32768
@@ -221,31 +219,3 @@ def check_render(width: int, height: int, spp: int, n_bands: int, *, name=None) 
     require_memory(estimate_render_bytes(w, h, b), f"a render of {w} x {h} pixels x {b} bands",
                    f"lower {name('width')} / {name('height')}")
 
-
-def check_capture_file(exr_path) -> None:
-    """Refuse to capture an EXR whose size (read from its header) needs more
-    memory than there is; a file that is not an EXR is left to the reader."""
-    from .io.validate import exr_size
-
-    path = Path(exr_path)
-    if not path.is_file():
-        return
-    h, w, b = exr_size(path)
-    require_memory(estimate_capture_bytes(h, w, b), f"capturing {str(path)!r} ({w} x {h} pixels x {b} bands)")
-
-
-def check_process_file(raw_path) -> None:
-    """Refuse to process a raw file whose mosaic (its header-declared shape)
-    needs more memory than there is."""
-    from .io.validate import numpy_arrays
-
-    path = Path(raw_path)
-    if not path.is_file():
-        return
-    arrays = numpy_arrays(path, "npz")
-    shape = arrays.get("raw", ((0, 0), None))[0]
-    channels = arrays.get("channels", ((3,), None))[0]
-    if len(shape) >= 2:
-        c = int(channels[0]) if channels else 1
-        require_memory(estimate_process_bytes(shape[0], shape[1], c),
-                       f"processing {str(path)!r} ({shape[1]} x {shape[0]} pixels, {c} channels)")
