@@ -109,6 +109,10 @@ def parse_band_grid(text: str) -> np.ndarray:
     if not stop > start:
         raise CfaMitsubaError(f"invalid band grid {text!r}: STOP must exceed START")
     n = int(np.floor((stop - start) / step + 1e-9)) + 1
+    if abs(start + step * (n - 1) - stop) > 1e-6 * step:  # never a grid that silently stops short of STOP
+        raise CfaMitsubaError(f"invalid band grid {text!r}: STEP {step:g} does not divide STOP - START = "
+                              f"{stop - start:g} nm (the last band would be {start + step * (n - 1):g} nm, not "
+                              f"{stop:g}); pick STOP = START + a multiple of STEP")
     return validate_wavelengths(start + step * np.arange(n))
 
 

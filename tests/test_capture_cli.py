@@ -36,7 +36,7 @@ def exr(tmp_path_factory):
     data, white = _chart()
     meta = {"width": 72, "height": 48, "fov_deg": 10.0, "oversample": 1, "scene_distance_m": 1.2,
             "illuminant": "D65", "white_radiance": white.tolist(), "luminance_cd_m2": 100.0,
-            "white_luminance_cd_m2": float(cm.spectra.luminance_cd_m2(white)), "geometry": {"patches": [1, 2]}}
+            "white_luminance_cd_m2": float(cm.spectra.luminance_cd_m2(white)), "geometry": {"patches": [{"rect": [0, 0, 12, 12]}]}}
     p = d / "chart.exr"
     cm.io.write_spectral_exr(p, SpectralImage(data, WL, meta))
     bare = d / "bare.exr"  # a JCGT EXR with no metadata of ours
@@ -72,7 +72,7 @@ def test_capture_bayer_writes_everything_process_needs(exr, tmp_path, capsys):
         assert z["spectra"].shape == (3, 31)
     raw = load_raw_npz(out)
     assert raw.settings["noise"] == "all" and raw.settings["exposure_mode"] == "auto"
-    assert raw.meta["geometry"] == {"patches": [1, 2]} and raw.meta["oversample"] == 1
+    assert raw.meta["geometry"] == {"patches": [{"rect": [0, 0, 12, 12]}]} and raw.meta["oversample"] == 1
     assert raw.meta["pixel_pitch_um"] == 2.2 and raw.meta["luminance_cd_m2"] == pytest.approx(100.0)
     np.testing.assert_array_equal(cfa_from_raw(raw).sensitivities(raw.wavelengths), raw.spectra)
     assert [p.name for p in tmp_path.iterdir()] == ["bayer.npz"]  # no temporary file left

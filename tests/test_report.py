@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cfa_mitsuba.io.owned import record_written
 from conftest import assert_one_line_error, run_cli
 from test_report_fixtures import run_chromium, study_dir
 
@@ -220,12 +221,15 @@ def test_cli_rebuilds_the_report(report_study, tmp_path):
     out = tmp_path / "results"
     shutil.copytree(report_study, out)
     (out / "figures").mkdir()
-    (out / "figures" / "stale-cfa.png").write_bytes(b"old")  # from an earlier build with other CFAs
+    (out / "figures" / "stale-cfa.png").write_bytes(b"old")  # from an earlier build with other CFAs ...
+    record_written(out / "figures", ["stale-cfa.png"])  # ... which recorded writing it
+    (out / "figures" / "users-own.png").write_bytes(b"mine")  # never written by the project
     proc = run_cli("report", out, "--formats", "png", check_rc=0)
     assert proc.stdout.strip() == str(out / "report.html")
     assert (out / "report.html").stat().st_size > 100_000
     names = {p.name for p in (out / "figures").iterdir()}
     assert "stale-cfa.png" not in names and "radar-cfa.png" in names
+    assert (out / "figures" / "users-own.png").read_bytes() == b"mine"  # the report deletes only its own files
     assert not any(n.endswith(".svg") for n in names)
     assert oct((out / "report.html").stat().st_mode & 0o044) == oct(0o044 & ~_umask())
 

@@ -165,8 +165,10 @@ def run(args) -> int:
         except ImportError:  # the render stage's reader (cfa_mitsuba/io/exr.py)
             raise CfaMitsubaError("reading spectral EXRs needs cfa_mitsuba.io.read_spectral_exr, "
                                   "which this installation lacks") from None
+        from ..io.exr import check_capture_file
         from ..io.illuminant import resolve_illuminant
 
+        check_capture_file(args.exr)  # memory, from the EXR's header, before the cube is read
         light = resolve_illuminant(args.illuminant) if args.illuminant else None
         scene = read_spectral_exr(args.exr, illuminant=light)
         oi = compute_optics(scene, optics, pixel_pitch_um=sensor.pixel_pitch_um, oversample=args.oversample,

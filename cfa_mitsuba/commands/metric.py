@@ -192,15 +192,10 @@ def _to_linear(img: _Loaded, white):
 
 def _geometry(path, shape):
     """Scene geometry from a render sidecar, rescaled to an image of ``shape``."""
-    from ..errors import CfaMitsubaError
+    from ..io import read_sidecar
     from ..metrics.geometry import scene_geometry
 
-    try:
-        with open(path) as fh:
-            side = json.load(fh)
-    except (OSError, ValueError) as exc:
-        raise CfaMitsubaError(f"cannot read the sidecar {path!r}: {exc}") from None
-    return scene_geometry(side, shape)
+    return scene_geometry(read_sidecar(path), shape)  # read_sidecar checks it against the sidecar schema
 
 
 def run(args) -> int:

@@ -65,6 +65,9 @@ def run(args) -> int:
     options = {k: v for k, v in (("iterations", args.iterations), ("tolerance", args.tolerance)) if v is not None}
     if options and args.demosaic != "pocs":
         raise CfaMitsubaError(f"--iterations and --tolerance apply to pocs, not {args.demosaic!r}")
+    from ..io.validate import check_process_file
+
+    check_process_file(args.raw)  # memory, from the mosaic's header, before it is read
     raw = load_raw_npz(args.raw)
     image = process(raw, args.demosaic, white_balance=args.white_balance,
                     white_preserving=not args.least_squares, **options)

@@ -21,7 +21,11 @@ Renders are cached (~/.cache/cfa-mitsuba, or $CFA_MITSUBA_CACHE) by a hash of
 everything that determines them; --luminance only rescales, so it reuses the
 cache.  The Mitsuba variant is cuda_ad_spectral > llvm_ad_spectral >
 scalar_spectral, whichever runs here first; $CFA_MITSUBA_THREADS caps the
-render's threads.
+render's threads.  A render beyond 2^32 - 1 samples (width x height x spp),
+a film beyond Dr.Jit's 2^32 - 1 values, or one whose estimated memory
+exceeds the memory available ($CFA_MITSUBA_MEMORY_LIMIT, the cgroup limit or
+the physical memory, whichever is smallest) is refused before Mitsuba
+starts (docs/stability.md, section 11).
 
 """ + render_measured.EPILOG
 

@@ -43,7 +43,10 @@ def run(args) -> int:
     from ..study.runner import run_study, timing_summary, write_timing
 
     config = load_config(args.config)
-    out = Path(args.out) if args.out else Path("results") / config.name
+    from ..io.validate import safe_name
+
+    # the config's name is a label, never a path: '../../x' must not leave results/
+    out = Path(args.out) if args.out else Path("results") / safe_name(config.name)
     result = run_study(config, out, workers=args.workers, scheduler=args.scheduler, progress=not args.quiet)
     report = not args.no_report and config.output.get("report", True)
     if report:

@@ -30,6 +30,8 @@ __all__ = [
     "parse_spectral_channel",
     "read_spectral_exr",
     "write_spectral_exr",
+    "spectral_exr_size",
+    "check_capture_file",
     "linear_srgb",
 ]
 
@@ -207,3 +209,30 @@ def _foreign(p: Path, cube, illuminant) -> tuple[np.ndarray, np.ndarray, dict]:
         "read_notices": list(cube.notices),
     }
     return data, wl, meta
+
+
+def spectral_exr_size(path) -> tuple[int, int, int]:
+    """(height, width, spectral bands) of an EXR, from its header alone."""
+    import OpenEXR
+
+    try:
+        with OpenEXR.File(str(path), header_only=True) as f:  # the header is the file's: read it while open
+            header = f.header()
+            (x0, y0), (x1, y1) = (tuple(int(v) for v in c) for c in header["dataWindow"])
+            bands = sum(1 for c in header.get("channels", ()) if parse_spectral_channel(c.name) is not None)
+    except Exception as exc:  # OpenEXR raises plain exceptions on bad files
+        raise CfaMitsubaError(f"{str(path)!r} is not a readable OpenEXR file: {' '.join(str(exc).split())[:200]}") from None
+    return y1 - y0 + 1, x1 - x0 + 1, bands
+
+
+def check_capture_file(path) -> None:
+    """Refuse to capture an EXR whose size (from its header) needs more
+    memory than there is (:func:`.limits.estimate_capture_bytes`); a missing
+    file is left to the reader's own message."""
+    from . import limits
+
+    p = Path(path)
+    if not p.is_file():
+        return
+    h, w, b = spectral_exr_size(p)
+    limits.require_memory(limits.estimate_capture_bytes(h, w, b), f"capturing {str(p)!r} ({w} x {h} pixels x {b} bands)")

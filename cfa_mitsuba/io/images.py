@@ -23,6 +23,10 @@ from .atomic import atomic_output
 
 IMAGE_SUFFIXES = (".png", ".exr", ".npy", ".npz")
 
+#: NPZ arrays read by default, in order; arrays never taken as the image by default.
+_NPZ_KEYS = ("xyz", "image")
+_NPZ_NOT_IMAGE = ("srgb", "raw", "white_xyz")
+
 #: Channel orders recognised in EXR files, in order of preference.
 _EXR_LAYOUTS = (("X", "Y", "Z"), ("R", "G", "B"), ("Y",), ("L",))
 
@@ -96,17 +100,22 @@ def _meta_from(header: dict) -> dict:
     raw = header.get("cfaMitsuba")
     if isinstance(raw, bytes):
         raw = raw.decode()
-    try:
-        return json.loads(raw) if isinstance(raw, str) else {}
-    except ValueError:
+    from .validate import load_json_text
+
+    try:  # informational only: a broken record is dropped, but parsed within the size and depth bounds
+        meta = load_json_text(raw, "the EXR's cfaMitsuba attribute") if isinstance(raw, str) else {}
+    except CfaMitsubaError:
         return {}
+    return meta if isinstance(meta, dict) else {}
 
 
 def read_image(path, *, key: str | None = None) -> ImageFile:
     """Read a PNG, EXR, NPY or NPZ image (see module docstring).
 
-    ``key`` picks the array of an NPZ; by default the first of ``xyz``,
-    ``image``, ``srgb``, ``raw`` present, or its only array.
+    ``key`` picks the array of an NPZ; by default ``xyz`` (a ``process``
+    output), else ``image`` (:func:`write_image`), else its only array
+    unless that is ``srgb`` or ``raw``: anything else is refused, never
+    guessed.  NPY and NPZ are checked by content (:mod:`.validate`).
     """
     p = Path(path)
     if not p.exists():
@@ -119,24 +128,30 @@ def read_image(path, *, key: str | None = None) -> ImageFile:
     if suffix == ".exr":
         return _read_exr(p)
     if suffix in (".npy", ".npz"):
+        from .validate import load_json_text, numpy_arrays
+
+        names = [n for n in numpy_arrays(p, suffix[1:]) if n != "meta"]  # by content; no pickles; fits memory
+        if suffix == ".npz" and key is None:
+            key = next((k for k in _NPZ_KEYS if k in names), None)
+            if key is None and len(names) == 1 and names[0] not in _NPZ_NOT_IMAGE:
+                key = names[0]
+            if key is None:  # never a guess: 'srgb' read as XYZ gave wrong metrics
+                raise CfaMitsubaError(f"{str(p)!r} has no {' or '.join(map(repr, _NPZ_KEYS))} array (arrays: "
+                                      f"{', '.join(names) or 'none'})")
         try:
             loaded = np.load(p, allow_pickle=False)
-        except (ValueError, OSError) as exc:
-            raise CfaMitsubaError(f"{str(p)!r} is not a readable numpy file: {exc}") from None
+        except (ValueError, OSError, EOFError) as exc:
+            raise CfaMitsubaError(f"{str(p)!r} is not a readable numpy file: {' '.join(str(exc).split())}") from None
         if suffix == ".npy":
             arr = loaded
             meta = {}
         else:
             with loaded:
-                names = list(loaded.files)
-                if key is None:
-                    key = next((k for k in ("xyz", "image", "srgb", "raw") if k in names), None)
-                    if key is None and len(names) == 1:
-                        key = names[0]
                 if key not in names:
                     raise CfaMitsubaError(f"{str(p)!r}: no array {key!r} (arrays: {', '.join(names)})")
                 arr = loaded[key]
-                meta = json.loads(str(loaded["meta"])) if "meta" in names else {}
+                meta = load_json_text(str(loaded["meta"]), f"{str(p)!r}'s meta") if "meta" in loaded.files else {}
+                meta = meta if isinstance(meta, dict) else {}
         if arr.dtype.kind not in "biuf":
             raise CfaMitsubaError(f"{str(p)!r}: array of type {arr.dtype} is not numeric")
         return ImageFile(np.asarray(arr, dtype=np.float64), suffix[1:], None, None, meta)

@@ -133,15 +133,16 @@ def _number(v) -> float | None:
 
 
 def our_meta(p: Path, header: dict) -> dict:
-    """Our metadata of a file we wrote (the sidecar, else the header's JSON), or {}."""
-    import json
-
+    """Our metadata of a file we wrote (the sidecar, else the header's JSON),
+    or {}; either is bounded and checked against the sidecar schema
+    (:mod:`.validate`): a malformed one is a one-line refusal."""
     from .sidecar import read_sidecar, sidecar_path
+    from .validate import check_sidecar, load_json_text
 
     if sidecar_path(p).exists():
         return read_sidecar(sidecar_path(p))
-    try:
-        meta = json.loads(header.get("cfaMitsuba", "{}"))
-    except (TypeError, ValueError):
+    raw = header.get("cfaMitsuba")
+    if not isinstance(raw, str):
         return {}
-    return meta if isinstance(meta, dict) else {}
+    what = f"{str(p)!r}'s cfaMitsuba attribute"
+    return check_sidecar(load_json_text(raw, what), what)

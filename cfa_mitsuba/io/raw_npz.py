@@ -97,7 +97,13 @@ def save_raw_npz(path, raw: RawImage, *, compress: bool = True) -> Path:
 
 def load_raw_npz(path) -> RawImage:
     """Read a raw file written by :func:`save_raw_npz`."""
+    from .validate import check_raw_arrays, load_json_text, numpy_arrays
+
     p = Path(path)
+    if p.is_dir():
+        raise CfaMitsubaError(f"raw file {str(p)!r} is a directory")
+    if p.exists():
+        numpy_arrays(p, "npz")  # by content: an archive, no pickled arrays, sizes that fit in memory
     try:
         with np.load(p, allow_pickle=False) as z:
             missing = [k for k in _ARRAYS if k not in z.files]
@@ -115,11 +121,11 @@ def load_raw_npz(path) -> RawImage:
         raise CfaMitsubaError(f"cannot read raw file {str(p)!r}: not a valid .npz ({exc})") from None
     if fmt != RAW_FORMAT:
         raise CfaMitsubaError(f"{str(p)!r}: unknown raw format {fmt!r} (expected {RAW_FORMAT!r})")
-    try:
-        settings = json.loads(str(d["settings_json"]))
-        meta = json.loads(str(d["meta_json"]))
-    except json.JSONDecodeError as exc:
-        raise CfaMitsubaError(f"{str(p)!r}: corrupt settings/meta JSON ({exc})") from None
+    settings = load_json_text(str(d["settings_json"]), f"{str(p)!r}: settings_json")
+    meta = load_json_text(str(d["meta_json"]), f"{str(p)!r}: meta_json")
+    if not isinstance(settings, dict) or not isinstance(meta, dict):
+        raise CfaMitsubaError(f"{str(p)!r}: settings_json and meta_json must be JSON objects")
+    check_raw_arrays(d, settings, repr(str(p)))  # QE in 0..1, positive exposure, tile = pattern
     seed = int(d["seed"])
     raw = RawImage(
         raw=d["raw"], pattern=d["pattern"], channels=tuple(str(c) for c in d["channels"]), spectra=d["spectra"],

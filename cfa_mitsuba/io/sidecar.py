@@ -48,16 +48,16 @@ def write_sidecar(path, meta: dict) -> Path:
 
 
 def read_sidecar(path) -> dict:
-    """Read a sidecar JSON object; a one-line error if missing or malformed."""
+    """Read a sidecar JSON object; a one-line error if missing, malformed,
+    nested too deeply or not of the sidecar schema (:mod:`.validate`)."""
+    from .validate import check_sidecar, load_json_text
+
     p = Path(path)
     try:
-        meta = json.loads(p.read_text())
+        text = p.read_text()
     except FileNotFoundError:
         raise CfaMitsubaError(f"no such sidecar: {str(p)!r}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise CfaMitsubaError(f"cannot read sidecar {str(p)!r}: {exc}") from None
-    except ValueError as exc:
-        raise CfaMitsubaError(f"sidecar {str(p)!r} is not valid JSON: {exc}") from None
-    if not isinstance(meta, dict):
-        raise CfaMitsubaError(f"sidecar {str(p)!r} is not a JSON object")
-    return meta
+    # bounded (size, depth), then checked against the schema of what the stages read
+    return check_sidecar(load_json_text(text, f"sidecar {str(p)!r}"), f"sidecar {str(p)!r}")

@@ -42,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io import limits as _limits
 from .. import spectra
 from ..errors import CfaMitsubaError
 from ..values import SpectralImage
@@ -130,9 +131,9 @@ def resolve_settings(scene, *, width=None, height=None, spp=None, luminance=None
     first bad setting.
     """
     sc = scene if isinstance(scene, Scene) else get_scene(scene)
-    w = _positive_int(sc.width if width is None else width, "width", maximum=32768)
-    h = _positive_int(sc.height if height is None else height, "height", maximum=32768)
-    n = _positive_int(sc.spp if spp is None else spp, "spp", maximum=1 << 20)
+    w = _positive_int(sc.width if width is None else width, "width", maximum=_limits.MAX_SIDE)
+    h = _positive_int(sc.height if height is None else height, "height", maximum=_limits.MAX_SIDE)
+    n = _positive_int(sc.spp if spp is None else spp, "spp", maximum=_limits.MAX_SPP)
     # The stratified sampler needs a square count (s x s strata per pixel);
     # round up here, as Mitsuba would, so the recorded spp is the true one.
     n = math.isqrt(n - 1) + 1
@@ -149,6 +150,7 @@ def resolve_settings(scene, *, width=None, height=None, spp=None, luminance=None
     if depth > 1 and not sc.is_3d:
         raise CfaMitsubaError(f"max_depth (--max-depth) applies to 3D scenes; {sc.name!r} is a chart seen directly")
     wl = _wavelengths(bands)
+    _limits.check_render(w, h, n, len(wl))  # samples, film size, memory: before Mitsuba loads
     v = _variant.choose_variant(variant)
     return sc, RenderConfig(width=w, height=h, spp=n, seed=s, wavelengths=wl, variant=v, oversample=k,
                             fov_deg=f, max_depth=depth, luminance_cd_m2=lum)

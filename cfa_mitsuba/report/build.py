@@ -9,6 +9,7 @@ import warnings
 from pathlib import Path
 
 from ..errors import CfaMitsubaError
+from ..io.owned import prune_written, record_written
 from .figure import RC, Absent, ReportFigure, figure_bytes
 from .results import Results, load_results
 
@@ -258,12 +259,12 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
     if formats:
         fig_dir.mkdir(exist_ok=True)
         keep = {f"{k}.{fmt}" for k, by in files.items() for fmt in by}
-        for old in fig_dir.iterdir():
-            if old.is_file() and old.suffix.lstrip(".") in FIGURE_FORMATS and old.name not in keep:
-                old.unlink()
+        prune_written(fig_dir, keep)  # only files an earlier build recorded writing: never the user's
     for key, by in files.items():
         for fmt, data in by.items():
             _write(fig_dir / f"{key}.{fmt}", data)
+    if formats:
+        record_written(fig_dir, keep)
     path = root / "report.html"
     _write(path, text)
     log(f"report: {len(figures)} figure(s), {len(absents)} absent, {len(text) / 1e6:.1f} MB, "

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import CfaMitsubaError
+from ..io.validate import safe_name
 
 from ..metrics import metrics_for_scene
 
@@ -380,6 +381,8 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
             continue
         ck.table(c, key, {"name": None, "file": None, **_RENDER_KEYS})
         cname = ck.string(c.get("name"), f"{key}.name")
+        if safe_name(cname) != cname:  # it names folders under details/: a label, never a path
+            ck.fail(f"{key}.name", f"must be a label of letters, digits, '-', '_' and inner '.' (got {cname!r})")
         if "file" not in c:
             ck.fail(f"{key}.file", "missing (the scene's Mitsuba XML file, or image = a measured spectral image)")
         f = base / ck.string(c["file"], f"{key}.file")
@@ -391,6 +394,9 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         scenes.append(SceneSpec(cname, str(f.resolve()), over, IMAGE_METRICS))
     if not scenes:
         ck.fail("scenes", "no scenes to run")
+    from .budget import check_scenes
+
+    check_scenes(ck.fail, scenes, render_common)  # renders and tasks within the limits, before any work
 
     # --- CFAs, demosaics, luminances -----------------------------------
     cfas = []
