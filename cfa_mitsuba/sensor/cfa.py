@@ -33,6 +33,7 @@ __all__ = [
     "DEFAULT_SPECTRA_SET",
     "get_cfa",
     "layout_info",
+    "list_layouts",
     "list_cfas",
     "register_cfa",
     "load_cfa_toml",
@@ -223,6 +224,11 @@ def _layouts() -> dict:
         return tomllib.loads(path.read_text())
     except (OSError, tomllib.TOMLDecodeError) as exc:  # a broken installation, not a user error
         raise CfaMitsubaError(f"cannot read the CFA layouts {str(path)!r}: {exc}") from None
+
+
+def list_layouts() -> list[str]:
+    """Names of the named layouts shipped in ``data/layouts.toml``."""
+    return list(_layouts())
 
 
 def layout_info(name: str) -> dict:
