@@ -30,7 +30,9 @@ files are read (:func:`read_curve_csv`): rows are sorted by wavelength
 in digitising order); a NaN is a missing sample, left out of its column;
 ``unit = "percent"`` is divided by 100 (and refused if the data are not in
 percent); a wavelength listed twice is kept once when both rows agree and
-refused when they do not.  Duplicated datasets are not shipped twice: a set
+refused when they do not; round-off below zero (|value| < 1e-9 of the
+column's peak, ``NikonD2xsNikon50mm.csv``) is set to 0, a larger negative
+value refused.  Duplicated datasets are not shipped twice: a set
 reuses the other set's letters (``borrow``).
 """
 
@@ -97,7 +99,8 @@ def read_curve_csv(path, columns=None, unit: str = "fraction", where: str | None
 
     Rows are sorted by wavelength; a NaN leaves that sample out of its
     column; a wavelength given twice is kept once if the rows agree and
-    refused otherwise; ``unit="percent"`` divides by 100 and refuses data
+    refused otherwise; negative round-off (above -1e-9 x the column's
+    peak) becomes 0, other negatives are refused; ``unit="percent"`` divides by 100 and refuses data
     whose maximum is not above 1 (then they are not percent).
     """
     p = Path(path)
@@ -141,6 +144,10 @@ def read_curve_csv(path, columns=None, unit: str = "fraction", where: str | None
         if np.count_nonzero(ok) < 2:
             raise CfaMitsubaError(f"{where}: {p.name}: column {name!r} has fewer than 2 finite values")
         y = y[ok]
+        tiny = (y < 0) & (y >= -1e-9 * np.abs(y).max())
+        if np.any(y[~tiny] < 0):
+            raise CfaMitsubaError(f"{where}: {p.name}: column {name!r} has negative values down to {y.min():g}")
+        y = np.where(tiny, 0.0, y)  # round-off below zero (NikonD2xs: -2e-19 against a peak of 7e5)
         if unit == "percent":
             if y.max() <= 1.0:
                 raise CfaMitsubaError(f"{where}: {p.name}: column {name!r} is declared in percent but peaks "
