@@ -1,13 +1,15 @@
 """Demosaicing benchmark: PSNR and time of every method on every CFA, and
 speed against colour-demosaicing on a 636 x 720 Bayer mosaic.
 
-    python benchmarks/bench_demosaic.py [--quick] [--repeat N]
+    python benchmarks/bench_demosaic.py [--quick] [--repeat N] [--new-layouts-only]
 
 Images: scikit-image's bundled photographs (astronaut, coffee, chelsea,
 rocket), 8-bit sRGB values / 255 taken as the scene, as the demosaicing
 literature does with Kodak; an 8-pixel border is excluded from PSNR.
 RGB CFAs are scored on R, G, B; the CMY and RGBW CFAs on their own
-white-balanced channels (``cm.isp.channels_from_rgb``).  Times are the
+white-balanced channels (``cm.isp.channels_from_rgb``).  The layouts of
+today's sensors (quad-bayer ... mono, issue 16) are scored the same way:
+the RGB ones on R, G, B, the others on their own channels.  Times are the
 minimum over ``--repeat`` runs (wall clock, one process): compare ratios
 within one run, since other processes share the machine.
 """
@@ -30,6 +32,8 @@ METHODS = ("bilinear", "laplacian", "adaptive-laplacian", "pocs")
 PHOTOS = ("astronaut", "coffee", "chelsea", "rocket")
 RGB_CFAS = ("bayer", "rgb1", "rgb2", "rgb3", "rgb4", "rgb5")
 OTHER_CFAS = ("cmy1", "cmy2", "cmy3", "rgbw1", "rgbw2", "rgbw3")
+NEW_RGB_CFAS = ("quad-bayer", "nona", "tetra2", "xtrans")
+NEW_OTHER_CFAS = ("ryyb", "rccb", "rccc", "kodak-cfa3", "sony-rgbw")  # mono: nothing to demosaic
 BORDER = 8
 
 
@@ -118,18 +122,24 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="192 x 192 crops, one repeat")
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--new-layouts-only", action="store_true", help="only the layouts of today's sensors")
     args = ap.parse_args()
     repeat = 1 if args.quick else args.repeat
     load = os.getloadavg() if hasattr(os, "getloadavg") else ("?",)
     print(f"# bench_demosaic: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load average {load[0]:.2f} at start; numpy {np.__version__}\n")
     imgs = photos(args.quick)
-    print("## Speed (Bayer)\n")
-    speed_table(repeat)
-    print("\n## RGB CFAs: PSNR on R, G, B\n")
-    quality_table(RGB_CFAS, imgs, repeat, rgb=True)
-    print("\n## CMY and RGBW CFAs: PSNR on the CFA's own white-balanced channels\n")
-    quality_table(OTHER_CFAS, imgs, repeat, rgb=False)
+    if not args.new_layouts_only:
+        print("## Speed (Bayer)\n")
+        speed_table(repeat)
+        print("\n## RGB CFAs: PSNR on R, G, B\n")
+        quality_table(RGB_CFAS, imgs, repeat, rgb=True)
+        print("\n## CMY and RGBW CFAs: PSNR on the CFA's own white-balanced channels\n")
+        quality_table(OTHER_CFAS, imgs, repeat, rgb=False)
+    print("\n## Layouts of today's sensors, RGB: PSNR on R, G, B\n")
+    quality_table(NEW_RGB_CFAS, imgs, repeat, rgb=True)
+    print("\n## Layouts of today's sensors, others: PSNR on the CFA's own white-balanced channels\n")
+    quality_table(NEW_OTHER_CFAS, imgs, repeat, rgb=False)
     load = os.getloadavg() if hasattr(os, "getloadavg") else ("?",)
     print(f"\nload average {load[0]:.2f} at the end")
 

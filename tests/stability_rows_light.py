@@ -29,7 +29,8 @@ def _():
     s = sweep(100.0)
     out = _sweep_row(100.0)
     assert s["saturated"] == 0 and s["raw"].max() < 4095
-    assert s["de00"] < 2.5 and s["ssim"] > 0.9 and s["haarpsi"] > 0.8
+    # bayer's ISETCam RGB filters: their fit alone misses the chart by 2.57 dE00 (tests/test_colour.py)
+    assert s["de00"] < 3.0 and s["ssim"] > 0.9 and s["haarpsi"] > 0.8
     # MTF50 102.4 cy/mm (docs/stability.md; one fixed noise realisation): within 3 %
     assert isinstance(s["mtf"], tuple) and s["mtf"][1] == "image" and s["mtf"][0] == pytest.approx(102.4, rel=0.03)
     return out
@@ -69,16 +70,20 @@ for _lum in (0.01, 1e5):
                 try:
                     cam = M.mean_match(img.xyz, ideal.xyz, border=2)
                 except CfaMitsubaError as exc:
-                    # read noise about black can leave a camera image's mean below 0
-                    assert "test image's interior mean is -" in str(exc) and lum < 1, exc
+                    # read noise about black can leave a camera image's mean below 0; at 1e5 every
+                    # well is full and cmy2's six-channel matrix (ISETCam's CMY dyes) maps the
+                    # clipped, white-balanced (so unequal) channels to a negative XYZ
+                    assert "test image's interior mean is -" in str(exc), exc
+                    assert lum < 1 or name == "cmy2", exc
                     assert img.xyz[2:-2, 2:-2].mean() < 0
                     refused.append(f"{name}/{m}")
                     continue
                 de[name, m] = float(M.delta_e(ideal.xyz, cam, ideal.white_xyz, patches=geo["patches"]))
         finite(list(de.values()))
-        assert len(refused) <= 8, refused  # the exception, not the rule
+        # the exception, not the rule: measured 17 of 88 at 0.01 (cmy2, the RGBW CFAs, rccc), 4 at 1e5
+        assert len(refused) <= 20, refused
         lo, hi = min(de, key=de.get), max(de, key=de.get)
-        return (f"12 CFAs x 4 demosaics finite; dE00 {de[lo]:.1f} ({lo[0]}, {lo[1]}) .. {de[hi]:.1f} "
+        return (f"{len(cm.sensor.list_cfas())} CFAs x 4 demosaics finite; dE00 {de[lo]:.1f} ({lo[0]}, {lo[1]}) .. {de[hi]:.1f} "
                 f"({hi[0]}, {hi[1]})" + (f"; mean matching refused (camera mean < 0): {', '.join(refused)}"
                                           if refused else ""))
 

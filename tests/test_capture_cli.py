@@ -196,5 +196,5 @@ def test_settings_and_meta_are_json(exr, tmp_path, capsys):
         settings = json.loads(str(z["settings_json"]))
         meta = json.loads(str(z["meta_json"]))
     assert settings["cfa"] == {"name": "rgbw2", "description": cm.sensor.get_cfa("rgbw2").description,
-                               "tile": "W B W G / B W G W / W G W R / G W R W"}
+                               "tile": "W B W G / B W G W / W G W R / G W R W", "spectra": "isetcam-rgbw"}
     assert meta["optics"]["f_number"] == 4.0 and meta["optics"]["boundary"].startswith("mirror")

@@ -70,7 +70,7 @@ def _nikon_native():
     return np.asarray(m.wavelengths), m.values * (0.6 / m.values.sum(axis=1).max())
 
 
-def test_spectra_follow_the_rules():
+def test_the_nikon_set_follows_the_rules():
     wl, rgb = _nikon_native()
     r, g, b = rgb.T
     w = r + g + b
@@ -84,13 +84,14 @@ def test_spectra_follow_the_rules():
     t = {k: np.where(w > 1e-12, expect[k] / safe, 0) for k in "CMY"}
     stacked = {"C2": t["C"] ** 2 * w, "M2": t["M"] ** 2 * w, "Y2": t["Y"] ** 2 * w,
                "R": t["M"] * t["Y"] * w, "G": t["C"] * t["Y"] * w, "B": t["C"] * t["M"] * w}
-    cmy2 = get_cfa("cmy2")
+    cmy2 = get_cfa("cmy2", spectra="nikon-d5100")
     for letter, curve in stacked.items():
         np.testing.assert_allclose(cmy2.curves[letter][1], curve, rtol=1e-12, atol=1e-15)
     # on the band grid: R, G, B are spectra.camera_rgb, W their sum (band averaging is linear)
     grid = cm.spectra.DEFAULT_WAVELENGTHS
-    np.testing.assert_allclose(get_cfa("bayer").sensitivities(grid), cm.spectra.camera_rgb(grid).T, rtol=1e-12)
-    rgbw = get_cfa("rgbw1").sensitivities(grid)
+    np.testing.assert_allclose(get_cfa("bayer", spectra="nikon-d5100").sensitivities(grid),
+                               cm.spectra.camera_rgb(grid).T, rtol=1e-12)
+    rgbw = get_cfa("rgbw1", spectra="nikon-d5100").sensitivities(grid)
     np.testing.assert_allclose(rgbw[3], rgbw[:3].sum(axis=0), rtol=1e-12)
     assert 0.58 < rgbw[3].max() <= 0.6  # W peaks at 0.6 on the native grid
 

@@ -53,7 +53,8 @@ def test_uniform_field_electrons_match_the_hand_calculation():
     photons = e_irr * (WL * 1e-9 / (H_PLANCK * C_LIGHT)) * 10.0  # per s per m^2 in each 10 nm box
     expect = t * pitch**2 * 1.0 * (nikon_qe() @ photons)  # electrons of R, G, B pixels (FF = 1)
     # --- through the pipeline (noise off, centre pixels: RI = 1 - 6e-5) --
-    raw = capture(uniform_scene(lum), "bayer", exposure_s=t, noise="off")
+    # the Nikon set: its R, G, B are the NPL data computed independently above
+    raw = capture(uniform_scene(lum), cm.sensor.get_cfa("bayer", spectra="nikon-d5100"), exposure_s=t, noise="off")
     e = raw.raw / raw.dn_per_electron
     got = {"G": e[16, 24], "R": e[16, 25], "B": e[17, 24]}  # GRBG tile, even row/col is G
     for i, ch in enumerate("RGB"):

@@ -18,6 +18,12 @@ through a diffraction-limited lens and a sensor with the given CFA.
   cfa-mitsuba capture scene.exr --cfa bayer --out bayer.npz
   cfa-mitsuba capture scene.exr --cfa ideal --out ideal.npz
   cfa-mitsuba capture scene.exr --cfa my_cfa.toml --luminance 12 --noise all --out dim.npz
+  cfa-mitsuba capture scene.exr --sensor imx363 --out imx363.npz
+  cfa-mitsuba capture scene.exr --cfa cmy1 --spectra nikon-d5100 --out cmy1_nikon.npz
+
+--sensor NAME starts from a measured preset (cfa-mitsuba list sensors): its
+pixel, its CFA unless --cfa is given, and its spectra set unless --spectra
+is given; the sensor options below override single values.
 
 Without --luminance the EXR's radiance is kept.  --exposure auto fills the
 brightest pixel's well to 95 % for the scene at the reference luminance
@@ -69,8 +75,14 @@ def _distance(text: str) -> float:
 
 def add_arguments(parser) -> None:
     parser.add_argument("exr", metavar="EXR", help="spectral EXR (JCGT layout), sidecar JSON beside it optional")
-    parser.add_argument("--cfa", required=True, metavar="NAME|FILE.toml|ideal",
-                        help="a built-in CFA (cfa-mitsuba list cfas), a CFA TOML file, or 'ideal' (XYZ reference)")
+    parser.add_argument("--cfa", metavar="NAME|FILE.toml|ideal",
+                        help="a built-in CFA (cfa-mitsuba list cfas), a CFA TOML file, or 'ideal' (XYZ reference); "
+                             "required unless --sensor gives one")
+    parser.add_argument("--spectra", metavar="SET",
+                        help="spectra set of the CFA's filters (cfa-mitsuba list spectra; default: the CFA's own, "
+                             "or the --sensor preset's)")
+    parser.add_argument("--sensor", metavar="NAME",
+                        help="a measured sensor preset (cfa-mitsuba list sensors): pixel, CFA and spectra")
     parser.add_argument("--out", required=True, metavar="RAW.npz", help="output raw file (.npz), written atomically")
     parser.add_argument("--luminance", type=_positive_float, metavar="CD_M2",
                         help="scale the scene to this mean luminance (default: keep the EXR's radiance)")
@@ -146,16 +158,24 @@ def run(args) -> int:
     from ..errors import CfaMitsubaError
     from ..io.raw_npz import save_raw_npz
     from ..optics import OpticsParams, compute_optics
-    from ..sensor import SensorParams, capture, capture_ideal, get_cfa
+    from ..sensor import SensorParams, capture, capture_ideal, get_cfa, get_sensor_preset
 
     out = Path(args.out)
     _check_output(out, args.out)
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        sensor = SensorParams().with_(**{k: getattr(args, k) for k in _SENSOR_OPTIONS})
-        ideal = args.cfa == "ideal"
-        cfa = None if ideal else get_cfa(args.cfa)  # a bad CFA fails before the EXR is read
+        preset = get_sensor_preset(args.sensor) if args.sensor else None
+        base = preset.params if preset else SensorParams()
+        sensor = base.with_(**{k: getattr(args, k) for k in _SENSOR_OPTIONS})
+        cfa_name = args.cfa or (preset.cfa_name if preset else None)
+        if cfa_name is None:
+            raise CfaMitsubaError("--cfa is required (or --sensor NAME, whose CFA is used)")
+        spectra = args.spectra or (preset.spectra if preset else None)
+        ideal = cfa_name == "ideal"
+        if ideal and args.spectra:
+            raise CfaMitsubaError("--spectra does not apply to the ideal sensor (CIE 1931 XYZ)")
+        cfa = None if ideal else get_cfa(cfa_name, spectra=spectra)  # a bad CFA fails before the EXR is read
         optics = OpticsParams(f_number=args.f_number, lens_transmittance=args.lens_transmittance,
                               relative_illumination=not args.no_relative_illumination,
                               diffraction=not args.no_diffraction, fov_deg=args.fov_deg,
@@ -185,13 +205,17 @@ def run(args) -> int:
     st, meta, opt = raw.settings, raw.meta, raw.meta["optics"]
     h, w = raw.raw.shape[:2]
     k = meta["oversample"]
-    lines = [f"wrote {out}: {st['cfa']['name']} ({st['cfa']['tile']}), {w} x {h} pixels of "
+    spec = f", spectra {st['cfa']['spectra']}" if st["cfa"].get("spectra") else ""
+    lines = [f"wrote {out}: {st['cfa']['name']} ({st['cfa']['tile']}{spec}), {w} x {h} pixels of "
              f"{sensor.pixel_pitch_um:g} um from {w * k} x {h * k} EXR pixels (K = {k}, {meta['oversample_source']})"]
     lens = (f"lens f/{opt['f_number']:g} ({opt['f_number_source']}; working f/{opt['working_f_number']:.4g}), "
             f"focal length "
             f"{opt['focal_length_mm']:.4g} mm, FOV {opt['fov_deg']:g} deg ({opt['fov_source']}), "
             f"distance {opt['scene_distance_m']} m ({opt['scene_distance_source']})")
     lines.append("  " + lens)
+    if args.sensor:
+        lines.append(f"  sensor preset {args.sensor}: {sensor.pixel_pitch_um:g} um, well {sensor.well_capacity_e:.0f} e-, "
+                     f"read noise {sensor.read_noise_e:.3g} e-, {sensor.adc_bits} bit")
     if ideal:
         y = raw.raw[..., 1]
         lines.append(f"  luminance {meta['luminance_cd_m2']:.4g} cd/m^2; XYZ absolute (Y cd/m^2): "

@@ -1,10 +1,10 @@
-"""``cfa-mitsuba list scenes|cfas|demosaics|metrics``."""
+"""``cfa-mitsuba list scenes|cfas|spectra|sensors|demosaics|metrics``."""
 
 from __future__ import annotations
 
-HELP = "list the built-in scenes, CFAs, demosaicing methods or metrics"
+HELP = "list the built-in scenes, CFAs, spectra sets, sensor presets, demosaicing methods or metrics"
 
-KINDS = ("scenes", "cfas", "demosaics", "metrics")
+KINDS = ("scenes", "cfas", "spectra", "sensors", "demosaics", "metrics")
 
 
 def add_arguments(parser) -> None:
@@ -22,11 +22,32 @@ def _rows(kind: str) -> list[tuple[str, str]]:
         return list_scenes()
     if kind == "cfas":
         from ..sensor import get_cfa, list_cfas
+        from ..sensor.cfa import layout_info, list_layouts
 
         rows = []
         for name in list_cfas():
             cfa = get_cfa(name)
-            rows.append((name, f"{cfa.tile_text():<40} {cfa.description}"))
+            src = layout_info(name)["source"] if name in list_layouts() else "user"
+            rows.append((name, f"{cfa.tile_text():<40} {cfa.description}; spectra {cfa.spectra or 'own'}; "
+                               f"source: {src}"))
+        return rows
+    if kind == "spectra":
+        from ..sensor import get_spectra_set, list_spectra_sets
+
+        return [(n, f"{', '.join(s.letters)}: {s.description}; source: {s.source}")
+                for n, s in ((n, get_spectra_set(n)) for n in list_spectra_sets())]
+    if kind == "sensors":
+        from ..sensor import get_sensor_preset, list_sensor_presets
+
+        rows = []
+        for n in list_sensor_presets():
+            p = get_sensor_preset(n)
+            q = p.params
+            rows.append((n, f"{p.description}; {q.pixel_pitch_um:g} um, fill {q.fill_factor:g}, "
+                            f"well {q.well_capacity_e:.0f} e-, read noise {q.read_noise_e:.3g} e-, "
+                            f"dark {q.dark_current_e_s:.3g} e-/s, PRNU {q.prnu_percent:g} %, "
+                            f"{q.adc_bits} bit, black {q.black_level_dn:g} DN; CFA {p.cfa_name}, "
+                            f"spectra {p.spectra}; source: {p.source}"))
         return rows
     if kind == "demosaics":
         from ..isp import list_demosaics

@@ -265,7 +265,7 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     # wells that were full before read-out (read noise then spreads their codes)
     meta["saturated_fraction"] = float(np.count_nonzero(electrons >= sensor.well_capacity_e)) / electrons.size
     settings = {
-        "cfa": {"name": cfa.name, "description": cfa.description, "tile": cfa.tile_text()},
+        "cfa": {"name": cfa.name, "description": cfa.description, "tile": cfa.tile_text(), "spectra": cfa.spectra},
         "noise": noise,
         "exposure_mode": mode,
         "exposure_s": exposure,

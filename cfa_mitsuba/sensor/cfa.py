@@ -1,24 +1,22 @@
 """Colour filter arrays as data: a repeating tile of filter names plus a
 spectral sensitivity per filter.
 
-The twelve CFAs of Bae 2020 (Fig 1) ship as named entries; users add their
-own in TOML (:func:`load_cfa_toml`) or with :func:`register_cfa`.  Tiles are
-written row by row from the top-left pixel of the image, which carries
-``pattern[0, 0]``; they repeat periodically (research/cfa-demosaic.md, s. 1,
-gives the source and confidence of each tile).
+The named layouts (the twelve CFAs of Bae 2020, Fig 1, and the layouts of
+today's sensors) are data, ``cfa_mitsuba/data/layouts.toml``: a tile, a
+default spectra set, a source.  Their curves come from a named spectra set
+(:mod:`cfa_mitsuba.sensor.spectra_sets`); the paper's CFAs use their
+family's ISETCam filters by default, and any set can be chosen instead
+(``get_cfa("bayer", spectra="nikon-d5100")``).  Users add their own CFAs in
+TOML (:mod:`cfa_mitsuba.sensor.cfa_toml`) or with :func:`register_cfa`.
+Tiles are written row by row from the top-left pixel of the image, which
+carries ``pattern[0, 0]``; they repeat periodically (research/cfa-demosaic.md,
+s. 1, gives the source and confidence of each of the paper's tiles).
 
-Spectra (research/cfa-demosaic.md, s. 2.3, option A): R, G, B are the
-quantum efficiencies of colour-science's 'Nikon 5100 (NPL)' camera
-(:func:`cfa_mitsuba.spectra.camera_rgb`); the complementary and panchromatic
-filters are built from them, C = G + B, M = R + B, Y = R + G, W = R + G + B
-(ideal block dyes on the same silicon).  Stacked dyes (cmy2) multiply dye
-transmittances, a dye's transmittance being its sensitivity divided by W's,
-so that the silicon's QE counts once: C2 = (C/W)^2 W, R = (M/W)(Y/W) W, ...
-All curves are built on the camera data's native 5-nm grid and band-averaged
-to a render's grid only when used (:meth:`CFA.sensitivities`).  A curve
-tabulated exactly on the requested band centres is taken as band values
-as it stands, so a CFA rebuilt from a raw file's ``spectra``
-(:func:`cfa_from_raw`) reproduces them bit for bit.
+Curves stay on their source grids and are band-averaged to a render's grid
+only when used (:meth:`CFA.sensitivities`).  A curve tabulated exactly on
+the requested band centres is taken as band values as it stands, so a CFA
+rebuilt from a raw file's ``spectra`` (:func:`cfa_from_raw`) reproduces
+them bit for bit.
 
 A CFA is refused, with one line naming the problem, when its tile is empty
 or ragged, a filter name is invalid or has no spectrum, a spectrum is given
@@ -32,7 +30,10 @@ from __future__ import annotations
 __all__ = [
     "CFA",
     "CANONICAL_ORDER",
+    "DEFAULT_SPECTRA_SET",
     "get_cfa",
+    "layout_info",
+    "list_layouts",
     "list_cfas",
     "register_cfa",
     "load_cfa_toml",
@@ -45,12 +46,16 @@ import functools
 import tomllib
 import warnings
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from .. import spectra as _spectra
 from ..errors import CfaMitsubaError
+from .spectra_sets import DATA_DIR, get_spectra_set
+
+#: The spectra set of a user TOML's built-in letters unless it names one
+#: (``spectra_set = "..."``): the Nikon construction, as before sets existed.
+DEFAULT_SPECTRA_SET = "nikon-d5100"
 
 #: Channel order of every CFA: these letters first, in this order, then any
 #: other filter names in order of first appearance in the tile (row by row).
@@ -71,6 +76,7 @@ class CFA:
         efficiency (electrons per photon, filter x silicon), linearly
         interpolated between points.
     description : one line for ``list cfas`` and the report.
+    spectra : the spectra set the curves come from ("" when given by hand).
     """
 
     name: str
@@ -78,6 +84,7 @@ class CFA:
     channels: tuple[str, ...]
     curves: dict = field(repr=False)
     description: str = ""
+    spectra: str = ""
 
     @property
     def tile_shape(self) -> tuple[int, int]:
@@ -180,8 +187,10 @@ def _check_curve(name: str, wl, qe, where: str):
     return wl, qe
 
 
-def make_cfa(name: str, tile, curves: dict, description: str = "", where: str | None = None) -> CFA:
-    """Build and validate a :class:`CFA` from a tile and ``{filter: (wl, qe)}``."""
+def make_cfa(name: str, tile, curves: dict, description: str = "", where: str | None = None,
+             spectra: str = "") -> CFA:
+    """Build and validate a :class:`CFA` from a tile and ``{filter: (wl, qe)}``
+    (``spectra``: the name of the set the curves come from, if any)."""
     where = where or f"CFA {name!r}"
     pattern = _parse_tile(tile, where)
     channels = _order_channels(pattern)
@@ -194,73 +203,44 @@ def make_cfa(name: str, tile, curves: dict, description: str = "", where: str | 
     if unused:
         raise CfaMitsubaError(f"{where}: channel {unused[0]!r} has a spectrum but no samples in the tile")
     checked = {c: _check_curve(c, *curves[c], where) for c in channels}
-    return CFA(name=name, pattern=pattern, channels=channels, curves=checked, description=description)
+    return CFA(name=name, pattern=pattern, channels=channels, curves=checked, description=description,
+               spectra=spectra)
 
 
-# --- built-in filters -------------------------------------------------------
+# --- named layouts ----------------------------------------------------------
 
 
-@functools.lru_cache(maxsize=1)
-def _native_rgb():
-    """R, G, B QE of 'Nikon 5100 (NPL)' on its native grid, scaled as in
-    :func:`cfa_mitsuba.spectra.camera_rgb`."""
-    colour = _spectra._colour()
-    msds = colour.MSDS_CAMERA_SENSITIVITIES["Nikon 5100 (NPL)"]
-    values = msds.values * (_spectra.CAMERA_PEAK_QE / msds.values.sum(axis=1).max())
-    return np.asarray(msds.wavelengths, dtype=np.float64), values
-
-
-def _dye(qe: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Transmittance of a dye from its sensitivity on the same silicon."""
-    return np.divide(qe, w, out=np.zeros_like(qe), where=w > 1e-12)
+def builtin_filter_curve(letter: str, spectra_set: str = DEFAULT_SPECTRA_SET) -> tuple[np.ndarray, np.ndarray]:
+    """``(wavelengths_nm, qe)`` of a filter of a spectra set (default the
+    Nikon set: R, G, B, C, M, Y, W, the doubled dyes C2, M2, Y2 and the
+    stacked pairs MY (= cmy2's R), CY (G), CM (B))."""
+    return get_spectra_set(spectra_set).curve(letter)
 
 
 @functools.lru_cache(maxsize=1)
-def _builtin_curves() -> dict:
-    wl, rgb = _native_rgb()
-    r, g, b = rgb[:, 0], rgb[:, 1], rgb[:, 2]
-    c, m, y, w = g + b, r + b, r + g, r + g + b
-    tc, tm, ty = _dye(c, w), _dye(m, w), _dye(y, w)
-    curves = {
-        "R": r, "G": g, "B": b, "C": c, "M": m, "Y": y, "W": w,
-        # cmy2: two stacked dye layers (Sajadi et al. 2011).
-        "C2": tc * tc * w, "M2": tm * tm * w, "Y2": ty * ty * w,
-        "MY": tm * ty * w, "CY": tc * ty * w, "CM": tc * tm * w,
-    }
-    return {k: (wl, v) for k, v in curves.items()}
+def _layouts() -> dict:
+    path = DATA_DIR / "layouts.toml"
+    try:
+        return tomllib.loads(path.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as exc:  # a broken installation, not a user error
+        raise CfaMitsubaError(f"cannot read the CFA layouts {str(path)!r}: {exc}") from None
 
 
-def builtin_filter_curve(letter: str) -> tuple[np.ndarray, np.ndarray]:
-    """``(wavelengths_nm, qe)`` of a built-in filter: R, G, B, C, M, Y, W,
-    the doubled dyes C2, M2, Y2, or the stacked pairs MY (= cmy2's R), CY
-    (G), CM (B)."""
-    curves = _builtin_curves()
-    if letter not in curves:
-        raise CfaMitsubaError(f"unknown built-in filter {letter!r} (known: {', '.join(curves)})")
-    return curves[letter]
+def list_layouts() -> list[str]:
+    """Names of the named layouts shipped in ``data/layouts.toml``."""
+    return list(_layouts())
 
 
-#: name -> (tile, {filter: built-in curve name}, description)
-_BUILTINS: dict[str, tuple[str, dict, str]] = {
-    "bayer": ("G R / B G", {}, "Bayer (GRBG phase, ISETCam's default); G 1/2, R 1/4, B 1/4"),
-    "rgb1": ("G R G B / G B G R", {}, "Yamanaka: G in full columns, R/B checkerboard in the others"),
-    "rgb2": ("G R / G B / R G / B G", {}, "Lukac: G pairs vertically, R and B rows shifted every two rows"),
-    "rgb3": ("R G B", {}, "vertical stripes R, G, B"),
-    "rgb4": ("R G B / B R G / G B R", {}, "diagonal stripes"),
-    "rgb5": ("G R G B / B G R G / G B G R / R G B G", {}, "modified Bayer: G quincunx, R and B in every row and column"),
-    "cmy1": ("Y C / M Y", {}, "CMY Bayer-type: Y quincunx, C and M"),
-    "cmy2": (
-        "C2 M2 Y2 / R G B",
-        {"R": "MY", "G": "CY", "B": "CM"},
-        "switchable primaries (RGB+CMY mode): doubled dyes over stacked pairs",
-    ),
-    "cmy3": ("C Y / G M", {}, "CYGM"),
-    "rgbw1": ("G R / B W", {}, "Bayer with the second G replaced by W"),
-    "rgbw2": ("W B W G / B W G W / W G W R / G W R W", {}, "Kodak CFA 2.0: W checkerboard, colours on diagonals"),
-    "rgbw3": ("W R W B / G W G W", {}, "W checkerboard; one line R and B, the other G"),
-}
+def layout_info(name: str) -> dict:
+    """A named layout's entry: ``tile``, ``spectra`` (default set),
+    ``description``, ``source`` and optional ``filters`` (renames)."""
+    if name not in _layouts():
+        raise CfaMitsubaError(f"unknown CFA {name!r} (known: {', '.join(list_cfas())}; or a FILE.toml)")
+    return dict(_layouts()[name])
+
 
 _REGISTRY: dict[str, CFA] = {}
+_BUILT: dict[tuple[str, str], CFA] = {}
 
 
 def register_cfa(cfa: CFA, *, replace: bool = False) -> CFA:
@@ -270,171 +250,72 @@ def register_cfa(cfa: CFA, *, replace: bool = False) -> CFA:
         raise CfaMitsubaError(f"register_cfa needs a CFA, got {type(cfa).__name__}")
     if cfa.name == "ideal":
         raise CfaMitsubaError("'ideal' is reserved for the XYZ reference sensor")
-    if (cfa.name in _REGISTRY or cfa.name in _BUILTINS) and not replace:
+    if (cfa.name in _REGISTRY or cfa.name in _layouts()) and not replace:
         raise CfaMitsubaError(f"a CFA named {cfa.name!r} is already registered")
     _REGISTRY[cfa.name] = cfa
     return cfa
 
 
-def _builtin(name: str) -> CFA:
-    tile, renames, description = _BUILTINS[name]
-    letters = _order_channels(_parse_tile(tile, name))
-    curves = {c: builtin_filter_curve(renames.get(c, c)) for c in letters}
-    return make_cfa(name, tile, curves, description)
+def _builtin(name: str, spectra: str | None) -> CFA:
+    info = layout_info(name)
+    spectra = spectra or info["spectra"]
+    key = (name, spectra)
+    if key not in _BUILT:
+        sset = get_spectra_set(spectra)
+        renames = info.get("filters", {})
+        letters = _order_channels(_parse_tile(info["tile"], name))
+        where = f"CFA {name!r} with spectra set {spectra!r}"
+        missing = [c for c in letters if renames.get(c, c) not in sset.curves]
+        if missing:
+            raise CfaMitsubaError(f"{where}: the set has no filter {renames.get(missing[0], missing[0])!r} "
+                                  f"(it has {', '.join(sset.letters)})")
+        curves = {c: sset.curve(renames.get(c, c)) for c in letters}
+        _BUILT[key] = make_cfa(name, info["tile"], curves, info["description"], where, spectra=spectra)
+    return _BUILT[key]
 
 
 def list_cfas() -> list[str]:
-    """Names of the registered CFAs: the 12 built-ins, then user additions."""
-    return list(_BUILTINS) + [n for n in _REGISTRY if n not in _BUILTINS]
+    """Names of the registered CFAs: the named layouts, then user additions."""
+    return list(_layouts()) + [n for n in _REGISTRY if n not in _layouts()]
 
 
-def get_cfa(name) -> CFA:
+def get_cfa(name, spectra: str | None = None) -> CFA:
     """A CFA by registry name (``"bayer"``, ``"rgbw2"``, ...) or from a TOML
-    file (a path ending in ``.toml``)."""
+    file (a path ending in ``.toml``).
+
+    ``spectra`` names a spectra set (``cfa-mitsuba list spectra``) to use
+    instead of the layout's default (for a TOML file: instead of its
+    ``spectra_set``, for the filters it does not give under ``[spectra]``).
+    """
     if isinstance(name, CFA):
+        if spectra is not None and spectra != name.spectra:
+            raise CfaMitsubaError(f"CFA {name.name!r} is already built; give its name to choose spectra set "
+                                  f"{spectra!r}")
         return name
     key = str(name)
+    if spectra is not None:
+        get_spectra_set(spectra)  # an unknown set is refused first, by name
     if key.lower().endswith(".toml"):
-        return load_cfa_toml(key)
-    if key not in _REGISTRY and key in _BUILTINS:
-        _REGISTRY[key] = _builtin(key)
-    if key not in _REGISTRY:
-        if key == "ideal":
-            raise CfaMitsubaError("'ideal' is not a CFA: it is the XYZ reference sensor (sensor.capture_ideal)")
-        raise CfaMitsubaError(f"unknown CFA {key!r} (known: {', '.join(list_cfas())}; or a FILE.toml)")
-    return _REGISTRY[key]
+        from .cfa_toml import load_cfa_toml
+
+        return load_cfa_toml(key, spectra=spectra)
+    if key in _REGISTRY:
+        if spectra is not None and spectra != _REGISTRY[key].spectra:
+            raise CfaMitsubaError(f"CFA {key!r} was registered with its own curves; a spectra set applies to "
+                                  "the named layouts and TOML files")
+        return _REGISTRY[key]
+    if key in _layouts():
+        return _builtin(key, spectra)
+    if key == "ideal":
+        raise CfaMitsubaError("'ideal' is not a CFA: it is the XYZ reference sensor (sensor.capture_ideal)")
+    raise CfaMitsubaError(f"unknown CFA {key!r} (known: {', '.join(list_cfas())}; or a FILE.toml)")
 
 
-# --- TOML -------------------------------------------------------------------
+def load_cfa_toml(path, spectra: str | None = None) -> CFA:
+    """Read a user CFA (:func:`cfa_mitsuba.sensor.cfa_toml.load_cfa_toml`)."""
+    from .cfa_toml import load_cfa_toml as _load
 
-
-def _read_csv_curve(path: Path, where: str):
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise CfaMitsubaError(f"{where}: cannot read spectrum file {str(path)!r}: {exc.strerror}") from None
-    rows = []
-    for line in text.splitlines():
-        line = line.split("#", 1)[0].strip()
-        if not line:
-            continue
-        parts = [p for p in line.replace(";", ",").replace("\t", ",").split(",") if p.strip()]
-        try:
-            rows.append([float(p) for p in parts[:2]])
-        except ValueError:
-            if rows:  # a header is allowed only before the data
-                raise CfaMitsubaError(f"{where}: {str(path)!r}: non-numeric line {line!r}") from None
-            continue
-        if len(rows[-1]) != 2:
-            raise CfaMitsubaError(f"{where}: {str(path)!r}: expected 'wavelength_nm, value' per line")
-    if not rows:
-        raise CfaMitsubaError(f"{where}: {str(path)!r} holds no data")
-    arr = np.array(rows)
-    return arr[:, 0], arr[:, 1]
-
-
-def _colour_curve(spec: str, where: str):
-    """``colour:<camera sensitivities name>/<label>``, e.g.
-    ``colour:Nikon 5100 (NPL)/green``; values as published (peak 1 for the
-    NPL sets), so give a ``scale`` to make them quantum efficiencies."""
-    colour = _spectra._colour()
-    body = spec[len("colour:"):]
-    name, _, label = body.rpartition("/")
-    msds = colour.MSDS_CAMERA_SENSITIVITIES
-    if name not in msds:
-        raise CfaMitsubaError(f"{where}: unknown colour-science camera {name!r} (known: {', '.join(msds)})")
-    labels = list(msds[name].labels)
-    if label not in labels:
-        raise CfaMitsubaError(f"{where}: camera {name!r} has no channel {label!r} (known: {', '.join(labels)})")
-    m = msds[name]
-    return np.asarray(m.wavelengths, float), np.asarray(m.values[:, labels.index(label)], float)
-
-
-def _curve_from_toml(letter: str, spec, base: Path, where: str):
-    scale = 1.0
-    if isinstance(spec, dict):
-        unknown = set(spec) - {"source", "scale", "wavelengths", "values"}
-        if unknown:
-            raise CfaMitsubaError(f"{where}: spectra.{letter}: unknown key {sorted(unknown)[0]!r}")
-        scale = spec.get("scale", 1.0)
-        if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not scale > 0:
-            raise CfaMitsubaError(f"{where}: spectra.{letter}.scale must be a positive number")
-        if "wavelengths" in spec or "values" in spec:
-            try:
-                wl = np.asarray(spec.get("wavelengths", []), dtype=np.float64)
-                qe = np.asarray(spec.get("values", []), dtype=np.float64) * scale
-            except (TypeError, ValueError):
-                raise CfaMitsubaError(f"{where}: spectra.{letter}: wavelengths and values must be lists of numbers") from None
-            return _check_curve(letter, wl, qe, where)
-        if "source" not in spec:
-            raise CfaMitsubaError(f"{where}: spectra.{letter} needs 'source' or 'wavelengths' and 'values'")
-        spec = spec["source"]
-    if not isinstance(spec, str):
-        raise CfaMitsubaError(f"{where}: spectra.{letter} must be a string (built-in filter, .csv file or "
-                              "'colour:CAMERA/LABEL') or a table")
-    if spec.startswith("colour:"):
-        wl, qe = _colour_curve(spec, where)
-    elif spec.lower().endswith(".csv"):
-        p = Path(spec)
-        wl, qe = _read_csv_curve(p if p.is_absolute() else base / p, where)
-    else:
-        try:
-            wl, qe = builtin_filter_curve(spec)
-        except CfaMitsubaError:
-            raise CfaMitsubaError(
-                f"{where}: spectra.{letter} = {spec!r} is not a built-in filter, a .csv file or 'colour:NAME/LABEL'"
-            ) from None
-    return _check_curve(letter, wl, np.asarray(qe, float) * scale, where)
-
-
-def load_cfa_toml(path) -> CFA:
-    """Read a user CFA.
-
-    Format (``configs/cfas/`` has complete files; docs/sensor.md)::
-
-        name = "rgbw-alt"              # optional, defaults to the file stem
-        description = "..."            # optional
-        tile = ["W R", "B W"]          # or "W R / B W", or [["W","R"],["B","W"]]
-        [spectra]                      # optional for the built-in filters
-                                       # R G B C M Y W C2 M2 Y2 MY CY CM
-        W = "W"                        # a built-in filter
-        R = "my_red.csv"               # CSV: wavelength_nm, qe (relative to this file)
-        B = { source = "colour:Nikon 5100 (NPL)/blue", scale = 0.4 }
-        X = { wavelengths = [400, 550, 700], values = [0.1, 0.5, 0.1] }
-    """
-    p = Path(path)
-    where = str(p)
-    try:
-        data = tomllib.loads(p.read_text())
-    except OSError as exc:
-        raise CfaMitsubaError(f"cannot read CFA file {where!r}: {exc.strerror}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise CfaMitsubaError(f"{where}: invalid TOML: {exc}") from None
-    unknown = set(data) - {"name", "description", "tile", "spectra"}
-    if unknown:
-        raise CfaMitsubaError(f"{where}: unknown key {sorted(unknown)[0]!r} (expected name, description, tile, spectra)")
-    if "tile" not in data:
-        raise CfaMitsubaError(f"{where}: missing 'tile'")
-    name = data.get("name", p.stem)
-    if not isinstance(name, str) or not name:
-        raise CfaMitsubaError(f"{where}: 'name' must be a non-empty string")
-    pattern = _parse_tile(data["tile"], where)
-    given = data.get("spectra", {})
-    if not isinstance(given, dict):
-        raise CfaMitsubaError(f"{where}: 'spectra' must be a table of filter = spectrum")
-    curves = {}
-    for letter in _order_channels(pattern):
-        if letter in given:
-            continue
-        if letter not in _builtin_curves():
-            raise CfaMitsubaError(
-                f"{where}: unknown filter {letter!r} in the tile: give its spectrum under [spectra] "
-                f"(built-in filters: {', '.join(_builtin_curves())})"
-            )
-        curves[letter] = builtin_filter_curve(letter)
-    for letter, spec in given.items():
-        curves[letter] = _curve_from_toml(letter, spec, p.parent, where)
-    return make_cfa(name, pattern.tolist(), curves, str(data.get("description", "")), where)
+    return _load(path, spectra=spectra)
 
 
 def cfa_from_raw(raw) -> CFA:
@@ -453,7 +334,7 @@ def cfa_from_raw(raw) -> CFA:
     info = (getattr(raw, "settings", None) or {}).get("cfa", {}) or {}
     cfa = make_cfa(str(info.get("name") or "custom"), pattern.tolist(),
                    {c: (wl, spectra[i]) for i, c in enumerate(channels)}, str(info.get("description") or ""),
-                   where="raw file CFA")
+                   where="raw file CFA", spectra=str(info.get("spectra") or ""))
     if cfa.channels != channels:
         raise CfaMitsubaError(f"raw file CFA: channels {channels} do not match the tile's {cfa.channels}")
     return cfa
