@@ -19,7 +19,12 @@ Renders are cached (~/.cache/cfa-mitsuba, or $CFA_MITSUBA_CACHE) by a hash of
 everything that determines them; --luminance only rescales, so it reuses the
 cache.  The Mitsuba variant is cuda_ad_spectral > llvm_ad_spectral >
 scalar_spectral, whichever runs here first; $CFA_MITSUBA_THREADS caps the
-render's threads."""
+render's threads.
+
+A scene FILE.xml is read as Mitsuba reads it (includes, <path> folders,
+<default> parameters); every file it names must lie inside its folder
+unless --allow-outside-paths.  The sidecar's white_radiance is a perfect
+white in the scene (--white-from; docs/scenes.md has the rule)."""
 
 
 def add_arguments(parser) -> None:
@@ -39,6 +44,15 @@ def add_arguments(parser) -> None:
                         help="EXR pixels per sensor pixel along each axis (default: the scene's; 4 for slanted-edge and chirp)")
     parser.add_argument("--fov", type=float, metavar="DEG", help="horizontal field of view of a built-in scene (degrees)")
     parser.add_argument("--max-depth", type=int, metavar="N", help="path length of a 3D scene (2: direct light only)")
+    parser.add_argument("--f-number", type=float, metavar="N",
+                        help="lens f-number: a 3D scene's thin lens renders with aperture radius f / 2N (default: "
+                             "puppy f/2, a scene file's own aperture); recorded in the sidecar as f_number")
+    parser.add_argument("--white-from", metavar="panel|illuminant|X,Y,Z", default=None,
+                        help="white reference: panel (default: a perfect white panel in the scene's light), "
+                             "illuminant (the panel's spectrum at the image's 99th-percentile luminance), or "
+                             "X,Y,Z in cd/m^2")
+    parser.add_argument("--allow-outside-paths", action="store_true",
+                        help="let a scene FILE.xml name files outside its folder (refused by default)")
     parser.add_argument("--preview", action="store_true", help="also write DIR/<name>.png, an sRGB preview")
     parser.add_argument("--no-cache", action="store_true", help="render even if a cached render exists, and do not store it")
 
@@ -72,7 +86,8 @@ def run(args) -> int:
 
     settings = dict(width=args.width, height=args.height, spp=args.spp, luminance=args.luminance,
                     variant=args.variant, seed=args.seed, bands=args.bands, oversample=args.oversample,
-                    fov=args.fov, max_depth=args.max_depth)
+                    fov=args.fov, max_depth=args.max_depth, f_number=args.f_number, white_from=args.white_from,
+                    allow_outside_paths=args.allow_outside_paths)
     out = Path(args.out)
     _check_out(out)
     sc, cfg = engine.resolve_settings(args.scene, **settings)

@@ -271,7 +271,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         ck.fail("custom_scenes", "must be an array of tables ([[custom_scenes]])")
     for i, c in enumerate(custom):
         key = f"custom_scenes[{i}]"
-        ck.table(c, key, {"name": None, "file": None, **_RENDER_KEYS})
+        ck.table(c, key, {"name": None, "file": None, "allow_outside_paths": None, **_RENDER_KEYS})
         cname = ck.string(c.get("name"), f"{key}.name")
         if "file" not in c:
             ck.fail(f"{key}.file", "missing (the scene's Mitsuba XML file)")
@@ -280,7 +280,11 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
             ck.fail(f"{key}.file", f"no such file {str(f)!r}")
         if cname in known_scenes or any(s.name == cname for s in scenes):
             ck.fail(f"{key}.name", f"{cname!r} is already a scene name")
-        over = _render_overrides(ck, {k: v for k, v in c.items() if k not in ("name", "file")}, key)
+        over = _render_overrides(ck, {k: v for k, v in c.items() if k not in ("name", "file", "allow_outside_paths")}, key)
+        if "allow_outside_paths" in c:  # the scene may name files outside its folder
+            if not isinstance(c["allow_outside_paths"], bool):
+                ck.fail(f"{key}.allow_outside_paths", "must be true or false")
+            over["allow_outside_paths"] = c["allow_outside_paths"]
         scenes.append(SceneSpec(cname, str(f.resolve()), over, IMAGE_METRICS))
     if not scenes:
         ck.fail("scenes", "no scenes to run")
