@@ -177,12 +177,8 @@ _DATA_MODULES = ("colour.colorimetry.datasets.illuminants.sds", "colour.colorime
                  "colour.characterisation.datasets.colour_checkers.sds")
 
 
-@functools.lru_cache(maxsize=1)
-def _source_digest() -> str:
-    """Digest of everything a render depends on besides its scene and
-    settings: the render package, spectra.py, values.py, the EXR and
-    sidecar code, and the colour-science data files the renders read.  Any
-    change to one of them invalidates cached renders by itself."""
+def _digest_paths() -> list[Path]:
+    """The files :func:`_source_digest` hashes."""
     import importlib
 
     package = Path(__file__).resolve().parents[1]
@@ -191,9 +187,19 @@ def _source_digest() -> str:
         p = package / name
         paths += sorted(p.rglob("*.py")) if p.is_dir() else [p]
     for module in _DATA_MODULES:
-        paths.append(Path(importlib.import_module(module).__file__))
+        paths.append(Path(importlib.import_module(module).__file__).resolve())
+    return paths
+
+
+@functools.lru_cache(maxsize=1)
+def _source_digest() -> str:
+    """Digest of everything a render depends on besides its scene and
+    settings: the render package, spectra.py, values.py, the EXR and
+    sidecar code, and the colour-science data files the renders read.  Any
+    change to one of them invalidates cached renders by itself."""
+    package = Path(__file__).resolve().parents[1]
     h = hashlib.sha256()
-    for p in paths:
+    for p in _digest_paths():
         h.update(str(p.relative_to(package) if p.is_relative_to(package) else p.name).encode())
         h.update(p.read_bytes())
     return h.hexdigest()[:16]
@@ -220,7 +226,7 @@ def _key_fields(sc: Scene, cfg: RenderConfig) -> dict:
         "sampler": sc.sampler,
         "jitter": sc.jitter,
         # Only a thin lens makes the render depend on the f-number.
-        "f_number": cfg.f_number if sc.thin_lens else None,
+        "f_number": (sc.f_number if cfg.f_number is None else cfg.f_number) if sc.thin_lens else None,
     }
 
 
@@ -290,8 +296,16 @@ def _white_of_3d_scene(mi, built: Built, cfg: RenderConfig, sc: Scene, scene, da
     boxes = _band_boxes(cfg, achromatic=False)
 
     def render_panels(sensor, extra, width):
-        return _render_boxes(mi, built, cfg, sc, boxes, width=width, height=1, spp=_white.PANEL_SPP,
-                             sensor=sensor, extra=extra)[0]
+        if not cfg.variant.startswith("scalar"):
+            return _render_boxes(mi, built, cfg, sc, boxes, width=width, height=1, spp=_white.PANEL_SPP,
+                                 sensor=sensor, extra=extra)[0]
+        # scalar_spectral: a batch sensor does not draw wavelengths from a
+        # specfilm's band (measured: band means 10x too high), so one meter
+        # at a time.
+        meters = [v for k, v in sensor.items() if k.startswith("meter_")]
+        return np.concatenate([_render_boxes(mi, built, cfg, sc, boxes, width=1, height=1, spp=_white.PANEL_SPP,
+                                             sensor={k: v for k, v in m.items() if k != "film"}, extra=extra)[0]
+                               for m in meters], axis=1)
 
     white, info = _white.measure_panels(mi, scene, cfg.wl, render_panels)
     if white is None:

@@ -232,5 +232,5 @@ SCENE = Scene(
     name="puppy",
     description="3D toy dog on a table, coloured panels and blocks at 0.9-3 m, D65 area light, thin lens focused on the dog (f/2); FOV 10 deg",
     width=720, height=636, fov_deg=10.0, spp=256, oversample=1, metrics=FULL_REFERENCE_METRICS,
-    builder=_build, max_depth=MAX_DEPTH, thin_lens=True,
+    builder=_build, max_depth=MAX_DEPTH, thin_lens=True, f_number=F_NUMBER,
 )

@@ -122,6 +122,8 @@ class Scene:
         files and their content hashes).
     thin_lens : the render depends on the f-number (a thin-lens camera), so
         ``f_number`` is part of the cache key.
+    f_number : the thin lens's default f-number (None: set by the scene
+        file's aperture).
     allow_outside_paths : a user XML may name files outside its folder.
     """
 
@@ -140,6 +142,7 @@ class Scene:
     path: Path | None = None
     identity: dict[str, Any] = field(default_factory=dict, compare=False)
     thin_lens: bool = False
+    f_number: float | None = None
     allow_outside_paths: bool = False
 
     @property

@@ -66,6 +66,8 @@ MAX_PATH_DEPTH = 64
 DEFAULT_SPP = 100
 #: Horizontal fields of view from this (degrees) up are refused.
 MAX_FOV_DEG = 170.0
+#: Smallest physically possible f-number (N >= 1 / (2 sin 90 deg)).
+MIN_F_NUMBER = 0.5
 #: Largest film side (pixels).
 MAX_FILM_SIDE = 32768
 _CAMERAS = ("perspective", "thinlens")
@@ -250,10 +252,16 @@ def _lens(scene: Scene, read: _Read, config: RenderConfig) -> tuple[dict, float 
         radius, source = f / (2 * float(config.f_number)), "f_number setting"
     else:
         radius, source = read.aperture_m, "the scene file's aperture_radius"
+    implied = (f / (2 * radius)) if radius > 0 else None
     lens = {"lens": "Mitsuba thinlens (defocus only; no diffraction, vignetting or distortion)",
-            "aperture_radius_m": radius, "focal_length_m": f,
-            "f_number": (f / (2 * radius)) if radius > 0 else None, "f_number_source": source,
+            "aperture_radius_m": radius, "focal_length_m": f, "f_number_source": source,
             "focus_distance_m": read.focus_m}
+    if implied is not None and implied >= MIN_F_NUMBER:
+        lens["f_number"] = implied
+    else:  # no lens has N < 0.5: the file's units are not metres, or its aperture is not a camera's
+        lens["f_number_implied"] = implied
+        lens["f_number_note"] = (f"below {MIN_F_NUMBER}: not recorded as f_number (the optics stage uses its "
+                                 "default); set f_number to render this scene through a real lens")
     return lens, (radius if config.f_number is not None else None)
 
 
