@@ -117,6 +117,7 @@ def _stock_process(scene, integrator, spp, width, height, out):
     """(In a fresh process) render the same scene with a stock Mitsuba
     integrator into a 3-channel XYZ hdrfilm and write it."""
     from cfa_mitsuba.render import engine, variant
+    from cfa_mitsuba.render.loading import load_scene
 
     sc, cfg = engine.resolve_settings(scene, width=width, height=height, spp=spp)
     mi = variant.load(cfg.variant)
@@ -128,7 +129,7 @@ def _stock_process(scene, integrator, spp, width, height, out):
     if integrator == "path":
         integ["max_depth"] = cfg.max_depth
     start = time.perf_counter()
-    scene_obj = engine._load(mi, built, film, sampler, integ)
+    scene_obj = load_scene(mi, built, film, sampler, integ)
     img = mi.render(scene_obj, seed=0)
     mi.util.write_bitmap(out, img)
     print(json.dumps({"render_s": time.perf_counter() - start}))

@@ -37,19 +37,21 @@ def test_puppy_render_and_sidecar(two_seeds):
     assert names <= set(ohta)
 
 
-def test_white_reference_is_d65_shaped_and_brighter_than_the_mean(two_seeds):
+def test_white_reference_is_near_d65_and_brighter_than_the_mean(two_seeds):
+    """The white panels face the D65 key light and see the beige table and
+    grey backdrop too (all the light the scene carries): D65 tinted a little."""
     m = two_seeds[0].meta
     white = np.asarray(m["white_radiance"])
-    ratio = white / spectra.illuminant("D65")
-    # Direct light from the D65 key light only: exactly D65-shaped (all
-    # bands share the same paths, so not even noise changes the shape).
-    np.testing.assert_allclose(ratio, ratio.mean(), rtol=1e-5)
+    xyz = spectra.xyz_from_radiance(white)
+    d65 = spectra.xyz_from_radiance(spectra.illuminant("D65"))
+    assert np.abs(xyz[:2] / xyz.sum() - d65[:2] / d65.sum()).max() < 0.01
     assert m["white_luminance_cd_m2"] == pytest.approx(spectra.luminance_cd_m2(white))
     assert m["white_luminance_cd_m2"] > 2 * m["luminance_cd_m2"]
-    # The two seeds measure the same white within 0.5 %.
-    w2 = np.asarray(two_seeds[1].meta["white_radiance"]) / two_seeds[1].meta["scale_from_canonical"]
-    w1 = white / m["scale_from_canonical"]
-    np.testing.assert_allclose(w1, w2, rtol=5e-3)
+    assert m["white_reference"]["rule"] == "panel" and m["white_from"] == "panel"
+    # The two seeds measure the same white within 1 %.
+    w2 = np.asarray(two_seeds[1].meta["white_radiance"]) / two_seeds[1].meta["luminance_cd_m2"]
+    w1 = white / m["luminance_cd_m2"]
+    np.testing.assert_allclose(w1, w2, rtol=1e-2)
 
 
 def test_noise_and_band_ratios_between_seeds(two_seeds):

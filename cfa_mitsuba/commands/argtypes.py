@@ -1,11 +1,12 @@
-"""argparse ``type=`` converters shared by the sub-commands: a bad value
-becomes argparse's one-line usage error (exit 2) naming the option."""
+"""Argument checks shared by the sub-commands: argparse ``type=``
+converters (a bad value becomes argparse's one-line usage error, exit 2,
+naming the option) and the output-directory probe."""
 
 from __future__ import annotations
 
 import argparse
 
-__all__ = ["positive_int", "non_negative_int"]
+__all__ = ["positive_int", "non_negative_int", "check_out_dir"]
 
 
 def _int_at_least(text: str, minimum: int) -> int:
@@ -26,3 +27,25 @@ def positive_int(text: str) -> int:
 def non_negative_int(text: str) -> int:
     """A whole number >= 0 (seeds, optional counts)."""
     return _int_at_least(text, 0)
+
+
+def check_out_dir(out) -> None:
+    """Refuse an output directory that cannot be created or written, before
+    rendering, by really trying (permission bits say little to root);
+    nothing is left behind."""
+    import tempfile
+
+    from ..errors import CfaMitsubaError
+
+    if out.exists() and not out.is_dir():
+        raise CfaMitsubaError(f"output directory {str(out)!r} is a file")
+    probe_in = out if out.exists() else out.absolute().parent
+    while not probe_in.exists():
+        probe_in = probe_in.parent
+    if not probe_in.is_dir():
+        raise CfaMitsubaError(f"cannot create output directory {str(out)!r}: {str(probe_in)!r} is a file")
+    try:
+        tempfile.TemporaryDirectory(dir=probe_in, prefix=".cfa-mitsuba-probe-").cleanup()
+    except OSError as exc:
+        what = "write to" if out.exists() else "create"
+        raise CfaMitsubaError(f"cannot {what} output directory {str(out)!r}: {exc.strerror}") from None

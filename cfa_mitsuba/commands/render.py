@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from . import render_measured
+from .argtypes import check_out_dir
 
 HELP = "render a scene to a spectral EXR (JCGT layout) and a sidecar JSON"
 
@@ -26,6 +27,11 @@ a film beyond Dr.Jit's 2^32 - 1 values, or one whose estimated memory
 exceeds the memory available ($CFA_MITSUBA_MEMORY_LIMIT, the cgroup limit or
 the physical memory, whichever is smallest) is refused before Mitsuba
 starts (docs/stability.md, section 11).
+
+A scene FILE.xml is read as Mitsuba reads it (includes, <path> folders,
+<default> parameters); every file it names must lie inside its folder
+unless --allow-outside-paths.  The sidecar's white_radiance is a perfect
+white in the scene (--white-from; docs/scenes.md has the rule).
 
 """ + render_measured.EPILOG
 
@@ -47,31 +53,18 @@ def add_arguments(parser) -> None:
                         help="EXR pixels per sensor pixel along each axis (default: the scene's; 4 for slanted-edge and chirp)")
     parser.add_argument("--fov", type=float, metavar="DEG", help="horizontal field of view of a built-in scene (degrees)")
     parser.add_argument("--max-depth", type=int, metavar="N", help="path length of a 3D scene (2: direct light only)")
+    parser.add_argument("--f-number", type=float, metavar="N",
+                        help="lens f-number: a 3D scene's thin lens renders with aperture radius f / 2N (default: "
+                             "puppy f/2, a scene file's own aperture); recorded in the sidecar as f_number")
+    parser.add_argument("--white-from", metavar="panel|illuminant|X,Y,Z", default=None,
+                        help="white reference: panel (default: a perfect white panel in the scene's light), "
+                             "illuminant (the panel's spectrum at the image's 99th-percentile luminance), or "
+                             "X,Y,Z in cd/m^2")
+    parser.add_argument("--allow-outside-paths", action="store_true",
+                        help="let a scene FILE.xml name files outside its folder (refused by default)")
     parser.add_argument("--preview", action="store_true", help="also write DIR/<name>.png, an sRGB preview")
     parser.add_argument("--no-cache", action="store_true", help="render even if a cached render exists, and do not store it")
     render_measured.add_measured_arguments(parser)
-
-
-def _check_out(out: Path) -> None:
-    """Refuse an output directory that cannot be created or written, before
-    rendering, by really trying (permission bits say little to root);
-    nothing is left behind."""
-    import tempfile
-
-    from ..errors import CfaMitsubaError
-
-    if out.exists() and not out.is_dir():
-        raise CfaMitsubaError(f"output directory {str(out)!r} is a file")
-    probe_in = out if out.exists() else out.absolute().parent
-    while not probe_in.exists():
-        probe_in = probe_in.parent
-    if not probe_in.is_dir():
-        raise CfaMitsubaError(f"cannot create output directory {str(out)!r}: {str(probe_in)!r} is a file")
-    try:
-        tempfile.TemporaryDirectory(dir=probe_in, prefix=".cfa-mitsuba-probe-").cleanup()
-    except OSError as exc:
-        what = "write to" if out.exists() else "create"
-        raise CfaMitsubaError(f"cannot {what} output directory {str(out)!r}: {exc.strerror}") from None
 
 
 def run(args) -> int:
@@ -83,9 +76,10 @@ def run(args) -> int:
         return render_measured.run_measured(args)
     settings = dict(width=args.width, height=args.height, spp=args.spp, luminance=args.luminance,
                     variant=args.variant, seed=args.seed, bands=args.bands, oversample=args.oversample,
-                    fov=args.fov, max_depth=args.max_depth)
+                    fov=args.fov, max_depth=args.max_depth, f_number=args.f_number, white_from=args.white_from,
+                    allow_outside_paths=args.allow_outside_paths)
     out = Path(args.out)
-    _check_out(out)
+    check_out_dir(out)
     sc, cfg = engine.resolve_settings(args.scene, **settings)
     prog = "cfa-mitsuba render"
     lib = os.environ.get("DRJIT_LIBLLVM_PATH")

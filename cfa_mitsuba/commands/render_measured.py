@@ -57,7 +57,7 @@ def run_measured(args) -> int:
     from ..errors import CfaMitsubaError
     from ..io import check_writable_dir, write_sidecar, write_spectral_exr
     from ..render.measured import measured_cached, measured_image
-    from .render import _check_out
+    from .argtypes import check_out_dir
 
     prog = args._prog
     ignored = [f"--{k.replace('_', '-')}" for k in ("spp", "seed", "variant", "max_depth") if getattr(args, k) is not None]
@@ -67,7 +67,7 @@ def run_measured(args) -> int:
                    oversample=args.oversample, wavelengths=args.wavelengths, quantity=args.quantity,
                    mat_cube=args.mat_cube, mat_wavelengths=args.mat_wavelengths, width=args.width, height=args.height)
     out = Path(args.out)
-    _check_out(out)
+    check_out_dir(out)
     if args.no_cache:
         image = measured_image(args.scene, luminance=args.luminance, **options)
     else:

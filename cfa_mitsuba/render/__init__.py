@@ -13,11 +13,14 @@ Public interface::
     choose_variant(requested=None) -> str
 
 Settings: width, height, spp, luminance (cd/m^2), variant, seed, bands,
-oversample, fov, max_depth.  Mitsuba is imported lazily (only when
-something is rendered), so importing this package is cheap.
+oversample, fov, max_depth, f_number, white_from, allow_outside_paths.
+Mitsuba is imported lazily (only when something is rendered or a scene
+file is read), so importing this package is cheap.
 """
 
-from .registry import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene, get_scene, list_scenes, register_scene  # noqa: F401
+from .types import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene  # noqa: F401
+from .registry import get_scene, list_scenes, register_scene  # noqa: F401
+from . import builtins as _builtins  # noqa: F401  (registers the built-in scenes)
 from .variant import SPECTRAL_VARIANTS, choose_variant, find_libllvm  # noqa: F401
 from .engine import (  # noqa: F401
     DEFAULT_LUMINANCE_CD_M2,

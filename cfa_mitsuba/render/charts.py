@@ -52,7 +52,7 @@ import numpy as np
 from .. import spectra
 from ..errors import CfaMitsubaError
 from .light import band_spectrum, d65_white_radiance
-from .registry import Built, RenderConfig, Scene, register_scene
+from .types import Built, RenderConfig, Scene
 
 #: Distance (m) from the camera to every chart: ISETCam's sceneInitGeometry default.
 CHART_DISTANCE_M = 1.2
@@ -421,27 +421,30 @@ SUPER_NYQUIST_OVERSAMPLE = 4
 #: would leave 125, coarse beside the 15-pixel block of the moire metric).
 CHIRP_OVERSAMPLE = 2
 
-register_scene(Scene(
-    name="macbeth",
-    description="ColorChecker (24 'ColorChecker N Ohta' reflectances, 4 x 6) under D65 on a dark surround; FOV 30 deg",
-    width=720, height=636, fov_deg=30.0, spp=16, oversample=1, metrics=("delta-e",),
-    builder=_build_macbeth, jitter=False,
-))
-register_scene(Scene(
-    name="slanted-edge",
-    description="ISO 12233 edge, 5 deg from vertical, 4:1 contrast, dark left; FOV 2 deg; rendered at 4x the sensor's sampling",
-    width=720, height=636, fov_deg=2.0, spp=16, oversample=SUPER_NYQUIST_OVERSAMPLE, metrics=("mtf",),
-    builder=_build_edge, jitter=False,
-))
-register_scene(Scene(
-    name="chirp",
-    description="black-and-white linear chirp along the row, 0 to twice the sensor Nyquist; FOV 10 deg; 2x the sensor's sampling",
-    width=500, height=500, fov_deg=10.0, spp=16, oversample=CHIRP_OVERSAMPLE, metrics=("moire",),
-    builder=_build_chirp, jitter=False,
-))
-register_scene(Scene(
-    name="gray-bar",
-    description="10 achromatic steps in equal L* (95 to 5), white to near black along the row; FOV 10 deg",
-    width=500, height=500, fov_deg=10.0, spp=16, oversample=1, metrics=("achromatic",),
-    builder=_build_gray, jitter=False,
-))
+#: The charts, registered by :mod:`.builtins`.
+SCENES = (
+    Scene(
+        name="macbeth",
+        description="ColorChecker (24 'ColorChecker N Ohta' reflectances, 4 x 6) under D65 on a dark surround; FOV 30 deg",
+        width=720, height=636, fov_deg=30.0, spp=16, oversample=1, metrics=("delta-e",),
+        builder=_build_macbeth, jitter=False,
+    ),
+    Scene(
+        name="slanted-edge",
+        description="ISO 12233 edge, 5 deg from vertical, 4:1 contrast, dark left; FOV 2 deg; rendered at 4x the sensor's sampling",
+        width=720, height=636, fov_deg=2.0, spp=16, oversample=SUPER_NYQUIST_OVERSAMPLE, metrics=("mtf",),
+        builder=_build_edge, jitter=False,
+    ),
+    Scene(
+        name="chirp",
+        description="black-and-white linear chirp along the row, 0 to twice the sensor Nyquist; FOV 10 deg; 2x the sensor's sampling",
+        width=500, height=500, fov_deg=10.0, spp=16, oversample=CHIRP_OVERSAMPLE, metrics=("moire",),
+        builder=_build_chirp, jitter=False,
+    ),
+    Scene(
+        name="gray-bar",
+        description="10 achromatic steps in equal L* (95 to 5), white to near black along the row; FOV 10 deg",
+        width=500, height=500, fov_deg=10.0, spp=16, oversample=1, metrics=("achromatic",),
+        builder=_build_gray, jitter=False,
+    ),
+)

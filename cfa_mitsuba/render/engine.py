@@ -46,19 +46,21 @@ from ..io import limits as _limits
 from .. import spectra
 from ..errors import CfaMitsubaError
 from ..values import SpectralImage
+from . import userxml as _userxml
 from . import variant as _variant
+from . import white as _white
 from .integrator import PLUGIN_NAME
 from .light import BAND_INSET, CENTRE_INSET
+from .loading import load_scene
 from .measured import is_measured_image, measured_cached, measured_image
-from .registry import Built, RenderConfig, Scene, get_scene
+from .scaling import DEFAULT_LUMINANCE_CD_M2, scale_to_luminance  # noqa: F401  (part of this module's interface)
+from .registry import get_scene
+from .types import Built, RenderConfig, Scene
 
 #: ISETCam's default mean scene luminance (cd/m^2).
-DEFAULT_LUMINANCE_CD_M2 = 100.0
 #: Bump when a change alters rendered numbers in a way the source digest
 #: cannot see (e.g. a new Mitsuba version).
 RENDER_CODE_VERSION = "1"
-#: Samples for the white-diffuser probe of 3D scenes.
-WHITE_PROBE_SPP = 16384
 
 _INT_LIMIT = 1 << 31
 
@@ -110,7 +112,8 @@ def _wavelengths(bands) -> tuple[float, ...]:
 
 
 def resolve_settings(scene, *, width=None, height=None, spp=None, luminance=None, variant=None, seed=None,
-                     bands=None, oversample=None, fov=None, max_depth=None) -> tuple[Scene, RenderConfig]:
+                     bands=None, oversample=None, fov=None, max_depth=None, f_number=None, white_from=None,
+                     allow_outside_paths=False) -> tuple[Scene, RenderConfig]:
     """Validate render settings and fill the scene's defaults.
 
     Parameters (all optional; None takes the scene's default)
@@ -126,11 +129,18 @@ def resolve_settings(scene, *, width=None, height=None, spp=None, luminance=None
         used by the chirp's frequency range and the edge ROI).
     fov : horizontal field of view in degrees (built-in scenes only).
     max_depth : path length for 3D scenes (1 = emitters seen directly).
+    f_number : the lens's f-number.  3D scenes with a thin lens render with
+        aperture radius f / (2 N) (default: the puppy's f/2, a scene file's
+        own aperture); recorded in the sidecar as ``f_number`` for every
+        scene, and part of the cache key only where the render depends on it.
+    white_from : the white-reference rule, 'panel' (default), 'illuminant'
+        or X,Y,Z in cd/m^2 (:mod:`.white`); not part of the cache key.
+    allow_outside_paths : a scene file may name files outside its folder.
 
     Returns ``(scene, config)``.  Raises :class:`CfaMitsubaError` naming the
     first bad setting.
     """
-    sc = scene if isinstance(scene, Scene) else get_scene(scene)
+    sc = scene if isinstance(scene, Scene) else get_scene(scene, allow_outside_paths=bool(allow_outside_paths))
     w = _positive_int(sc.width if width is None else width, "width", maximum=_limits.MAX_SIDE)
     h = _positive_int(sc.height if height is None else height, "height", maximum=_limits.MAX_SIDE)
     n = _positive_int(sc.spp if spp is None else spp, "spp", maximum=_limits.MAX_SPP)
@@ -152,19 +162,48 @@ def resolve_settings(scene, *, width=None, height=None, spp=None, luminance=None
     wl = _wavelengths(bands)
     _limits.check_render(w, h, n, len(wl))  # samples, film size, memory: before Mitsuba loads
     v = _variant.choose_variant(variant)
+    fn = None if f_number is None else _positive_float(f_number, "f_number")
+    if fn is not None and not 0.5 <= fn <= 1000:
+        raise CfaMitsubaError(f"f_number (--f-number) must be between 0.5 and 1000, got {fn:g}")
     return sc, RenderConfig(width=w, height=h, spp=n, seed=s, wavelengths=wl, variant=v, oversample=k,
-                            fov_deg=f, max_depth=depth, luminance_cd_m2=lum)
+                            fov_deg=f, max_depth=depth, luminance_cd_m2=lum, f_number=fn,
+                            white_from=_white.parse_white_from(white_from))
 
 
 # -------------------------------------------------------------------- cache
 
+#: What a render reads besides its scene: this package's render code, the
+#: modules it computes with, and the colour-science data it reads (D65, the
+#: CIE 1931 observer, the ColorChecker reflectances).
+_CODE_FILES = ("render", "spectra.py", "values.py", "errors.py", "io/exr.py", "io/sidecar.py", "io/atomic.py")
+_DATA_MODULES = ("colour.colorimetry.datasets.illuminants.sds", "colour.colorimetry.datasets.cmfs",
+                 "colour.characterisation.datasets.colour_checkers.sds")
+
+
+def _digest_paths() -> list[Path]:
+    """The files :func:`_source_digest` hashes."""
+    import importlib
+
+    package = Path(__file__).resolve().parents[1]
+    paths = []
+    for name in _CODE_FILES:
+        p = package / name
+        paths += sorted(p.rglob("*.py")) if p.is_dir() else [p]
+    for module in _DATA_MODULES:
+        paths.append(Path(importlib.import_module(module).__file__).resolve())
+    return paths
+
+
 @functools.lru_cache(maxsize=1)
 def _source_digest() -> str:
-    """Digest of this package's source: any change to how scenes are built
-    or rendered invalidates cached renders by itself."""
+    """Digest of everything a render depends on besides its scene and
+    settings: the render package, spectra.py, values.py, the EXR and
+    sidecar code, and the colour-science data files the renders read.  Any
+    change to one of them invalidates cached renders by itself."""
+    package = Path(__file__).resolve().parents[1]
     h = hashlib.sha256()
-    for p in sorted(Path(__file__).parent.rglob("*.py")):
-        h.update(p.name.encode())
+    for p in _digest_paths():
+        h.update(str(p.relative_to(package) if p.is_relative_to(package) else p.name).encode())
         h.update(p.read_bytes())
     return h.hexdigest()[:16]
 
@@ -189,16 +228,20 @@ def _key_fields(sc: Scene, cfg: RenderConfig) -> dict:
         "max_depth": cfg.max_depth,
         "sampler": sc.sampler,
         "jitter": sc.jitter,
+        # Only a thin lens makes the render depend on the f-number.
+        "f_number": (sc.f_number if cfg.f_number is None else cfg.f_number) if sc.thin_lens else None,
     }
 
 
 def cache_key(scene, **settings) -> str:
     """The render-cache key for ``scene`` rendered with ``settings`` (the
     keywords of :func:`resolve_settings`): a hash of everything that
-    determines the canonical render (scene identity including a user XML's
-    content and referenced files, size, spp, seed, bands, variant, K, FOV,
-    path depth, sampler, Mitsuba version, this package's render source).
-    ``luminance`` is not part of it: it only scales the cached render."""
+    determines the canonical render (scene identity including the content
+    of a user XML and every file it reads, size, spp, seed, bands, variant,
+    K, FOV, path depth, sampler, the f-number for thin-lens scenes, Mitsuba
+    version, the render code and data, :func:`_source_digest`).
+    ``luminance`` and ``white_from`` are not part of it: they only scale the
+    cached render and choose its white."""
     from ..io.cache import hash_key
 
     sc, cfg = resolve_settings(scene, **settings)
@@ -206,83 +249,6 @@ def cache_key(scene, **settings) -> str:
 
 
 # ------------------------------------------------------------- Mitsuba glue
-
-def _xml_element(tag: str, d: dict, name: str | None = None) -> str:
-    """Serialise a flat Mitsuba plugin dict (nested dicts allowed) as XML."""
-    nested_tag = {"rfilter": "rfilter", "film": "film", "sampler": "sampler"}
-    attrs = f' type="{d["type"]}"' + (f' name="{name}"' if name else "")
-    parts = []
-    for k, v in d.items():
-        if k == "type":
-            continue
-        if isinstance(v, dict):
-            parts.append(_xml_element(nested_tag.get(k, "spectrum"), v, k))
-        elif isinstance(v, bool):
-            parts.append(f'<boolean name="{k}" value="{str(v).lower()}"/>')
-        elif isinstance(v, int):
-            parts.append(f'<integer name="{k}" value="{v}"/>')
-        elif isinstance(v, float):
-            parts.append(f'<float name="{k}" value="{v!r}"/>')
-        else:
-            parts.append(f'<string name="{k}" value="{v}"/>')
-    return f"<{tag}{attrs}>" + "".join(parts) + f"</{tag}>"
-
-
-def _probe_parts(mi, probe: dict, as_xml: bool):
-    """The white probe's radiance-meter sensor and white square (dict or XML)."""
-    c, o, h = (list(map(float, probe["center"])), list(map(float, probe["camera"])), float(probe["half_size"]))
-    d = np.subtract(c, o)
-    up = [0.0, 1.0, 0.0] if abs(d[1]) < 0.9 * np.linalg.norm(d) else [1.0, 0.0, 0.0]
-    if as_xml:
-        def v(x):
-            return ",".join(repr(float(t)) for t in x)
-        sensor = (f'<sensor type="radiancemeter"><transform name="to_world"><lookat origin="{v(o)}" target="{v(c)}" '
-                  f'up="{v(up)}"/></transform><!--cfa:film--><!--cfa:sampler--></sensor>')
-        shape = (f'<shape type="rectangle"><transform name="to_world"><scale value="{h!r}"/><lookat origin="{v(c)}" '
-                 f'target="{v(o)}" up="{v(up)}"/></transform><bsdf type="diffuse"><spectrum name="reflectance" value="1"/>'
-                 f'</bsdf></shape>')
-        return sensor + shape
-    T = mi.ScalarTransform4f
-    sensor = {"type": "radiancemeter", "to_world": T().look_at(origin=o, target=c, up=up)}
-    shape = {"type": "rectangle", "to_world": T().look_at(origin=c, target=o, up=up).scale(h),
-             "bsdf": {"type": "diffuse", "reflectance": {"type": "uniform", "value": 1.0}}}
-    return sensor, {"cfa_white_probe": shape}
-
-
-def _load(mi, built: Built, film: dict, sampler: dict, integrator: dict, probe: dict | None = None):
-    """A Mitsuba scene of ``built`` with our film, sampler and integrator;
-    with ``probe``, the white probe's radiance meter replaces the camera."""
-    if built.xml is not None:
-        sensor = _probe_parts(mi, probe, True) if probe is not None else built.xml_sensor
-        xml = (built.xml.replace("<!--cfa:sensor-->", sensor)
-               .replace("<!--cfa:film-->", _xml_element("film", film))
-               .replace("<!--cfa:sampler-->", _xml_element("sampler", sampler))
-               .replace("<!--cfa:integrator-->", _xml_element("integrator", integrator)))
-        resolver = mi.Thread.thread().file_resolver()
-        if built.xml_dir is not None and str(built.xml_dir) not in [str(p) for p in resolver]:
-            resolver.prepend(str(built.xml_dir))
-        try:
-            return mi.load_string(xml)
-        except Exception as exc:  # Mitsuba reports parse/plugin errors as RuntimeError
-            raise CfaMitsubaError(f"Mitsuba cannot load the scene: {_first_line(exc)}") from None
-    sensor, extra = _probe_parts(mi, probe, False) if probe is not None else (built.sensor, {})
-    d = {"type": "scene", **built.objects, **extra, "integrator": integrator,
-         "sensor": {**sensor, "film": film, "sampler": sampler}}
-    return mi.load_dict(d)
-
-
-def _probe_load_settings(width: int, height: int) -> tuple[dict, dict, dict]:
-    """Film, sampler and integrator for loading a scene only to inspect it
-    (field of view, first hits): stock plugins, valid in every variant."""
-    return ({"type": "hdrfilm", "width": int(width), "height": int(height), "rfilter": {"type": "box"}},
-            {"type": "independent", "sample_count": 1},
-            {"type": "path", "max_depth": 2})
-
-
-def _first_line(exc: Exception) -> str:
-    text = " ".join(str(exc).split())
-    return text[:300]
-
 
 def _band_boxes(cfg: RenderConfig, achromatic: bool) -> list[tuple[float, float]]:
     edges = spectra.band_edges(cfg.wl)
@@ -292,8 +258,10 @@ def _band_boxes(cfg: RenderConfig, achromatic: bool) -> list[tuple[float, float]
 
 
 def _render_boxes(mi, built: Built, cfg: RenderConfig, sc: Scene, boxes, *, width, height, spp,
-                  probe: dict | None = None) -> np.ndarray:
-    """Render band means over ``boxes`` ((lo, hi) nm each): (height, width, len(boxes)) float32."""
+                  sensor: dict | None = None, extra: dict | None = None):
+    """Render band means over ``boxes`` ((lo, hi) nm each): (height, width,
+    len(boxes)) float32, and the (last) loaded Mitsuba scene.  ``sensor``
+    and ``extra`` replace the camera and add shapes (the white panels)."""
     sampler = {"type": sc.sampler, "sample_count": int(spp), "seed": int(cfg.seed), "jitter": bool(sc.jitter)}
     if cfg.variant.startswith("scalar"):
         planes = []
@@ -304,10 +272,11 @@ def _render_boxes(mi, built: Built, cfg: RenderConfig, sc: Scene, boxes, *, widt
                     "component_format": "float32",
                     "band": {"type": "regular", "wavelength_min": lo, "wavelength_max": hi,
                              "values": f"{1 / (hi - lo)!r}, {1 / (hi - lo)!r}"}}
-            scene = _load(mi, built, film, sampler, {"type": "path", "max_depth": cfg.max_depth}, probe)
+            scene = load_scene(mi, built, film, sampler, {"type": "path", "max_depth": cfg.max_depth},
+                               sensor=sensor, extra=extra)
             img = np.array(mi.render(scene, seed=cfg.seed), dtype=np.float32)
             planes.append(img.reshape(height, width, -1)[..., 0])
-        return np.stack(planes, axis=-1)
+        return np.stack(planes, axis=-1), scene
     edges = [boxes[0][0]] + [hi for _, hi in boxes]
     if any(abs(boxes[i][1] - boxes[i + 1][0]) > 1e-9 for i in range(len(boxes) - 1)):
         raise ValueError("band boxes must be contiguous")
@@ -316,27 +285,38 @@ def _render_boxes(mi, built: Built, cfg: RenderConfig, sc: Scene, boxes, *, widt
     inset = CENTRE_INSET if built.band_constant else BAND_INSET
     integrator = {"type": PLUGIN_NAME, "band_edges": ",".join(repr(float(e)) for e in edges),
                   "band_inset": inset, "max_depth": cfg.max_depth}
-    scene = _load(mi, built, film, sampler, integrator, probe)
+    scene = load_scene(mi, built, film, sampler, integrator, sensor=sensor, extra=extra)
     img = np.array(mi.render(scene, seed=cfg.seed), dtype=np.float32)
     n = len(boxes)
     if img.ndim != 3 or img.shape[2] < n:
         raise RuntimeError(f"unexpected film output of shape {img.shape} for {n} bands")
-    return img[..., -n:]  # the AOVs follow the film's own channels
+    return img[..., -n:], scene  # the AOVs follow the film's own channels
 
 
-def _measure_white(mi, built: Built, cfg: RenderConfig, sc: Scene) -> np.ndarray:
-    """Radiance of the white probe patch (3D scenes), (B,) W/(m^2 sr nm).
-
-    Direct light only (a path depth of 2): the reference white is the
-    scene's lights as they reach the subject, not tinted by what nearby
-    surfaces reflect (that is the scene's content, which the camera must
-    reproduce, not balance away)."""
-    import dataclasses
-
+def _white_of_3d_scene(mi, built: Built, cfg: RenderConfig, sc: Scene, scene, data: np.ndarray):
+    """The canonical ``panel`` white of a 3D scene (:mod:`.white`) and its
+    record; the ``illuminant`` rule on the image if no panel gets light."""
     boxes = _band_boxes(cfg, achromatic=False)
-    direct = dataclasses.replace(cfg, max_depth=2)
-    out = _render_boxes(mi, built, direct, sc, boxes, width=1, height=1, spp=WHITE_PROBE_SPP, probe=built.white_probe)
-    return out.reshape(-1).astype(np.float64)
+
+    def render_panels(sensor, extra, width):
+        if not cfg.variant.startswith("scalar"):
+            return _render_boxes(mi, built, cfg, sc, boxes, width=width, height=1, spp=_white.PANEL_SPP,
+                                 sensor=sensor, extra=extra)[0]
+        # scalar_spectral: a batch sensor does not draw wavelengths from a
+        # specfilm's band (measured: band means 10x too high), so one meter
+        # at a time.
+        meters = [v for k, v in sensor.items() if k.startswith("meter_")]
+        return np.concatenate([_render_boxes(mi, built, cfg, sc, boxes, width=1, height=1, spp=_white.PANEL_SPP,
+                                             sensor={k: v for k, v in m.items() if k != "film"}, extra=extra)[0]
+                               for m in meters], axis=1)
+
+    white, info = _white.measure_panels(mi, scene, cfg.wl, render_panels)
+    if white is None:
+        shape = _white.bright_spectrum(data, cfg.wl)
+        y = float(spectra.luminance_cd_m2(shape, cfg.wl))
+        white = shape * (_white.robust_max_luminance(data, cfg.wl) / y) if y > 0 else shape
+        info["rule"] = "illuminant (no white panel receives light)"
+    return np.asarray(white, dtype=np.float64), info
 
 
 # ---------------------------------------------------------------- rendering
@@ -357,20 +337,31 @@ def _render_canonical(sc: Scene, cfg: RenderConfig) -> SpectralImage:
     built = sc.build(cfg)
     start = time.perf_counter()
     achromatic = built.pattern_spectrum is not None
-    bands = _render_boxes(mi, built, cfg, sc, _band_boxes(cfg, achromatic), width=cfg.width,
-                          height=cfg.height, spp=cfg.spp)
+    bands, scene = _render_boxes(mi, built, cfg, sc, _band_boxes(cfg, achromatic), width=cfg.width,
+                                 height=cfg.height, spp=cfg.spp)
     if achromatic:
         data = bands[..., :1].astype(np.float64) * np.asarray(built.pattern_spectrum)[None, None, :]
     else:
         data = bands.astype(np.float64)
-    white = built.white_radiance if built.white_radiance is not None else _measure_white(mi, built, cfg, sc)
-    elapsed = time.perf_counter() - start
     data = data.astype(np.float32).astype(np.float64)
     bad = int(data.size - np.count_nonzero(np.isfinite(data)))
     if bad:  # a scene file with an infinite (or float32-overflowing) emitter or texture value
         raise CfaMitsubaError(
             f"the render of {sc.name!r} has {bad} NaN or infinite radiance values: check the scene's emitters "
             "and textures for infinite or huge (> 3e38) values")
+    meta_extra = {}
+    if built.white_radiance is not None:
+        white = np.asarray(built.white_radiance, dtype=np.float64)
+        meta_extra["white_reference"] = {"rule": "exact: a perfect white diffuser under the chart's light"}
+    else:
+        white, info = _white_of_3d_scene(mi, built, cfg, sc, scene, data)
+        meta_extra["white_reference"] = info
+        if "scene_distance_m" not in built.meta:
+            central = [p for p in info["panels"] if p["grid"] == [0.5, 0.5]] or info["panels"]
+            meta_extra["scene_distance_m"] = float(np.median([p["distance_m"] for p in central])) if central else None
+    elapsed = time.perf_counter() - start
+    if sc.path is not None and not _userxml.files_unchanged(sc):
+        raise CfaMitsubaError(f"the files of scene {sc.name!r} changed while it rendered: render it again")
     wl = cfg.wl
     meta = {
         "scene": sc.name,
@@ -386,7 +377,8 @@ def _render_canonical(sc: Scene, cfg: RenderConfig) -> SpectralImage:
                             "box mean over the band's edges of the linearly interpolated spectrum"),
         "band_constant_spectra": built.band_constant,
         "illuminant": "D65",
-        "canonical_white_radiance": np.asarray(white, dtype=np.float64).tolist(),
+        "canonical_white_radiance": white.tolist(),
+        "white_exact": built.white_radiance is not None,
         "spp": cfg.spp,
         "sampler": sc.sampler,
         "sampler_jitter": sc.jitter,
@@ -397,31 +389,10 @@ def _render_canonical(sc: Scene, cfg: RenderConfig) -> SpectralImage:
         "cache_key": key,
         "metrics": list(sc.metrics),
         "renderer": f"mitsuba {mi.__version__}",
+        **meta_extra,
         **built.meta,
     }
     return SpectralImage(data, wl, meta)
-
-
-def scale_to_luminance(canonical: SpectralImage, luminance_cd_m2: float) -> SpectralImage:
-    """Scale a canonical render so that its mean luminance is
-    ``luminance_cd_m2`` (ISETCam sceneAdjustLuminance, 'mean'), scaling the
-    white radiance by the same factor (reflectances are preserved)."""
-    wl = canonical.wavelengths
-    mean = float(spectra.luminance_cd_m2(canonical.data, wl).mean())
-    if not mean > 0:
-        raise CfaMitsubaError(
-            f"scene {canonical.meta.get('scene')!r} renders black (mean luminance 0): no light reaches the camera"
-        )
-    factor = float(luminance_cd_m2) / mean
-    meta = dict(canonical.meta)
-    white = np.asarray(meta.pop("canonical_white_radiance"), dtype=np.float64) * factor
-    meta.update({
-        "luminance_cd_m2": float(luminance_cd_m2),
-        "white_radiance": white.tolist(),
-        "white_luminance_cd_m2": float(spectra.luminance_cd_m2(white, wl)),
-        "scale_from_canonical": factor,
-    })
-    return SpectralImage(canonical.data * factor, np.asarray(wl, dtype=np.float64), meta)
 
 
 def render(scene, **settings) -> SpectralImage:
@@ -436,7 +407,16 @@ def render(scene, **settings) -> SpectralImage:
     if is_measured_image(scene):  # a measured spectral image: converted, not rendered
         return measured_image(scene, **settings)
     sc, cfg = resolve_settings(scene, **settings)
-    return scale_to_luminance(_render_canonical(sc, cfg), cfg.luminance_cd_m2)
+    return scale_to_luminance(_render_canonical(_current(sc), cfg), cfg.luminance_cd_m2,
+                              white_from=cfg.white_from, f_number=cfg.f_number)
+
+
+def _current(sc: Scene) -> Scene:
+    """A scene file's :class:`Scene` read again if any of its files changed
+    since it was read, so that the cache key follows the files on disk."""
+    if sc.path is not None and not _userxml.files_unchanged(sc):
+        return get_scene(sc.path, allow_outside_paths=sc.allow_outside_paths)
+    return sc
 
 
 def render_cached(scene, *, cache=None, **settings) -> SpectralImage:
@@ -453,9 +433,10 @@ def render_cached(scene, *, cache=None, **settings) -> SpectralImage:
     if is_measured_image(scene):  # a measured spectral image: converted once, cached like a render
         return measured_cached(scene, cache=cache, **settings)
     sc, cfg = resolve_settings(scene, **settings)
+    sc = _current(sc)
     store = cache if isinstance(cache, RenderCache) else RenderCache(cache)
     key = hash_key(_key_fields(sc, cfg))
     canonical, hit = store.get_or_create(key, lambda: _render_canonical(sc, cfg))
-    out = scale_to_luminance(canonical, cfg.luminance_cd_m2)
+    out = scale_to_luminance(canonical, cfg.luminance_cd_m2, white_from=cfg.white_from, f_number=cfg.f_number)
     out.meta["cache_reused"] = hit
     return out

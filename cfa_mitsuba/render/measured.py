@@ -26,7 +26,7 @@ from .. import spectra
 from ..errors import CfaMitsubaError
 from ..io.hyperspectral import is_measured_path
 from ..values import SpectralImage
-from .registry import FULL_REFERENCE_METRICS
+from .types import FULL_REFERENCE_METRICS
 
 #: Options of a measured image (the render command's flags, a study's keys).
 MEASURED_OPTIONS = ("bands", "illuminant", "fov", "distance", "oversample", "wavelengths", "quantity", "mat_cube",
@@ -182,7 +182,7 @@ def measured_canonical(path, **options) -> SpectralImage:
 def measured_image(path, *, luminance=None, **options) -> SpectralImage:
     """:func:`measured_canonical` scaled to a mean luminance (cd/m^2, default
     100), as :func:`.engine.render`; writes no files."""
-    from .engine import DEFAULT_LUMINANCE_CD_M2, scale_to_luminance
+    from .scaling import DEFAULT_LUMINANCE_CD_M2, scale_to_luminance
 
     img = measured_canonical(path, **options)
     img.meta["cache_key"] = measured_key(path, **options)
@@ -194,7 +194,7 @@ def measured_cached(path, *, cache=None, luminance=None, **options) -> SpectralI
     :class:`~cfa_mitsuba.io.cache.RenderCache`, a directory or None for the
     default); ``meta['cache_reused']`` says whether the cache had it."""
     from ..io.cache import RenderCache
-    from .engine import DEFAULT_LUMINANCE_CD_M2, scale_to_luminance
+    from .scaling import DEFAULT_LUMINANCE_CD_M2, scale_to_luminance
 
     lum = DEFAULT_LUMINANCE_CD_M2 if luminance is None else float(luminance)
     if not (np.isfinite(lum) and lum > 0):

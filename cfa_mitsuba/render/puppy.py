@@ -37,11 +37,14 @@ m), 7 to 9 px for the panels (2.2 to 2.7 m) and 9.3 px for the backdrop.  Mitsub
 thin lens models defocus only; the optics stage adds diffraction (at the
 sidecar's ``f_number``), relative illumination and the pixel aperture.
 
-White reference: a perfect white Lambertian square (3 cm) facing the camera
-just in front of the dog's chest, lit directly by the key light (no
-interreflections, so that its spectrum is the illuminant's, D65, not
-tinted by the beige table), measured with a radiance meter at 16384
-samples; its band radiance is the sidecar's ``white_radiance``.
+White reference: the rule of every 3D scene (:mod:`.white`): perfect white
+Lambertian panels at the first hits of a 3 x 3 grid of camera rays, each
+facing the direction of most direct light, measured with all the light the
+scene carries; the directly lit panel of median luminance is the sidecar's
+``white_radiance``.
+
+``f_number`` (a render setting) sets the aperture radius f / (2 N); the
+default is f/2 (:data:`F_NUMBER`).
 """
 
 from __future__ import annotations
@@ -54,11 +57,11 @@ import numpy as np
 
 from .. import spectra
 from .light import band_spectrum, d65_white_radiance
-from .registry import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene, register_scene
+from .types import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene
 
 #: Distance (m) from the lens to the plane of focus, through the dog's middle.
 FOCUS_DISTANCE_M = 1.2
-#: f-number of the thin lens.
+#: Default f-number of the thin lens (the ``f_number`` setting overrides it).
 F_NUMBER = 2.0
 #: Focal length (m): the 10 degree field onto 720 x 2.2 um.
 FOCAL_LENGTH_M = 0.5 * 720 * 2.2e-6 / math.tan(math.radians(5.0))
@@ -193,7 +196,8 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
                       "to_world": T().look_at(origin=[-0.5, 0.9, -0.4], target=[0.0, -0.02, z], up=[0, 1, 0]).scale(0.3),
                       "emitter": {"type": "area", "radiance": band_spectrum(config, 15.0 * white)}},
     }
-    aperture = FOCAL_LENGTH_M / (2 * F_NUMBER)
+    f_number = F_NUMBER if config.f_number is None else float(config.f_number)
+    aperture = FOCAL_LENGTH_M / (2 * f_number)
     sensor = {
         "type": "thinlens",
         "fov": float(config.fov_deg),
@@ -204,8 +208,6 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
         "far_clip": 20.0,
         "to_world": T().look_at(origin=[0, 0, 0], target=[0, 0, -1], up=[0, 1, 0]),
     }
-    # The white reference: a perfect white square in front of the dog's chest.
-    probe = {"center": [0.012, body_y, -1.15], "camera": [0.0, 0.0, 0.0], "half_size": 0.015}
     meta = {
         "illuminant": "D65",
         "scene_distance_m": FOCUS_DISTANCE_M,
@@ -214,22 +216,21 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
             "reflectance_set": "ColorChecker N Ohta",
             "focus_distance_m": FOCUS_DISTANCE_M,
             "aperture_radius_m": aperture,
-            "f_number": F_NUMBER,
+            "f_number": f_number,
             "focal_length_m": FOCAL_LENGTH_M,
             "lens": "Mitsuba thinlens (defocus only; no diffraction, vignetting or distortion)",
             "lights": "one 0.6 m square D65 area light centred at (-0.5, 0.9, -0.4) m, aimed at the dog",
             "max_depth": MAX_DEPTH,
-            "white_reference": "perfect white Lambertian 3 cm square facing the camera at (0.012, -0.018, -1.15) m, "
-                               "direct light only, radiance meter, 16384 samples",
             "camera": "at the origin looking along -z, y up; the table top is at y = -0.07 m",
         },
     }
-    return Built(meta=meta, objects=obj, sensor=sensor, white_probe=probe)
+    return Built(meta=meta, objects=obj, sensor=sensor)
 
 
-register_scene(Scene(
+#: The puppy, registered by :mod:`.builtins`.
+SCENE = Scene(
     name="puppy",
     description="3D toy dog on a table, coloured panels and blocks at 0.9-3 m, D65 area light, thin lens focused on the dog (f/2); FOV 10 deg",
     width=720, height=636, fov_deg=10.0, spp=256, oversample=1, metrics=FULL_REFERENCE_METRICS,
-    builder=_build, max_depth=MAX_DEPTH,
-))
+    builder=_build, max_depth=MAX_DEPTH, thin_lens=True, f_number=F_NUMBER,
+)

@@ -1,42 +1,55 @@
 """Users' Mitsuba 3 scene files (``cfa-mitsuba render FILE.xml``).
 
-We keep the scene's geometry, materials, emitters and camera (pose, field of
-view, lens) and replace its film, sampler and integrator with ours (the
-spectral-quadrature integrator, or the per-band ``specfilm`` route in
-scalar_spectral).  Scenes we cannot render correctly are refused with one
-line, before anything is rendered:
+A scene file is read the way Mitsuba reads it: first walked safely by
+:mod:`.xmlscan` (size and nesting bounds, includes, ``<path>`` folders,
+``<default>`` parameters, every file confined to the scene's folder), then
+parsed by Mitsuba's own parser (``mitsuba.parser.parse_file``: includes
+merged, parameters substituted, references resolved), and the checks below
+run on what Mitsuba parsed, wherever an element came from.  Every file a
+plugin names (a mesh's, a bitmap's or an environment map's ``filename``)
+is resolved as Mitsuba would resolve it, checked, and handed to Mitsuba as
+that absolute path, so the files hashed into the cache key are the files
+rendered.
 
-- not a readable, well-formed Mitsuba ``<scene>`` file, or Mitsuba cannot
-  load it (a missing mesh, an unknown plugin);
-- no ``<sensor>`` (Mitsuba would invent a camera), or one that is not a
-  ``perspective`` or ``thinlens`` camera (the metrics need a field of view);
-- no emitter (the render would be black);
-- participating media (the integrator traces surfaces only);
+We keep the scene's geometry, materials, emitters and camera (pose, field
+of view, lens) and replace its film, sampler and integrator with ours.
+Refused with one line naming the file and line of the element:
+
+- participating media (``<medium>``, ``<phase>``, ``<volume>``): our
+  integrator traces surfaces only;
 - a BSDF outside :data:`SUPPORTED_BSDFS`: the integrator draws one
-  direction per path for all bands, which is exact only when a BSDF's
-  sampling does not depend on wavelength.
+  direction per path for all bands, exact only when a BSDF's sampling does
+  not depend on wavelength;
+- no ``<sensor>`` (Mitsuba would invent a camera), or a first one that is
+  not a ``perspective`` or ``thinlens`` camera; a horizontal field of view
+  of :data:`MAX_FOV_DEG` or more;
+- no emitter;
+- film sizes, path depths or apertures we cannot render (named by element
+  and attribute).
 
-The XML integrator's ``max_depth`` is kept if it sets one (-1, unlimited,
-becomes :data:`UNLIMITED_DEPTH`), else :data:`DEFAULT_MAX_DEPTH`.
-
-White reference (``white_radiance``): the central camera ray's first hit
-gets a small perfect-white Lambertian square just in front of it, facing
-the camera, measured with a radiance meter in the scene's own lights
-(direct light only, as for the puppy).
+The integrator's ``max_depth`` is kept (-1, unlimited, becomes
+:data:`UNLIMITED_DEPTH`), else :data:`DEFAULT_MAX_DEPTH`.  A ``thinlens``
+camera's f-number is f / (2 R): R its ``aperture_radius`` (scene units
+taken as metres), f the focal length that images its field of view onto
+the film width in 2.2 um pixels (:func:`.types.focal_length_m`); the
+``f_number`` setting replaces R by f / (2 N).
 """
 
 from __future__ import annotations
 
-__all__ = ["SUPPORTED_BSDFS", "DEFAULT_MAX_DEPTH", "UNLIMITED_DEPTH", "DEFAULT_SPP", "user_scene"]
+__all__ = ["SUPPORTED_BSDFS", "DEFAULT_MAX_DEPTH", "UNLIMITED_DEPTH", "DEFAULT_SPP", "MAX_FOV_DEG", "user_scene",
+           "files_unchanged"]
 
-import hashlib
 import math
-import re
-import xml.etree.ElementTree as ET
+import os
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import CfaMitsubaError
-from .registry import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene
+from . import variant as _variant
+from . import xmlscan
+from .loading import first_line
+from .types import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene, focal_length_m
 
 #: BSDF plugins whose sampling is wavelength-independent (Mitsuba 3.9).
 SUPPORTED_BSDFS = frozenset({
@@ -47,78 +60,171 @@ SUPPORTED_BSDFS = frozenset({
 DEFAULT_MAX_DEPTH = 5
 #: Path length used for an XML max_depth of -1 (unlimited).
 UNLIMITED_DEPTH = 8
-#: Default samples per pixel for scene files (as the puppy).
+#: Longest path a scene file may ask for.
+MAX_PATH_DEPTH = 64
+#: Default samples per pixel for scene files.
 DEFAULT_SPP = 100
+#: Horizontal fields of view from this (degrees) up are refused.
+MAX_FOV_DEG = 170.0
+#: Smallest physically possible f-number (N >= 1 / (2 sin 90 deg)).
+MIN_F_NUMBER = 0.5
+#: Largest film side (pixels).
+MAX_FILM_SIDE = 32768
 _CAMERAS = ("perspective", "thinlens")
-_FALLBACK_SIZE = (720, 636)
+_FALLBACK_SIZE = (768, 576)  # Mitsuba's hdrfilm default
 
 
 def _fail(path: Path, why: str):
-    raise CfaMitsubaError(f"scene file {str(path)!r} {why}")
+    raise CfaMitsubaError(f"scene file {str(path)!r}: {why}")
 
 
-def _defaults(root) -> dict[str, str]:
-    return {d.get("name"): d.get("value", "") for d in root.iter("default") if d.get("name")}
+@dataclass
+class _Read:
+    """A scene file read, parsed by Mitsuba and checked."""
+
+    scan: xmlscan.Scan
+    state: object  # mitsuba.parser.ParserState, references resolved, file names absolute
+    sensor: int
+    camera: str
+    size: tuple[int, int]
+    depth: int
+    fov_deg: float
+    aperture_m: float | None
+    focus_m: float | None
+    files: list[tuple[str, Path]]
 
 
-def _resolve(value: str | None, defaults: dict[str, str]) -> str | None:
-    if value is None:
-        return None
-    return re.sub(r"\$(\w+)", lambda m: defaults.get(m.group(1), m.group(0)), value)
+def _tag(mi, node) -> str:
+    names = {mi.ObjectType.Sensor: "sensor", mi.ObjectType.BSDF: "bsdf", mi.ObjectType.Emitter: "emitter",
+             mi.ObjectType.Shape: "shape", mi.ObjectType.Texture: "texture", mi.ObjectType.Medium: "medium",
+             mi.ObjectType.PhaseFunction: "phase", mi.ObjectType.Volume: "volume", mi.ObjectType.Film: "film",
+             mi.ObjectType.Sampler: "sampler", mi.ObjectType.Integrator: "integrator"}
+    return f'<{names.get(node.type, "element")} type="{node.props.plugin_name()}">'
 
 
-def _prop(elem, tag: str, name: str, defaults) -> str | None:
-    for child in elem.findall(tag):
-        if child.get("name") == name:
-            return _resolve(child.get("value"), defaults)
-    return None
+def _children(mi, node) -> list[tuple[str, int]]:
+    props = node.props
+    return [(k, props[k].index()) for k in props.keys() if props.type(k) == mi.Properties.Type.ResolvedReference]
 
 
-def _identity(path: Path, text: bytes, root, defaults) -> dict:
-    """Hash of the file and of every file it references (meshes, textures,
-    includes), so that editing any of them invalidates cached renders."""
-    h = hashlib.sha256(text)
-    for elem in root.iter():
-        for key, value in elem.attrib.items():
-            if key == "filename" or (elem.get("name") == "filename" and key == "value"):
-                ref = _resolve(value, defaults)
-                p = (path.parent / ref) if ref else None
-                h.update((ref or "").encode())
-                if p is not None and p.is_file():
-                    h.update(hashlib.sha256(p.read_bytes()).digest())
-    return {"xml_path": str(path.resolve()), "xml_sha256": h.hexdigest()}
+def _number(props, key, default=None):
+    return float(props[key]) if key in props.keys() else default
 
 
-def _template(root, sensor) -> tuple[str, str]:
-    """The scene XML with placeholders for our integrator and for the sensor
-    (returned separately, with placeholders for film and sampler)."""
-    for child in list(sensor):
-        if child.tag in ("film", "sampler"):
-            sensor.remove(child)
-    sensor.append(ET.Comment("cfa:film"))
-    sensor.append(ET.Comment("cfa:sampler"))
-    sensor_xml = ET.tostring(sensor, encoding="unicode")
-    for child in list(root):
-        if child.tag in ("integrator", "sensor"):
-            root.remove(child)
-    root.insert(0, ET.Comment("cfa:integrator"))
-    root.insert(1, ET.Comment("cfa:sensor"))
-    return ET.tostring(root, encoding="unicode"), sensor_xml
+def _read(path: Path, allow_outside_paths: bool) -> _Read:
+    scan = xmlscan.scan(path, allow_outside_paths=allow_outside_paths)
+    main = scan.main
+    mi = _variant.load(_variant.choose_variant())
+    config = mi.parser.ParserConfig(mi.variant())
+    try:
+        state = mi.parser.parse_file(config, str(main))
+        mi.parser.transform_upgrade(config, state)
+        mi.parser.transform_resolve(config, state)
+    except Exception as exc:  # Mitsuba reports parse errors as RuntimeError, with file and line
+        _fail(main, f"Mitsuba cannot read it: {first_line(exc)}")
+    parsed = {Path(os.path.realpath(str(f))) for f in state.files}
+    scanned = {p for role, p in scan.files if role == "xml"}
+    if parsed != scanned:  # pragma: no cover - our walk follows Mitsuba's rules; refuse if it ever does not
+        _fail(main, f"Mitsuba read other XML files than the check did: {sorted(map(str, parsed ^ scanned))}")
+    nodes = state.nodes
+
+    def at(i: int) -> str:
+        return f"{_tag(mi, nodes[i])} at {mi.parser.file_location(state, nodes[i])}"
+
+    for i, n in enumerate(nodes):
+        if n.type in (mi.ObjectType.Medium, mi.ObjectType.PhaseFunction, mi.ObjectType.Volume):
+            _fail(main, f"{at(i)}: participating media are not supported (cfa-mitsuba's spectral integrator "
+                        "traces surfaces only)")
+    for i, n in enumerate(nodes):
+        if n.type == mi.ObjectType.BSDF and n.props.plugin_name() not in SUPPORTED_BSDFS:
+            _fail(main, f"{at(i)}: this BSDF's sampling depends on wavelength or is not supported "
+                        f"(supported: {', '.join(sorted(SUPPORTED_BSDFS))})")
+    root = _children(mi, nodes[0])
+    sensors = [j for _, j in root if nodes[j].type == mi.ObjectType.Sensor]
+    if not sensors:
+        _fail(main, "has no <sensor>: cfa-mitsuba renders through the scene's own camera")
+    s = sensors[0]
+    camera = nodes[s].props.plugin_name()
+    if camera not in _CAMERAS:
+        _fail(main, f"{at(s)}: cfa-mitsuba needs a perspective or thinlens camera")
+    if not any(n.type == mi.ObjectType.Emitter for n in nodes):
+        _fail(main, "has no emitter: nothing would light it")
+
+    files = list(scan.files)
+    for i, n in enumerate(nodes):
+        props = n.props
+        if "filename" in props.keys() and props.type("filename") == mi.Properties.Type.String:
+            name = str(props["filename"])
+            where = f'{at(i)}, <string name="filename" value="{name}">'
+            real = xmlscan.checked_file(scan, name, scan.resolver, where)
+            props["filename"] = str(real)
+            files.append(("data", real))
+
+    sp = nodes[s].props
+    size = list(_FALLBACK_SIZE)
+    for _, j in _children(mi, nodes[s]):
+        if nodes[j].type == mi.ObjectType.Film:
+            for k, key in enumerate(("width", "height")):
+                if key in nodes[j].props.keys():
+                    v = int(nodes[j].props[key])
+                    if not 1 <= v <= MAX_FILM_SIDE:
+                        _fail(main, f'{at(j)}, <integer name="{key}" value="{v}">: must be 1 to {MAX_FILM_SIDE}')
+                    size[k] = v
+            break
+    depth = DEFAULT_MAX_DEPTH
+    for _, j in root:
+        if nodes[j].type == mi.ObjectType.Integrator:
+            cands = [j] + [c for _, c in _children(mi, nodes[j]) if nodes[c].type == mi.ObjectType.Integrator]
+            for c in cands:
+                if "max_depth" in nodes[c].props.keys():
+                    v = int(nodes[c].props["max_depth"])
+                    if v > MAX_PATH_DEPTH:
+                        _fail(main, f'{at(c)}, <integer name="max_depth" value="{v}">: at most {MAX_PATH_DEPTH} '
+                                    "(-1, unlimited, renders with 8)")
+                    depth = UNLIMITED_DEPTH if v < 0 else max(1, v)
+                    break
+            break
+    try:
+        fov = float(mi.parse_fov(sp, size[0] / size[1]))
+    except Exception as exc:
+        _fail(main, f"{at(s)}: cannot read its field of view ({first_line(exc)})")
+    if not 0 < fov < MAX_FOV_DEG:
+        key = next((k for k in ("fov", "focal_length") if k in sp.keys()), "fov")
+        shown = f'<float name="fov" value="{_number(sp, "fov")}">' if key == "fov" and "fov" in sp.keys() else (
+            f'<string name="focal_length" value="{sp["focal_length"]}">' if key == "focal_length" else "default fov")
+        _fail(main, f"{at(s)}, {shown}: a horizontal field of view of {fov:.4g} degrees; cfa-mitsuba needs more than "
+                    f"0 and less than {MAX_FOV_DEG:g}")
+    aperture = focus = None
+    if camera == "thinlens":
+        aperture = _number(sp, "aperture_radius")
+        if aperture is None or not math.isfinite(aperture) or aperture < 0:
+            _fail(main, f'{at(s)}, <float name="aperture_radius">: must be given, finite and not negative '
+                        f"(got {aperture})")
+        focus = _number(sp, "focus_distance")
+    return _Read(scan, state, s, camera, (size[0], size[1]), depth, fov, aperture, focus, files)
 
 
-def _horizontal_fov(mi, scene) -> float:
-    params = mi.traverse(scene.sensors()[0])
-    for key in params.keys():
-        if key.endswith("x_fov"):
-            value = params[key]
-            return float(value[0] if hasattr(value, "__len__") else value)
-    raise CfaMitsubaError("cannot read the camera's field of view")  # pragma: no cover
+def _identity(read: _Read) -> dict:
+    """The files the render reads, each with its content hash: any edit of
+    the scene file, an included file, a mesh, texture or spectrum gives a
+    new cache key."""
+    return {"xml_path": str(read.scan.main),
+            "files": [[role, str(p), xmlscan.file_sha256(p)] for role, p in read.files]}
 
 
-def user_scene(path) -> Scene:
-    """Validate a Mitsuba 3 scene file and return it as a :class:`Scene`
-    (defaults: the file's film size, :data:`DEFAULT_SPP`, its camera's
-    horizontal field of view)."""
+def files_unchanged(scene: Scene) -> bool:
+    """Whether every file of ``scene`` (a user XML scene) still has the
+    content it had when the scene was read."""
+    try:
+        return all(xmlscan.file_sha256(Path(p)) == h for _, p, h in scene.identity.get("files", []))
+    except CfaMitsubaError:
+        return False
+
+
+def user_scene(path, *, allow_outside_paths: bool = False) -> Scene:
+    """Read and check a Mitsuba 3 scene file (module docstring) and return
+    it as a :class:`Scene` (defaults: the file's film size, :data:`DEFAULT_SPP`,
+    its camera's horizontal field of view and its integrator's path depth)."""
     p = Path(path)
     if not p.exists():
         raise CfaMitsubaError(f"no such scene file: {str(p)!r}")
@@ -126,118 +232,81 @@ def user_scene(path) -> Scene:
         raise CfaMitsubaError(f"{str(p)!r} is a directory, not a scene file")
     if p.suffix.lower() != ".xml":
         raise CfaMitsubaError(f"unknown scene {str(p)!r}: a scene file must be a Mitsuba 3 .xml file")
-    try:
-        text = p.read_bytes()
-    except OSError as exc:
-        raise CfaMitsubaError(f"cannot read scene file {str(p)!r}: {exc.strerror}") from None
-    try:
-        root = ET.fromstring(text)
-    except ET.ParseError as exc:
-        _fail(p, f"is not well-formed XML ({exc})")
-    if root.tag != "scene":
-        _fail(p, f"is not a Mitsuba scene (its root element is <{root.tag}>, not <scene>)")
-    defaults = _defaults(root)
-    sensors = root.findall("sensor")
-    if not sensors:
-        _fail(p, "has no <sensor>: cfa-mitsuba renders through the scene's own camera")
-    sensor = sensors[0]
-    if sensor.get("type") not in _CAMERAS:
-        _fail(p, f"has a {sensor.get('type')!r} sensor; cfa-mitsuba needs a perspective or thinlens camera")
-    if not any(True for _ in root.iter("emitter")):
-        _fail(p, "has no emitter: nothing would light it")
-    if any(True for _ in root.iter("medium")):
-        _fail(p, "uses participating media, which cfa-mitsuba's spectral integrator does not trace")
-    bad = sorted({b.get("type") for b in root.iter("bsdf")} - SUPPORTED_BSDFS - {None})
-    if bad:
-        _fail(p, f"uses BSDF {', '.join(bad)}, whose sampling depends on wavelength or is not supported "
-                 f"(supported: {', '.join(sorted(SUPPORTED_BSDFS))})")
-
-    film = sensor.find("film")
-    size = list(_FALLBACK_SIZE)
-    if film is not None:
-        for i, key in enumerate(("width", "height")):
-            v = _prop(film, "integer", key, defaults)
-            if v is not None:
-                try:
-                    size[i] = int(v)
-                except ValueError:
-                    _fail(p, f"has a film {key} of {v!r}, not an integer")
-    depth = DEFAULT_MAX_DEPTH
-    for integ in root.findall("integrator"):
-        v = _prop(integ, "integer", "max_depth", defaults)
-        if v is not None:
-            try:
-                depth = int(v)
-            except ValueError:
-                _fail(p, f"has an integrator max_depth of {v!r}, not an integer")
-            depth = UNLIMITED_DEPTH if depth < 0 else max(1, depth)
-    identity = _identity(p, text, root, defaults)
-    xml, sensor_xml = _template(root, sensor)
-
-    # Load it once with Mitsuba now: the user learns at once if it cannot be
-    # loaded, and we learn the horizontal field of view.
-    from . import variant as _variant
-    from .engine import _load, _probe_load_settings
-
-    mi = _variant.load(_variant.choose_variant())
-    probe_built = Built(meta={}, xml=xml, xml_sensor=sensor_xml, xml_dir=p.parent.resolve())
-    scene = _load(mi, probe_built, *_probe_load_settings(size[0], size[1]))
-    if not scene.emitters():
-        _fail(p, "has no emitter Mitsuba can use: nothing would light it")
-    fov = _horizontal_fov(mi, scene)
-
+    read = _read(p, allow_outside_paths)
     return Scene(
         name=p.stem,
         description=f"Mitsuba scene file {p.name}",
-        width=size[0], height=size[1], fov_deg=fov, spp=DEFAULT_SPP, oversample=1,
-        metrics=FULL_REFERENCE_METRICS, builder=_build, max_depth=depth, path=p.resolve(),
-        identity=identity,
+        width=read.size[0], height=read.size[1], fov_deg=read.fov_deg, spp=DEFAULT_SPP, oversample=1,
+        metrics=FULL_REFERENCE_METRICS, builder=_build, max_depth=read.depth, path=read.scan.main,
+        identity=_identity(read), thin_lens=read.camera == "thinlens", allow_outside_paths=allow_outside_paths,
     )
 
 
-def _build(scene: Scene, config: RenderConfig) -> Built:
-    from . import variant as _variant
-    from .engine import _load, _probe_load_settings
-
-    mi = _variant.load(config.variant)
-    root = ET.fromstring(scene.path.read_bytes())
-    xml, sensor_xml = _template(root, root.findall("sensor")[0])
-    built = Built(meta={}, xml=xml, xml_sensor=sensor_xml, xml_dir=scene.path.parent)
-    loaded = _load(mi, built, *_probe_load_settings(config.width, config.height))
-    sensor = loaded.sensors()[0]
-    # The central ray's first hit (or the scene's centre, if it escapes).
-    ray, _ = sensor.sample_ray(0.0, 0.5, mi.Point2f(0.5, 0.5), mi.Point2f(0.5, 0.5))
-    si = loaded.ray_intersect(ray)
-    origin = [float(v) for v in _xyz(ray.o)]
-    direction = [float(v) for v in _xyz(ray.d)]
-    if bool(_scalar(si.is_valid())):
-        distance = float(_scalar(si.t))
+def _lens(scene: Scene, read: _Read, config: RenderConfig) -> tuple[dict, float | None]:
+    """The lens's sidecar entries and the aperture radius to render with
+    (None: the file's own)."""
+    f = focal_length_m(read.size[0], read.fov_deg)
+    if read.camera != "thinlens":
+        return {"lens": "perspective (pinhole): no defocus", "focal_length_m": f}, None
+    if config.f_number is not None:
+        radius, source = f / (2 * float(config.f_number)), "f_number setting"
     else:
-        bbox = loaded.bbox()
-        centre = [float(v) for v in _xyz(bbox.center())]
-        distance = max(1e-3, math.dist(origin, centre))
-    center = [o + 0.99 * distance * d for o, d in zip(origin, direction)]
+        radius, source = read.aperture_m, "the scene file's aperture_radius"
+    implied = (f / (2 * radius)) if radius > 0 else None
+    lens = {"lens": "Mitsuba thinlens (defocus only; no diffraction, vignetting or distortion)",
+            "aperture_radius_m": radius, "focal_length_m": f, "f_number_source": source,
+            "focus_distance_m": read.focus_m}
+    if implied is not None and implied >= MIN_F_NUMBER:
+        lens["f_number"] = implied
+    else:  # no lens has N < 0.5: the file's units are not metres, or its aperture is not a camera's
+        lens["f_number_implied"] = implied
+        lens["f_number_note"] = (f"below {MIN_F_NUMBER}: not recorded as f_number (the optics stage uses its "
+                                 "default); set f_number to render this scene through a real lens")
+    return lens, (radius if config.f_number is not None else None)
+
+
+def _build(scene: Scene, config: RenderConfig) -> Built:
+    read = _read(scene.path, scene.allow_outside_paths)
+    lens, radius = _lens(scene, read, config)
     meta = {
-        "fov_deg": _horizontal_fov(mi, loaded),
+        "fov_deg": read.fov_deg,
         "illuminant": "the scene file's emitters",
-        "scene_distance_m": distance,
-        "geometry": {
-            "xml": str(scene.path),
-            "xml_sha256": scene.identity.get("xml_sha256"),
-            "max_depth": config.max_depth,
-            "white_reference": "perfect white Lambertian square facing the camera just in front of the central "
-                               "ray's first hit, direct light only, radiance meter; scene units taken as metres",
-            "white_reference_center": center,
-        },
+        "geometry": {"xml": str(scene.path), "files": [[r, str(p)] for r, p in read.files],
+                     "max_depth": config.max_depth, **lens},
     }
-    probe = {"center": center, "camera": origin, "half_size": 0.01 * distance}
-    return Built(meta=meta, xml=xml, xml_sensor=sensor_xml, xml_dir=scene.path.parent, white_probe=probe,
-                 band_constant=False)
+    if lens.get("f_number"):
+        meta["f_number"] = lens["f_number"]
+    if read.focus_m:
+        meta["scene_distance_m"] = read.focus_m
+    return Built(meta=meta, loader=_loader(read, radius), band_constant=False)
 
 
-def _xyz(v):
-    return [v[i][0] if hasattr(v[i], "__len__") else v[i] for i in range(3)]
+def _loader(read: _Read, radius: float | None):
+    def load(mi, film, sampler, integrator, *, sensor=None, extra=None):
+        state = mi.parser.ParserState(read.state)
+        nodes = state.nodes
+        root = nodes[0].props
+        for key, j in _children(mi, nodes[0]):
+            if nodes[j].type == mi.ObjectType.Integrator or (
+                    nodes[j].type == mi.ObjectType.Sensor and (j != read.sensor or sensor is not None)):
+                del root[key]
+        cam = nodes[read.sensor].props
+        for key, j in _children(mi, nodes[read.sensor]):
+            if nodes[j].type in (mi.ObjectType.Film, mi.ObjectType.Sampler):
+                del cam[key]
+        if radius is not None:
+            cam["aperture_radius"] = float(radius)
+        try:
+            if sensor is not None:
+                root["cfa_sensor"] = mi.load_dict({**sensor, "film": film, "sampler": sampler})
+            else:
+                cam["film"] = mi.load_dict(film)
+                cam["sampler"] = mi.load_dict(sampler)
+            root["cfa_integrator"] = mi.load_dict(integrator)
+            for name, shape in (extra or {}).items():
+                root[name] = mi.load_dict(shape)
+            return mi.parser.instantiate(mi.parser.ParserConfig(mi.variant()), state)
+        except Exception as exc:  # Mitsuba reports plugin errors as RuntimeError
+            raise CfaMitsubaError(f"Mitsuba cannot load the scene {str(read.scan.main)!r}: {first_line(exc)}") from None
 
-
-def _scalar(x):
-    return x[0] if hasattr(x, "__len__") else x
+    return load

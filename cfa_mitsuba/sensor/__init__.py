@@ -1,7 +1,8 @@
 """sensor/: CFAs (layout + spectra), exposure, pixel integration, noise, ADC
 -> :class:`~cfa_mitsuba.values.RawImage`."""
 
-from .cfa import CFA, get_cfa, list_cfas, load_cfa_toml, make_cfa, register_cfa, cfa_from_raw  # noqa: F401
+from .cfa import CFA, list_cfas, make_cfa, register_cfa, cfa_from_raw  # noqa: F401
+from .catalogue import get_cfa, load_cfa_toml  # noqa: F401
 from .spectra_sets import SpectraSet, get_spectra_set, list_spectra_sets  # noqa: F401
 from .params import NOISE_MODES, SensorParams  # noqa: F401
 from .presets import SensorPreset, get_sensor_preset, list_sensor_presets  # noqa: F401

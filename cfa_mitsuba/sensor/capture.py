@@ -37,7 +37,8 @@ from .. import spectra as _spectra
 from ..errors import CfaMitsubaError, require
 from ..optics import OpticsParams, compute_optics, integrate_pixels
 from ..values import OpticalImage, RawImage, SpectralImage
-from .cfa import CFA, get_cfa
+from .catalogue import get_cfa
+from .cfa import CFA
 from .noise import collect_electrons, read_out, temporal_rng
 from .params import NOISE_MODES, SensorParams
 

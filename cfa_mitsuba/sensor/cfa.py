@@ -31,12 +31,10 @@ __all__ = [
     "CFA",
     "CANONICAL_ORDER",
     "DEFAULT_SPECTRA_SET",
-    "get_cfa",
     "layout_info",
     "list_layouts",
     "list_cfas",
     "register_cfa",
-    "load_cfa_toml",
     "make_cfa",
     "cfa_from_raw",
     "builtin_filter_curve",
@@ -277,45 +275,6 @@ def _builtin(name: str, spectra: str | None) -> CFA:
 def list_cfas() -> list[str]:
     """Names of the registered CFAs: the named layouts, then user additions."""
     return list(_layouts()) + [n for n in _REGISTRY if n not in _layouts()]
-
-
-def get_cfa(name, spectra: str | None = None) -> CFA:
-    """A CFA by registry name (``"bayer"``, ``"rgbw2"``, ...) or from a TOML
-    file (a path ending in ``.toml``).
-
-    ``spectra`` names a spectra set (``cfa-mitsuba list spectra``) to use
-    instead of the layout's default (for a TOML file: instead of its
-    ``spectra_set``, for the filters it does not give under ``[spectra]``).
-    """
-    if isinstance(name, CFA):
-        if spectra is not None and spectra != name.spectra:
-            raise CfaMitsubaError(f"CFA {name.name!r} is already built; give its name to choose spectra set "
-                                  f"{spectra!r}")
-        return name
-    key = str(name)
-    if spectra is not None:
-        get_spectra_set(spectra)  # an unknown set is refused first, by name
-    if key.lower().endswith(".toml"):
-        from .cfa_toml import load_cfa_toml
-
-        return load_cfa_toml(key, spectra=spectra)
-    if key in _REGISTRY:
-        if spectra is not None and spectra != _REGISTRY[key].spectra:
-            raise CfaMitsubaError(f"CFA {key!r} was registered with its own curves; a spectra set applies to "
-                                  "the named layouts and TOML files")
-        return _REGISTRY[key]
-    if key in _layouts():
-        return _builtin(key, spectra)
-    if key == "ideal":
-        raise CfaMitsubaError("'ideal' is not a CFA: it is the XYZ reference sensor (sensor.capture_ideal)")
-    raise CfaMitsubaError(f"unknown CFA {key!r} (known: {', '.join(list_cfas())}; or a FILE.toml)")
-
-
-def load_cfa_toml(path, spectra: str | None = None) -> CFA:
-    """Read a user CFA (:func:`cfa_mitsuba.sensor.cfa_toml.load_cfa_toml`)."""
-    from .cfa_toml import load_cfa_toml as _load
-
-    return _load(path, spectra=spectra)
 
 
 def cfa_from_raw(raw) -> CFA:

@@ -47,7 +47,7 @@ class SensorPreset:
 
     def cfa(self, name: str | None = None):
         """The preset's CFA, or another layout with the preset's spectra."""
-        from .cfa import get_cfa
+        from .catalogue import get_cfa
 
         return get_cfa(name or self.cfa_name, spectra=self.spectra)
 

@@ -17,12 +17,13 @@ from __future__ import annotations
 __all__ = ["StudyConfig", "SceneSpec", "SweepSpec", "load_config", "parse_config"]
 
 import dataclasses
-import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import CfaMitsubaError
+from .checker import _Checker, _typename
+from .sweeps import SweepSpec, _sweeps
 from ..io.validate import safe_name
 
 from ..metrics import metrics_for_scene
@@ -47,26 +48,6 @@ class SceneSpec:
     file: str | None = None
     render: dict = field(default_factory=dict)
     metrics: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class SweepSpec:
-    """Extra conditions for some metrics of some scenes: one list of values
-    per swept axis (:data:`~.conditions.AXES`), crossed (paper: S-CIELAB
-    and SSIM on PUPPY at 3 ... 400 cd/m^2).  ``metrics`` empty: every
-    metric each scene feeds."""
-
-    scenes: tuple[str, ...]
-    metrics: tuple[str, ...]
-    values: dict
-
-    @property
-    def scene(self) -> str:
-        return self.scenes[0]
-
-    @property
-    def luminances(self) -> tuple:
-        return tuple(self.values.get("luminance", ()))
 
 
 @dataclass(frozen=True)
@@ -115,82 +96,6 @@ class StudyConfig:
         lum = self.luminances[0] if luminance is None else luminance
         return self.chain_settings().base_condition(luminance=lum, exposure=self.capture.get("exposure", "auto"),
                                                     seed=self.seed)
-
-
-class _Checker:
-    """Collects the config's file name so every error names file and key."""
-
-    def __init__(self, where: str):
-        self.where = where
-
-    def fail(self, key: str, reason: str):
-        raise CfaMitsubaError(f"{self.where}: {key}: {reason}")
-
-    def table(self, data, key: str, allowed: dict) -> dict:
-        if not isinstance(data, dict):
-            self.fail(key, f"must be a table, got {_typename(data)}")
-        for k in data:
-            if k not in allowed:
-                path = f"{key}.{k}" if key else k
-                known = ", ".join(sorted(allowed))
-                self.fail(path, f"unknown key (known here: {known})")
-        return data
-
-    def string(self, value, key: str, choices=None) -> str:
-        if not isinstance(value, str) or not value:
-            self.fail(key, f"must be a non-empty string, got {_typename(value)} {value!r}")
-        if choices is not None and value not in choices:
-            self.fail(key, f"must be one of {', '.join(choices)} (got {value!r})")
-        return value
-
-    def boolean(self, value, key: str) -> bool:
-        if not isinstance(value, bool):
-            self.fail(key, f"must be true or false, got {_typename(value)} {value!r}")
-        return value
-
-    def integer(self, value, key: str, minimum: int | None = None) -> int:
-        if isinstance(value, bool) or not isinstance(value, int):
-            self.fail(key, f"must be an integer, got {_typename(value)} {value!r}")
-        if minimum is not None and value < minimum:
-            self.fail(key, f"must be at least {minimum} (got {value})")
-        return value
-
-    def number(self, value, key: str, *, positive=False, nonneg=False, maximum=None) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            self.fail(key, f"must be a finite number, got {_typename(value)} {value!r}")
-        if positive and not value > 0:
-            self.fail(key, f"must be a positive number (got {value})")
-        if nonneg and value < 0:
-            self.fail(key, f"must not be negative (got {value})")
-        if maximum is not None and value > maximum:
-            self.fail(key, f"must be at most {maximum} (got {value})")
-        return float(value)
-
-    def string_list(self, value, key: str, *, allow_empty=False) -> tuple[str, ...]:
-        if not isinstance(value, list):
-            self.fail(key, f"must be a list of strings, got {_typename(value)}")
-        if not value and not allow_empty:
-            self.fail(key, "must not be empty")
-        out = []
-        for i, v in enumerate(value):
-            out.append(self.string(v, f"{key}[{i}]"))
-        if len(set(out)) != len(out):
-            dup = next(v for v in out if out.count(v) > 1)
-            self.fail(key, f"lists {dup!r} twice")
-        return tuple(out)
-
-    def number_list(self, value, key: str) -> tuple[float, ...]:
-        if not isinstance(value, list) or not value:
-            self.fail(key, f"must be a non-empty list of numbers, got {_typename(value)}")
-        out = tuple(self.number(v, f"{key}[{i}]", positive=True) for i, v in enumerate(value))
-        if len(set(out)) != len(out):
-            self.fail(key, "lists a value twice")
-        return out
-
-
-def _typename(v) -> str:
-    return {bool: "boolean", int: "integer", float: "number", str: "string", list: "list",
-            dict: "table"}.get(type(v), type(v).__name__)
 
 
 # Render settings a config may override per scene, with their checks.
@@ -244,71 +149,6 @@ def _dataclass_table(ck: _Checker, data, key: str, cls, extra: dict) -> dict:
     except TypeError as exc:  # a field the dataclass rejects
         ck.fail(key, str(exc))
     return {**params, **rest}
-
-
-def _axis_values(ck: _Checker, axis: str, value, key: str) -> tuple:
-    """A sweep's list of values for one axis, each checked as the axis needs."""
-    if not isinstance(value, list) or not value:
-        ck.fail(key, f"must be a non-empty list of values, got {_typename(value)}")
-    out = []
-    for i, v in enumerate(value):
-        k = f"{key}[{i}]"
-        if axis == "seed":
-            out.append(ck.integer(v, k, 0))
-        elif axis == "exposure":
-            out.append(v if v == "auto" else ck.number(v, k, positive=True))
-        elif axis == "read_noise_e":
-            out.append(ck.number(v, k, nonneg=True))
-        elif axis == "f_number":
-            out.append(ck.number(v, k, positive=True, maximum=1000.0))
-        else:
-            out.append(ck.number(v, k, positive=True))
-    if len(set(out)) != len(out):
-        ck.fail(key, "lists a value twice")
-    return tuple(out)
-
-
-def _sweeps(ck: _Checker, sweep_data, scenes) -> list[SweepSpec]:
-    """``[[sweep]]`` tables: ``scene`` or ``scenes``, ``metrics`` (default:
-    all each scene feeds) and one list per axis (``luminances`` is the old
-    name of ``luminance``); several axes in one table are crossed."""
-    from .conditions import AXES
-
-    if not isinstance(sweep_data, list):
-        ck.fail("sweep", "must be an array of tables ([[sweep]])")
-    out = []
-    for i, sw in enumerate(sweep_data):
-        key = f"sweep[{i}]"
-        ck.table(sw, key, {"scene": None, "scenes": None, "metrics": None, "luminances": None,
-                           **{a: None for a in AXES}})
-        if ("scene" in sw) == ("scenes" in sw):
-            ck.fail(f"{key}.scene", "give either scene = \"NAME\" or scenes = [...] (exactly one)")
-        names = ((ck.string(sw["scene"], f"{key}.scene"),) if "scene" in sw
-                 else ck.string_list(sw["scenes"], f"{key}.scenes"))
-        specs = []
-        for j, sname in enumerate(names):
-            spec = next((s for s in scenes if s.name == sname), None)
-            if spec is None:
-                where = f"{key}.scene" if "scene" in sw else f"{key}.scenes[{j}]"
-                ck.fail(where, f"{sname!r} is not one of this study's scenes")
-            specs.append(spec)
-        fed = [m for s in specs for m in s.metrics]
-        ms = ck.string_list(sw["metrics"], f"{key}.metrics") if "metrics" in sw else ()
-        for j, m in enumerate(ms):
-            if m not in fed:
-                ck.fail(f"{key}.metrics[{j}]", f"scene {', '.join(map(repr, names))} does not feed metric {m!r} "
-                                               f"(it feeds {', '.join(dict.fromkeys(fed))})")
-        if "luminances" in sw and "luminance" in sw:
-            ck.fail(f"{key}.luminances", "give luminance or its old name luminances, not both")
-        values = {}
-        for axis in AXES:
-            name = "luminances" if axis == "luminance" and "luminances" in sw else axis
-            if name in sw:
-                values[axis] = _axis_values(ck, axis, sw[name], f"{key}.{name}")
-        if not values:
-            ck.fail(key, f"sweeps no axis (give a list for one of: {', '.join(AXES)})")
-        out.append(SweepSpec(tuple(names), tuple(ms), values))
-    return out
 
 
 def parse_config(data: dict, *, where: str = "config", base: Path | None = None) -> StudyConfig:
@@ -379,7 +219,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
             name, image, opts = image_scene_spec(ck, c, key, base, [*known_scenes, *(s.name for s in scenes)])
             scenes.append(SceneSpec(name, image, opts, IMAGE_METRICS))
             continue
-        ck.table(c, key, {"name": None, "file": None, **_RENDER_KEYS})
+        ck.table(c, key, {"name": None, "file": None, "allow_outside_paths": None, **_RENDER_KEYS})
         cname = ck.string(c.get("name"), f"{key}.name")
         if safe_name(cname) != cname:  # it names folders under details/: a label, never a path
             ck.fail(f"{key}.name", f"must be a label of letters, digits, '-', '_' and inner '.' (got {cname!r})")
@@ -390,7 +230,11 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
             ck.fail(f"{key}.file", f"no such file {str(f)!r}")
         if cname in known_scenes or any(s.name == cname for s in scenes):
             ck.fail(f"{key}.name", f"{cname!r} is already a scene name")
-        over = _render_overrides(ck, {k: v for k, v in c.items() if k not in ("name", "file")}, key)
+        over = _render_overrides(ck, {k: v for k, v in c.items() if k not in ("name", "file", "allow_outside_paths")}, key)
+        if "allow_outside_paths" in c:  # the scene may name files outside its folder
+            if not isinstance(c["allow_outside_paths"], bool):
+                ck.fail(f"{key}.allow_outside_paths", "must be true or false")
+            over["allow_outside_paths"] = c["allow_outside_paths"]
         scenes.append(SceneSpec(cname, str(f.resolve()), over, IMAGE_METRICS))
     if not scenes:
         ck.fail("scenes", "no scenes to run")

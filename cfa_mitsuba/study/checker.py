@@ -1,0 +1,87 @@
+"""The config checker: every error names the file, the key's dotted path
+and the reason (``quick.toml: sensor.pixel_pitch_um: must be a positive
+number (got -1)``)."""
+
+from __future__ import annotations
+
+__all__ = ["_Checker", "_typename"]
+
+import math
+
+from ..errors import CfaMitsubaError
+
+
+class _Checker:
+    """Collects the config's file name so every error names file and key."""
+
+    def __init__(self, where: str):
+        self.where = where
+
+    def fail(self, key: str, reason: str):
+        raise CfaMitsubaError(f"{self.where}: {key}: {reason}")
+
+    def table(self, data, key: str, allowed: dict) -> dict:
+        if not isinstance(data, dict):
+            self.fail(key, f"must be a table, got {_typename(data)}")
+        for k in data:
+            if k not in allowed:
+                path = f"{key}.{k}" if key else k
+                known = ", ".join(sorted(allowed))
+                self.fail(path, f"unknown key (known here: {known})")
+        return data
+
+    def string(self, value, key: str, choices=None) -> str:
+        if not isinstance(value, str) or not value:
+            self.fail(key, f"must be a non-empty string, got {_typename(value)} {value!r}")
+        if choices is not None and value not in choices:
+            self.fail(key, f"must be one of {', '.join(choices)} (got {value!r})")
+        return value
+
+    def boolean(self, value, key: str) -> bool:
+        if not isinstance(value, bool):
+            self.fail(key, f"must be true or false, got {_typename(value)} {value!r}")
+        return value
+
+    def integer(self, value, key: str, minimum: int | None = None) -> int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            self.fail(key, f"must be an integer, got {_typename(value)} {value!r}")
+        if minimum is not None and value < minimum:
+            self.fail(key, f"must be at least {minimum} (got {value})")
+        return value
+
+    def number(self, value, key: str, *, positive=False, nonneg=False, maximum=None) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            self.fail(key, f"must be a finite number, got {_typename(value)} {value!r}")
+        if positive and not value > 0:
+            self.fail(key, f"must be a positive number (got {value})")
+        if nonneg and value < 0:
+            self.fail(key, f"must not be negative (got {value})")
+        if maximum is not None and value > maximum:
+            self.fail(key, f"must be at most {maximum} (got {value})")
+        return float(value)
+
+    def string_list(self, value, key: str, *, allow_empty=False) -> tuple[str, ...]:
+        if not isinstance(value, list):
+            self.fail(key, f"must be a list of strings, got {_typename(value)}")
+        if not value and not allow_empty:
+            self.fail(key, "must not be empty")
+        out = []
+        for i, v in enumerate(value):
+            out.append(self.string(v, f"{key}[{i}]"))
+        if len(set(out)) != len(out):
+            dup = next(v for v in out if out.count(v) > 1)
+            self.fail(key, f"lists {dup!r} twice")
+        return tuple(out)
+
+    def number_list(self, value, key: str) -> tuple[float, ...]:
+        if not isinstance(value, list) or not value:
+            self.fail(key, f"must be a non-empty list of numbers, got {_typename(value)}")
+        out = tuple(self.number(v, f"{key}[{i}]", positive=True) for i, v in enumerate(value))
+        if len(set(out)) != len(out):
+            self.fail(key, "lists a value twice")
+        return out
+
+
+def _typename(v) -> str:
+    return {bool: "boolean", int: "integer", float: "number", str: "string", list: "list",
+            dict: "table"}.get(type(v), type(v).__name__)
