@@ -19,7 +19,7 @@ from .results import SCORED_METRICS, Results
 from .style import cfa_styles, metric_info
 
 _LABELS = {"f_number": "f-number", "pixel_pitch_um": "pixel pitch", "exposure": "exposure time",
-           "read_noise_e": "read noise", "seed": "noise seed (realisation)"}
+           "read_noise_e": "read noise", "seed": "noise seed (realisation)", "spectra": "spectra set"}
 
 
 def axis_rows(res: Results, axis: str):
@@ -31,9 +31,9 @@ def axis_rows(res: Results, axis: str):
     others = [a for a in AXES[1:] if a != axis and a in m.columns]
     base = res.metrics
     keep = np.zeros(len(m), dtype=bool)
-    for scene, g in base.groupby("scene", sort=False):
+    for (scene, cfa), g in base.groupby(["scene", "cfa"], sort=False):
         ref = {a: str(g[a].iloc[0]) for a in others}
-        sel = (m["scene"] == scene).to_numpy().copy()
+        sel = ((m["scene"] == scene) & (m["cfa"] == cfa)).to_numpy().copy()
         for a, v in ref.items():
             sel &= (m[a].astype(str) == v).to_numpy()
         keep |= sel
@@ -57,7 +57,7 @@ def axis_sweep(res: Results, axis: str):
     fig, axes = panel_grid(rows, cols, 2.7, 2.0, left=0.95, right=0.15,
                            top=0.35 + 0.2 * legend_rows(len(res.cfas), ncol), bottom=0.5, wspace=0.15, hspace=0.35,
                            width=6.0)
-    numeric = axis != "exposure" or not (m[axis].astype(str) == "auto").any()
+    numeric = axis not in ("exposure", "spectra") or (axis == "exposure" and not (m[axis].astype(str) == "auto").any())
     drawn = []
     unit = AXIS_UNITS.get(axis, "")
     for r, (scene, metric) in enumerate(pairs):

@@ -193,14 +193,16 @@ def split_sweeps(metrics):
     """(rows at the study's own values of every axis but luminance, {axis:
     values} of the other axes some sweep varied).  A row belongs to the
     first part when its scene has a base row (``base`` column) with the same
-    values of those axes; tables without axis columns are all base."""
+    values of those axes (for its CFA: the spectra set is a CFA's own); tables
+    without axis columns are all base."""
     others = [a for a in AXES[1:] if a in metrics.columns]
     if not others or "base" not in metrics.columns:
         return metrics, {}
     base_flag = metrics["base"].astype(str).str.lower().isin(("true", "1"))
     keys = [tuple(str(v) for v in row) for row in metrics[others].itertuples(index=False)]
-    base_keys = {(sc, k) for sc, k, b in zip(metrics["scene"], keys, base_flag) if b}
-    keep = np.array([(sc, k) in base_keys for sc, k in zip(metrics["scene"], keys)], dtype=bool)
+    ids = list(zip(metrics["scene"], metrics["cfa"], keys))  # a CFA's own spectra set is one of its axes
+    base_keys = {i for i, b in zip(ids, base_flag) if b}
+    keep = np.array([i in base_keys for i in ids], dtype=bool)
     swept = {}
     for a in others:
         vals = list(dict.fromkeys(metrics.loc[~keep, a].tolist()))

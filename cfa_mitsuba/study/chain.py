@@ -172,10 +172,13 @@ class CameraChain:
 
     def capture(self, oi, cfa, cond: Condition, seed: int, *, noise: str | None = None):
         """The raw mosaic of ``cfa`` (a name, TOML path or CFA) under ``cond``
-        (``noise`` overrides the settings' noise mode)."""
-        from ..sensor import capture
+        (its spectra set, when the condition names one; ``noise`` overrides
+        the settings' noise mode)."""
+        from ..sensor import capture, get_cfa
 
         _, sensor = self.settings.for_condition(cond)
+        if cond.spectra is not None:
+            cfa = get_cfa(cfa, spectra=cond.spectra)
         return self._timed("capture_s", capture, oi, cfa, luminance_cd_m2=cond.luminance, exposure_s=cond.exposure,
                            noise=noise or self.settings.noise, seed=seed, sensor=sensor,
                            reference_luminance_cd_m2=self.settings.reference_luminance_cd_m2)

@@ -13,6 +13,8 @@ axis                what it sets                                default
                     reference luminance) or seconds
 ``read_noise_e``    read noise (electrons rms)                  6.2
 ``seed``            the noise realisation (the study seed)      the study's
+``spectra``         the spectra set of every CFA's filters      each layout's
+                    (``cfa-mitsuba list spectra``)              family set
 ==================  ==========================================  ==============
 
 A config's base values come from ``[optics]``, ``[sensor]`` and the top-level
@@ -29,10 +31,10 @@ import itertools
 from dataclasses import asdict, dataclass, replace
 
 #: The study axes, in metrics.csv column order.
-AXES = ("luminance", "f_number", "pixel_pitch_um", "exposure", "read_noise_e", "seed")
+AXES = ("luminance", "f_number", "pixel_pitch_um", "exposure", "read_noise_e", "seed", "spectra")
 #: Units of the axes, for labels.
 AXIS_UNITS = {"luminance": "cd/m²", "f_number": "", "pixel_pitch_um": "µm", "exposure": "s",
-              "read_noise_e": "e⁻", "seed": ""}
+              "read_noise_e": "e⁻", "seed": "", "spectra": ""}
 
 
 @dataclass(frozen=True)
@@ -41,7 +43,8 @@ class Condition:
 
     ``f_number`` None means the scene's own (a render's sidecar records the
     aperture it modelled; charts: the optics default f/4).  ``exposure`` is
-    ``"auto"`` or a time in seconds.
+    ``"auto"`` or a time in seconds.  ``spectra`` None means each CFA's
+    own spectra set (its family's filters).
     """
 
     luminance: float = 100.0
@@ -50,6 +53,7 @@ class Condition:
     exposure: object = "auto"
     read_noise_e: float = 6.2
     seed: int = 0
+    spectra: str | None = None
 
     def with_(self, **changes) -> "Condition":
         return replace(self, **changes)
@@ -61,7 +65,8 @@ class Condition:
         """A short text naming the axes that differ from ``base`` (all but
         luminance when no base), e.g. ``L100 f8 seed2``; file-name safe."""
         parts = [f"L{self.luminance:g}"]
-        short = {"f_number": "f", "pixel_pitch_um": "p", "exposure": "t", "read_noise_e": "rn", "seed": "seed"}
+        short = {"f_number": "f", "pixel_pitch_um": "p", "exposure": "t", "read_noise_e": "rn", "seed": "seed",
+                 "spectra": "s-"}
         for axis in AXES[1:]:
             v = getattr(self, axis)
             if base is not None and v == getattr(base, axis):

@@ -39,6 +39,10 @@ def _axis_values(ck: _Checker, axis: str, value, key: str) -> tuple:
         k = f"{key}[{i}]"
         if axis == "seed":
             out.append(ck.integer(v, k, 0))
+        elif axis == "spectra":
+            from ..sensor import list_spectra_sets
+
+            out.append(ck.string(v, k, tuple(list_spectra_sets())))
         elif axis == "exposure":
             out.append(v if v == "auto" else ck.number(v, k, positive=True))
         elif axis == "read_noise_e":

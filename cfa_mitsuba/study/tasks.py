@@ -99,6 +99,15 @@ def condition_columns(cond, ideal_meta: dict) -> dict:
     return out
 
 
+def _spectra_in_effect(cfa, cond) -> str:
+    """The spectra set a capture used: the condition's, else the CFA's own."""
+    if cond.spectra is not None:
+        return cond.spectra
+    from ..sensor import get_cfa
+
+    return str(get_cfa(cfa).spectra or "")
+
+
 def _thumbnail(srgb: np.ndarray, path: Path, longest: int = 240) -> None:
     from ..io import write_image
 
@@ -167,12 +176,14 @@ def evaluate_task(task: dict) -> dict:
     def image():
         return load_scene_image(task["source"])
 
+    spectra_used = _spectra_in_effect(task["cfa"], cond)
     for i, seed in enumerate(realisation_seeds(cond.seed, task["scene"], task["cfa"], cond.luminance,
                                                int(task.get("realisations", 1)))):
         for raw, ideal, method, ev in chain.evaluate(image, task["cfa"], task["demosaics"], task["metrics"], cond,
                                                      seed, scene_key):
             base = {"scene": task["scene"], "cfa": cfa_label, "demosaic": method,
-                    **condition_columns(cond, ideal.meta), "base": bool(task.get("base", True)), "realisation": i}
+                    **condition_columns(cond, ideal.meta), "spectra": spectra_used,
+                    "base": bool(task.get("base", True)), "realisation": i}
             if not hasattr(ev, "results"):
                 # No output to measure (a channel the scene white leaves dark) or
                 # no scale for it (a black ideal interior): every metric of this
