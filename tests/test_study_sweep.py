@@ -31,8 +31,8 @@ scenes = ["slanted-edge", "puppy"]
 seed = [1, 2, 3]
 
 [render.slanted-edge]
-width = 320
-height = 288
+width = 1280
+height = 1152
 [render.puppy]
 width = 96
 height = 84
@@ -77,47 +77,76 @@ def test_one_row_per_axis_value(swept):
     assert {"puppy", "puppy@f2.8", "puppy@f8"} <= set(timing["renders"])  # defocus follows the f-number
 
 
-def _edge_curve(out, tag):
-    d = json.loads((out / "details" / "slanted-edge" / "bayer" / "bilinear" / f"{tag}.json").read_text())
-    rec = d["mtf"]["details"]["records"]["lum"]
+def _edge_curve(out, who, tag):
+    d = json.loads((out / "details" / "slanted-edge" / who / f"{tag}.json").read_text())
+    rec = d["mtf"]["records"]["lum"]
     return np.asarray(rec["freq_cy_px"], float), np.asarray(rec["mtf"], float), d["mtf"]["value"]
 
 
 def _polychromatic_otf(f_cy_mm, n):
-    """The luminance-weighted diffraction OTF of a D65 edge at f-number n."""
+    """The diffraction OTF of a D65 edge as the MTF analysis sees it: each
+    band's OTF weighted by that band's share of the analysed luminance
+    (0.3 R + 0.6 G + 0.1 B of linear sRGB, ISETCam's weights)."""
+    from cfa_mitsuba import colorimetry
+
     wl = spectra.DEFAULT_WAVELENGTHS
-    w = spectra.illuminant("D65", wl) * spectra.cmfs_xyz(wl)[:, 1]
+    rgb = spectra.cmfs_xyz(wl) @ colorimetry.XYZ_TO_SRGB.T
+    w = spectra.illuminant("D65", wl) * (rgb @ np.array([0.3, 0.6, 0.1]))
     w = w / w.sum()
     return sum(wi * diffraction_mtf(f_cy_mm, lam, n) for wi, lam in zip(w, wl))
+
+
+def _predicted_mtf50(freq_cy_px, mtf28, pitch_mm=2.2e-3):
+    """MTF50 at f/8 from the f/2.8 curve: f/2.8's diffraction OTF divided out, f/8's multiplied in."""
+    f_mm = freq_cy_px / pitch_mm
+    m = mtf28 * _polychromatic_otf(f_mm, 8.0) / np.maximum(_polychromatic_otf(f_mm, 2.8), 1e-9)
+    i = int(np.argmax(m < 0.5))
+    return float(np.interp(0.5, [m[i], m[i - 1]], [f_mm[i], f_mm[i - 1]]))
 
 
 def test_mtf50_falls_by_the_diffraction_amount(swept):
     out, m = swept
     edge = m[(m.scene == "slanted-edge") & (m.metric == "mtf") & (m.seed == 0)]
-    f28 = float(edge[edge.f_number.round(3) == 2.8].value.iloc[0])
-    f8 = float(edge[edge.f_number.round(3) == 8.0].value.iloc[0])
-    assert f8 < f28
-    # predict f/8 from the measured f/2.8 curve: divide out f/2.8's OTF, multiply in f/8's
-    freq, mtf28, v28 = _edge_curve(out, "L100_f2.8")
+    mean28 = edge[edge.f_number.round(3) == 2.8].iloc[0]
+    mean8 = edge[edge.f_number.round(3) == 8.0].iloc[0]
+    assert mean8.ci_high < mean28.ci_low  # lower, beyond the noise
+    # the curve in details/ is the first realisation's: compare like with like
+    every = pd.read_csv(out / "metrics_realisations.csv")
+    first = every[(every.scene == "slanted-edge") & (every.metric == "mtf") & (every.seed == 0)
+                  & (every.realisation == 0)]
+    f28 = float(first[first.f_number.round(3) == 2.8].value.iloc[0])
+    f8 = float(first[first.f_number.round(3) == 8.0].value.iloc[0])
+    # predict f/8 from the measured f/2.8 curve: divide out f/2.8's OTF, multiply in f/8's.  The edge
+    # is rendered at the paper's size: on a 4x smaller one the ROI cuts the diffraction LSF's tails
+    # and the prediction misses by 5 % (measured), an artefact of the edge analysis, not of the optics
+    freq, mtf28, v28 = _edge_curve(out, "bayer/bilinear", "L100_f2.8")
     assert v28 == pytest.approx(f28)
-    pitch_mm = 2.2e-3
-    f_mm = freq / pitch_mm
-    m_pred = mtf28 * _polychromatic_otf(f_mm, 8.0 * 1.0) / np.maximum(_polychromatic_otf(f_mm, 2.8), 1e-9)
-    i = int(np.argmax(m_pred < 0.5))
-    pred = np.interp(0.5, [m_pred[i], m_pred[i - 1]], [f_mm[i], f_mm[i - 1]])
-    print(f"MTF50 f/2.8 {f28:.1f}, f/8 measured {f8:.1f}, predicted {pred:.1f} cy/mm")
-    assert f8 == pytest.approx(pred, rel=0.05)
-    assert (f28 - f8) == pytest.approx(f28 - pred, rel=0.15)
+    pred = _predicted_mtf50(freq, mtf28)
+    print(f"camera MTF50 f/2.8 {f28:.1f}, f/8 measured {f8:.1f}, predicted {pred:.1f} cy/mm")
+    assert f8 == pytest.approx(pred, rel=0.02)  # measured 0.7 % apart
+    # the ideal sensor (no demosaic): the same optics through the same analysis
+    freq, ideal28, _ = _edge_curve(out, "ideal", "L100_f2.8")
+    _, _, ideal8 = _edge_curve(out, "ideal", "L100_f8")
+    pred_ideal = _predicted_mtf50(freq, ideal28)
+    print(f"ideal MTF50 f/8 measured {ideal8:.1f}, predicted {pred_ideal:.1f} cy/mm")
+    assert ideal8 == pytest.approx(pred_ideal, rel=0.01)  # measured 0.2 % apart
 
 
 @pytest.mark.parametrize("scene,metric", [("slanted-edge", "mtf"), ("puppy", "ssim"), ("puppy", "scielab")])
 def test_seeds_differ_by_noise_only(swept, scene, metric):
-    _, m = swept
-    rows = m[(m.scene == scene) & (m.metric == metric) & m.f_number.isin(
-        m[(m.scene == scene) & m.base].f_number)]
-    by_seed = rows.set_index("seed")["value"]
-    others = by_seed.loc[[1, 2, 3]].to_numpy()
-    assert len(set(np.round(others, 12))) == 3  # three noise realisations, not one
-    sd = others.std(ddof=1)
-    # seed 0 (the base row) is a fourth, independent realisation of the same camera
-    assert abs(by_seed.loc[0] - others.mean()) < 3 * sd * np.sqrt(1 + 1 / 3), (by_seed.to_dict(), sd)
+    """Seeds 0 (the base) to 3, three noise realisations each: the seeds'
+    means differ no more than the noise within a seed predicts (one-way
+    ANOVA, p above 0.0027, the two-sided 3-sigma level), and the seeds are
+    distinct draws."""
+    from scipy.stats import f_oneway
+
+    out, m = swept
+    every = pd.read_csv(out / "metrics_realisations.csv")
+    own_f = float(m[(m.scene == scene) & m.base].f_number.iloc[0])
+    rows = every[(every.scene == scene) & (every.metric == metric) & (every.f_number == own_f)]
+    groups = [g["value"].to_numpy() for _, g in rows.groupby("seed")]
+    assert len(groups) == 4 and all(len(g) == 3 for g in groups)
+    assert len({round(float(v), 12) for g in groups for v in g}) == 12  # twelve noise draws, not one
+    p = f_oneway(*groups).pvalue
+    print(f"{scene} {metric}: seed means {[round(float(g.mean()), 4) for g in groups]}, ANOVA p = {p:.3g}")
+    assert p > 0.0027, p
