@@ -252,6 +252,7 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
         "other": tables.other_table(res),
         "sweep": tables.sweep_table(res),
         "ranges": tables.ranges_table(res),
+        "policies": tables.policy_table(res),
     }
     text = page.render_page(res, figures=figures, absents=absents, embeds=embeds, tables=tabs, facts=_facts(res))
     # figures/: this build's files only (a rebuild must not leave figures of CFAs no longer in the

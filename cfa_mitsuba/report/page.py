@@ -80,6 +80,8 @@ table.data td.lum{text-align:right;color:var(--muted)}
 .unit{color:var(--muted);font-size:11.5px}
 .dir{color:var(--muted)}
 .rank{color:var(--muted);font-size:11.5px}
+.ci{color:var(--muted);font-size:11px}
+td.tie .rank{font-style:italic;color:#aa3377}
 .oor-mark{color:var(--warn)}
 .swatch{display:inline-block;width:9px;height:9px;border-radius:2px;margin-right:4px;vertical-align:baseline}
 figure{margin:10px 0 6px}
@@ -308,8 +310,10 @@ def render_page(res: Results, *, figures: list, absents: list, embeds: dict, tab
                  '<span class="paper">(paper Table 3, Fig 17)</span></h3>')
         if tab:
             t.append(f'<div class="tablewrap">{tab}</div>')
-            t.append('<p class="note">Each cell: the mean of the CFA\'s normalised metric scores for that method '
-                     "(rank in brackets, 1 = best); 'Total' is the mean over the methods. Boxed: rank 1. Shading "
+            t.append('<p class="note">Each cell: the mean of the CFA\'s normalised metric scores for that method, '
+                     "± half its 95 % interval over the noise realisations, and its rank in brackets (1 = best); "
+                     "a range such as (1–3) is a rank interval: CFAs whose score intervals overlap are tied, "
+                     "and a tie is not a ranking. 'Total' is the mean over the methods. Boxed: rank 1. Shading "
                      "follows the score.</p>")
     if not tables.get("table3"):
         t.append('<div class="absent"><b>Not available:</b> nothing was scored.</div>')
@@ -323,15 +327,31 @@ def render_page(res: Results, *, figures: list, absents: list, embeds: dict, tab
     t.append("</section>")
     body.append("".join(t))
 
+    policy_text = {
+        "paper": "the paper's printed ranges, with the MSP range moved to true cycles per degree for this "
+                 "study's chirp and the MTF50 range to its pixel pitch",
+        "study": "fitted to the compared set: each metric's worst and best mean value over the CFAs and methods",
+        "ideal": "anchored on the ideal sensor: its own value scores 1 (an MTF50 past the ideal's, overshoot from "
+                 "sharpening, is clipped at 1, not rewarded) and the worst CFA's value scores 0",
+    }.get(res.range_policy or "paper", "")
     r = ['<section id="ranges"><h2>Score ranges</h2>',
          '<p class="intro">Eq. 8 maps each metric linearly from its range\'s worst end (score 0) to its best '
-         "end (score 1). The ranges are the paper's, with the MSP range moved to true cycles per degree for this "
-         "study's chirp and the MTF50 range to its pixel pitch (ranges.json). A value outside its range means "
-         "the range does not span the CFAs compared; such scores are "
+         f"end (score 1). Range policy <b>{_e(res.range_policy or 'paper')}</b>: {_e(policy_text)} (ranges.json). "
+         "A value outside its range means the range does not span the CFAs compared; such scores are "
          + ("clipped to [0, 1]" if res.config.get("clip_scores", True) else "left unclipped in this study")
          + ".</p>"]
+    if res.constant_metrics:
+        r.append('<p class="note warn">Not scored, because every CFA gave the same value (a metric that cannot '
+                 "tell the candidates apart is shown as such, not scored as a tie): "
+                 + ", ".join(_e(m) for m in res.constant_metrics) + ".</p>")
     if tables.get("ranges"):
         r.append(f'<div class="tablewrap">{tables["ranges"]}</div>')
+    if tables.get("policies"):
+        r.append('<h3>The three range policies side by side</h3><p class="note">Per metric, how many scores '
+                 "each policy clips (or that the metric is constant across the CFAs), then each CFA's overall "
+                 "rank and score under each policy (policies.csv): how much of the ranking is the choice of "
+                 "ranges.</p>")
+        r.append(f'<div class="tablewrap">{tables["policies"]}</div>')
     if facts.get("oor_lines"):
         r.append('<p class="note">Values outside their range:</p><ul class="tight">'
                  + "".join(f"<li>{_e(x)}</li>" for x in facts["oor_lines"]) + "</ul>")

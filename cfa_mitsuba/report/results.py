@@ -80,6 +80,12 @@ class Results:
     all_metrics: object = None
     #: the axes other than luminance that a sweep varied, {axis: values}
     swept_axes: dict = field(default_factory=dict)
+    #: the range policy the scores used ('paper', 'study', 'ideal'; None for old results)
+    range_policy: str | None = None
+    #: scored metrics left out because no CFA differed on them
+    constant_metrics: list = field(default_factory=list)
+    #: policies.csv (clipping and ranks under every policy), or None
+    policies: object = None
 
     # -- what was measured -------------------------------------------------
     def has_metric(self, metric: str, luminance: float | None = None) -> bool:
@@ -189,6 +195,17 @@ def _read_metrics(path: Path):
     return m[np.isfinite(m["value"]) & np.isfinite(m["luminance"])].reset_index(drop=True)
 
 
+def _read_policies(path: Path):
+    import pandas as pd
+
+    if not path.is_file():
+        return None
+    try:
+        return pd.read_csv(path)
+    except (OSError, ValueError):
+        return None
+
+
 def split_sweeps(metrics):
     """(rows at the study's own values of every axis but luminance, {axis:
     values} of the other axes some sweep varied).  A row belongs to the
@@ -265,7 +282,10 @@ def load_results(out_dir) -> Results:
         notes.append("config.json is absent: the study's name, scenes and settings are taken from metrics.csv.")
     ranges = {}
     raw_ranges = _read_json(root / "ranges.json")
+    policy, constant = None, []
     if isinstance(raw_ranges, dict):
+        policy = raw_ranges.pop("_policy", None)
+        constant = [str(c) for c in raw_ranges.pop("_constant", []) or []]
         for k, v in raw_ranges.items():
             try:
                 ranges[str(k)] = (float(v[0]), float(v[1]))
@@ -325,4 +345,5 @@ def load_results(out_dir) -> Results:
     return Results(root=root, metrics=metrics, scores=scores, ranges=ranges, timing=timing, config=config,
                    cfas=cfas, demosaics=demosaics, scenes=scenes, base_luminances=base,
                    primary_luminance=primary, scored_here=scored_here, notes=notes, all_metrics=all_metrics,
-                   swept_axes=swept)
+                   swept_axes=swept, range_policy=policy if isinstance(policy, str) else None,
+                   constant_metrics=constant, policies=_read_policies(root / "policies.csv"))

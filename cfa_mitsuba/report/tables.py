@@ -14,7 +14,7 @@ Every value cell carries the full-precision number from the CSV in
 
 from __future__ import annotations
 
-__all__ = ["table1", "table2", "table3", "other_table", "sweep_table", "ranges_table"]
+__all__ = ["table1", "table2", "table3", "other_table", "sweep_table", "ranges_table", "policy_table"]
 
 import html
 
@@ -215,6 +215,7 @@ def table3(res: Results, luminance: float) -> str | None:
     per = s[s["luminance"] == luminance].drop_duplicates(["cfa", "demosaic"])
     nmet = {(r.cfa, r.demosaic): int(r.n_metrics) for r in per.itertuples(index=False)} \
         if "n_metrics" in per.columns else {}
+    spans = _rank_spans(per)
     cfas = [c for c in res.cfas if c in mean.columns]
     rows = [d for d in res.demosaics if d in mean.index] + ["total"]
     uneven = len(set(nmet.values())) > 1
@@ -234,16 +235,81 @@ def table3(res: Results, luminance: float) -> str | None:
                 continue
             klass = "best" if np.isfinite(k) and int(k) == 1 and len(cfas) > 1 else ""
             n = nmet.get((c, d))
+            ci, (b, w) = spans.get((c, d), (None, (int(k), int(k))))
             tip = f"rank {int(k)} of {len(cfas)}" + (f"; mean of {n} metric score(s)" if n is not None else "")
+            if ci is not None:
+                tip += f"; 95 % interval {ci[0]:.4f} … {ci[1]:.4f}; rank interval {b}–{w}"
             flag = '<sup class="oor-mark">*</sup>' if uneven and n is not None and n != max(nmet.values()) else ""
-            row.append(f'<td class="{klass}" style="{_heat(v, lo, hi)}" data-value="{_num(v)}" title="{_e(tip)}">'
-                       f'{v:.4f}{flag} <span class="rank">({int(k)})</span></td>')
+            rank_text = f"{int(k)}" if b == w else f"{b}–{w}"
+            if b != w:
+                klass += " tie"
+            pm = f' <span class="ci">±{(ci[1] - ci[0]) / 2:.4f}</span>' if ci is not None else ""
+            row.append(f'<td class="{klass.strip()}" style="{_heat(v, lo, hi)}" data-value="{_num(v)}" '
+                       f'title="{_e(tip)}">{v:.4f}{pm}{flag} <span class="rank">({rank_text})</span></td>')
         row.append("</tr>")
         out.append("".join(row))
     out.append("</tbody></table>")
     if uneven:
         out.append('<p class="note">* averages fewer metrics than the others (a metric is missing for this CFA '
                    "and demosaic): its mean and rank are not comparable with the rest.</p>")
+    return "".join(out)
+
+
+def _rank_spans(per) -> dict:
+    """{(cfa, demosaic or 'total'): ((ci_low, ci_high) or None, (best rank, worst rank))}
+    from scores.csv's interval columns (absent in results made before them)."""
+    out = {}
+    if "demosaic_rank_best" not in per.columns:
+        return out
+    for r in per.itertuples(index=False):
+        out[(r.cfa, r.demosaic)] = ((float(r.mean_score_ci_low), float(r.mean_score_ci_high)),
+                                    (int(r.demosaic_rank_best), int(r.demosaic_rank_worst)))
+        out[(r.cfa, "total")] = ((float(r.total_score_ci_low), float(r.total_score_ci_high)),
+                                 (int(r.total_rank_best), int(r.total_rank_worst)))
+    return out
+
+
+def policy_table(res: Results) -> str | None:
+    """Per scored metric and range policy: how many scores eq. 8 clips, or
+    that the metric cannot rank the CFAs (constant); then each CFA's overall
+    rank under each policy (policies.csv)."""
+    p = res.policies
+    if p is None or not len(p):
+        return None
+    clip = p[p["scope"] == "clipping"]
+    rank = p[p["scope"] == "rank"]
+    policies = list(dict.fromkeys(clip["policy"]))
+    out = ['<table class="data policies"><thead><tr><th>metric</th>'
+           + "".join(f"<th>{_e(q)}{' (used)' if q == res.range_policy else ''}</th>" for q in policies)
+           + "</tr></thead><tbody>"]
+    for m in [k for k in SCORED_METRICS if k in set(clip["metric"])]:
+        cells = []
+        for q in policies:
+            r = clip[(clip["policy"] == q) & (clip["metric"] == m)]
+            if not len(r):
+                cells.append('<td class="na">—</td>')
+                continue
+            r = r.iloc[0]
+            if str(r["constant"]).lower() == "true":
+                cells.append('<td class="warn">constant: cannot rank</td>')
+            else:
+                n, k = int(r["scores"]), int(r["clipped"])
+                cells.append(f'<td{" class=warn" if k else ""}>{k} of {n} clipped</td>')
+        out.append(f'<tr><th class="metric">{_metric_label(m, res)}</th>{"".join(cells)}</tr>')
+    out.append("</tbody></table>")
+    if len(rank):
+        lum = res.primary_luminance if res.primary_luminance in set(rank["luminance"]) else rank["luminance"].iloc[0]
+        rank = rank[rank["luminance"] == lum]
+        out.append('<table class="data policies"><thead><tr><th>CFA</th>'
+                   + "".join(f"<th>rank, {_e(q)}</th>" for q in policies) + "</tr></thead><tbody>")
+        for c in [c for c in res.cfas if c in set(rank["cfa"])]:
+            cells = []
+            for q in policies:
+                r = rank[(rank["policy"] == q) & (rank["cfa"] == c)]
+                cells.append(f"<td>{int(r['total_rank'].iloc[0])} ({float(r['total_score'].iloc[0]):.3f})</td>"
+                             if len(r) else '<td class="na">—</td>')
+            out.append(f'<tr><th>{_e(c)}</th>{"".join(cells)}</tr>')
+        out.append("</tbody></table>")
     return "".join(out)
 
 

@@ -108,7 +108,8 @@ def score_realisations(rows, ranges: dict, *, clip: bool = True, constant=()):
     out = out.join(first, on=_KEYS)
     raw = every.groupby(_KEYS, sort=False)["raw_score"].mean().rename("raw_score")
     out = out.join(raw, on=_KEYS)
-    out["out_of_range"] = (out["raw_score"] < 0) | (out["raw_score"] > 1)
+    # past an end by more than rounding (a mean at an end of a fitted range is exactly there)
+    out["out_of_range"] = (out["raw_score"] < -1e-9) | (out["raw_score"] > 1 + 1e-9)
     out = out.drop(columns=["std", "score_std", "score_n"])
     # per metric: rank of the mean score, intervals from the score intervals
     for col in ("metric_rank", "metric_rank_best", "metric_rank_worst"):
@@ -162,7 +163,7 @@ def policy_summary(means, paper: dict, ideal: dict, clip: bool = True):
                 clip_rows.append((policy, metric, len(g), 0, True))
                 continue
             raw = ranges[metric].normalise(g["value"].to_numpy(dtype=float))
-            clip_rows.append((policy, metric, len(g), int(np.sum((raw < 0) | (raw > 1))), False))
+            clip_rows.append((policy, metric, len(g), int(np.sum((raw < -1e-9) | (raw > 1 + 1e-9))), False))
         if kept.empty:
             continue
         s = score(kept, ranges, clip=clip)
