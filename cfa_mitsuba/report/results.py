@@ -220,11 +220,21 @@ def split_sweeps(metrics):
     ids = list(zip(metrics["scene"], metrics["cfa"], keys))  # a CFA's own spectra set is one of its axes
     base_keys = {i for i, b in zip(ids, base_flag) if b}
     keep = np.array([i in base_keys for i in ids], dtype=bool)
+    # an axis is swept when some row outside the base differs from its CFA's base value of it
+    base_of = {}
+    for (sc, cfa, k), b in zip(ids, base_flag):
+        if b:
+            base_of.setdefault((sc, cfa), k)
     swept = {}
-    for a in others:
-        vals = list(dict.fromkeys(metrics.loc[~keep, a].tolist()))
-        if vals:
-            swept[a] = list(dict.fromkeys(metrics[a].tolist()))
+    for (sc, cfa, k), kept in zip(ids, keep):
+        ref = base_of.get((sc, cfa))
+        if kept or ref is None:
+            continue
+        for a, v, r in zip(others, k, ref):
+            if v != r:
+                swept.setdefault(a, [])
+    for a in swept:
+        swept[a] = list(dict.fromkeys(metrics[a].tolist()))
     return metrics[keep].reset_index(drop=True), swept
 
 
