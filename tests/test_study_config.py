@@ -41,6 +41,15 @@ def test_paper_config_is_the_papers_study():
     assert sweep.luminances == (3, 6, 12, 50, 100, 200, 400)
 
 
+def test_exposure_policies_set_where_auto_exposure_is_chosen(tmp_path):
+    each = load_config(write(tmp_path, GOOD + '[sensor]\nexposure_policy = "each"\n')).chain_settings()
+    assert each.reference_luminance_cd_m2 is None  # ISETCam's auto exposure at every luminance
+    ref = load_config(write(tmp_path, GOOD)).chain_settings()
+    assert ref.reference_luminance_cd_m2 == 100.0
+    fixed = load_config(write(tmp_path, GOOD + '[sensor]\nexposure_policy = "fixed"\nexposure = 0.02\n'))
+    assert fixed.base_condition().exposure == 0.02
+
+
 def test_good_config_values(tmp_path):
     cfg = load_config(write(tmp_path, GOOD + '[sensor]\npixel_pitch_um = 1.4\nnoise = "shot"\n'))
     assert cfg.sensor == {"pixel_pitch_um": 1.4} and cfg.capture == {"noise": "shot"}
@@ -67,6 +76,17 @@ BAD = [
      "does not feed"),
     ("[[sweep]]\nscene = \"chirp\"\nluminances = [10]\n", "sweep[0].scene", "not one of"),
     ("[output]\nfigures = [\"jpg\"]\n", "output.figures[0]", "png or svg"),
+    ("[sensor]\nexposure_policy = \"sometimes\"\n", "sensor.exposure_policy", "one of"),
+    ("[sensor]\nexposure_policy = \"fixed\"\n", "sensor.exposure", "needs an exposure time"),
+    ("[sensor]\nexposure = 0.01\n", "sensor.exposure_policy", "fixed"),
+    ("[sensor]\nexposure_policy = \"each\"\nreference_luminance_cd_m2 = 50\n",
+     "sensor.reference_luminance_cd_m2", "does not apply"),
+    ("seeds = 0\n", "seeds", "at least 1"),
+    ("[normalisation]\npolicy = \"best\"\n", "normalisation.policy", "one of"),
+    ("[[sweep]]\nscene = \"macbeth\"\nf_number = [0]\n", "sweep[0].f_number[0]", "positive"),
+    ("[[sweep]]\nscene = \"macbeth\"\nspectra = [\"sepia\"]\n", "sweep[0].spectra[0]", "one of"),
+    ("[[sweep]]\nscene = \"macbeth\"\nseed = [1, 1]\n", "sweep[0].seed", "twice"),
+    ("[[sweep]]\nscene = \"macbeth\"\nmetrics = [\"delta-e\"]\n", "sweep[0]", "sweeps no axis"),
 ]
 
 

@@ -38,7 +38,8 @@ class ChainSettings:
     and :class:`~cfa_mitsuba.sensor.params.SensorParams` (their f-number,
     pitch and read noise are replaced by the condition's); ``noise`` is
     'off', 'shot' or 'all'; ``reference_luminance_cd_m2`` is where 'auto'
-    exposure is chosen; ``isp`` the processing options (white balance,
+    exposure is chosen (None: at each capture's own luminance, ISETCam's
+    plain auto exposure); ``isp`` the processing options (white balance,
     white preserving, pocs_iterations) as sorted (key, value) pairs;
     ``mean_match`` scales each camera output to the ideal's mean (ISETCam).
     """
@@ -46,7 +47,7 @@ class ChainSettings:
     optics: object = None
     sensor: object = None
     noise: str = "all"
-    reference_luminance_cd_m2: float = 100.0
+    reference_luminance_cd_m2: float | None = 100.0
     isp: tuple = ()
     mean_match: bool = True
 

@@ -30,6 +30,11 @@ from ..metrics import metrics_for_scene
 
 #: Metrics a user scene feeds (the image metrics of DESIGN.md), from the metric records.
 IMAGE_METRICS = metrics_for_scene("", natural=True)
+#: How a study chooses the exposure: 'reference' (ISETCam's auto exposure,
+#: chosen once at the reference luminance and kept at every luminance: the
+#: camera of a fixed scene brightness, the default), 'each' (auto exposure at
+#: each luminance, ISETCam's default in a sweep), 'fixed' (the given time).
+EXPOSURE_POLICIES = ("reference", "each", "fixed")
 #: Noise realisations of every capture unless a config says otherwise (each
 #: value is their mean with a 95 % interval: study/intervals.py).
 DEFAULT_SEEDS = 3
@@ -88,7 +93,8 @@ class StudyConfig:
         return ChainSettings(
             optics=OpticsParams(**self.optics), sensor=SensorParams(**self.sensor),
             noise=self.capture.get("noise", "all"),
-            reference_luminance_cd_m2=float(self.capture.get("reference_luminance_cd_m2", 100.0)),
+            reference_luminance_cd_m2=(None if self.capture.get("exposure_policy") == "each"
+                                       else float(self.capture.get("reference_luminance_cd_m2", 100.0))),
             isp=dict(self.isp), mean_match=self.mean_match)
 
     def base_condition(self, luminance: float | None = None):
@@ -271,9 +277,20 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         "noise": lambda v, k: ck.string(v, k, NOISE_MODES),
         "exposure": lambda v, k: v if v == "auto" else ck.number(v, k, positive=True),
         "reference_luminance_cd_m2": lambda v, k: ck.number(v, k, positive=True),
+        "exposure_policy": lambda v, k: ck.string(v, k, EXPOSURE_POLICIES),
     }
     sensor_all = _dataclass_table(ck, data.get("sensor", {}), "sensor", SensorParams, capture_extra)
     capture = {k: sensor_all.pop(k) for k in list(sensor_all) if k in capture_extra}
+    policy = capture.get("exposure_policy", "reference")
+    fixed = capture.get("exposure", "auto") != "auto"
+    if policy == "fixed" and not fixed:
+        ck.fail("sensor.exposure", "exposure_policy 'fixed' needs an exposure time in seconds here")
+    if policy != "fixed" and fixed:
+        ck.fail("sensor.exposure_policy", f"a fixed exposure ({capture['exposure']} s) needs "
+                                          "exposure_policy = \"fixed\" (or exposure = \"auto\")")
+    if policy == "each" and "reference_luminance_cd_m2" in capture:
+        ck.fail("sensor.reference_luminance_cd_m2", "exposure_policy 'each' chooses the exposure at each "
+                                                   "luminance: a reference luminance does not apply")
     isp_cfg = data.get("isp", {})
     ck.table(isp_cfg, "isp", {"white_balance": None, "white_preserving": None, "pocs_iterations": None})
     isp_opts = {}
