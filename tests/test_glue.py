@@ -204,3 +204,21 @@ def test_shared_optical_image_gives_the_numbers_of_a_fresh_one(monkeypatch):
     assert np.array_equal(runs[0][1], runs[2][1]) and np.array_equal(runs[1][1], runs[2][1])
     monkeypatch.setenv(chain_mod.NO_MEMO_ENV, "1")
     assert ch.optical(img, cond, "scene-a") is not runs[0][0]
+
+
+def test_shared_reference_work_gives_identical_values():
+    """S-CIELAB's filtered reference and the reference's sRGB codes, computed
+    once per ideal image and reused, give the numbers of a fresh computation."""
+    rng = np.random.default_rng(8)
+    white = D65_XYZ
+    ideal = rng.uniform(5.0, 90.0, (40, 48, 3))
+    shared: dict = {}
+    geo = {"samples_per_degree": 12.0}
+    for k in range(3):
+        cam = ideal * rng.uniform(0.95, 1.05, ideal.shape)
+        fresh = cm.metrics.MetricInputs(ideal, cam, white, geometry=geo)
+        reused = cm.metrics.MetricInputs(ideal, cam, white, geometry=geo, shared=shared)
+        for name in ("scielab", "ssim", "haarpsi"):
+            assert float(cm.metrics.evaluate(name, reused)) == float(cm.metrics.evaluate(name, fresh)), name
+    assert any(isinstance(key, tuple) and key[0] == "scielab_reference_lab" for key in shared)
+    assert "srgb8_reference" in shared

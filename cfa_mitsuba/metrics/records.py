@@ -35,7 +35,7 @@ from .haarpsi import haarpsi
 from .mdsi import mdsi
 from .moire import moire
 from .mtf import mtf
-from .scielab import scielab
+from .scielab import scielab, scielab_reference_lab
 from .ssim import ssim
 
 #: The scene kind of a natural (3D or measured) scene: the built-in puppy, a
@@ -60,18 +60,25 @@ class MetricInputs:
         given directly or derived from XYZ (white -> 255).
     reference_linear, test_linear : linear sRGB with the white at 1, given
         directly or derived from XYZ.
+    shared : a dict kept with the reference image (the caller's: one per
+        ideal image), where what depends on the reference alone (its sRGB
+        codes, S-CIELAB's filtered reference) is computed once for every
+        camera output compared with it.
     """
 
     def __init__(self, reference_xyz=None, test_xyz=None, white_xyz=None, *, geometry: dict | None = None,
                  pixel_pitch_um: float | None = None, reference_srgb8=None, test_srgb8=None,
-                 reference_linear=None, test_linear=None):
+                 reference_linear=None, test_linear=None, shared: dict | None = None):
         self.reference_xyz = reference_xyz
         self.test_xyz = test_xyz
         self.white_xyz = None if white_xyz is None else np.asarray(white_xyz, dtype=np.float64)
         self.geometry = dict(geometry or {})
         self.pixel_pitch_um = pixel_pitch_um
-        self._srgb8 = {"reference": reference_srgb8, "test": test_srgb8}
-        self._linear = {"reference": reference_linear, "test": test_linear}
+        self.shared = shared if shared is not None else {}
+        self._srgb8 = {"reference": reference_srgb8 if reference_srgb8 is not None
+                       else self.shared.get("srgb8_reference"), "test": test_srgb8}
+        self._linear = {"reference": reference_linear if reference_linear is not None
+                        else self.shared.get("linear_reference"), "test": test_linear}
 
     def _xyz(self, which: str):
         return self.reference_xyz if which == "reference" else self.test_xyz
@@ -80,12 +87,16 @@ class MetricInputs:
         """8-bit sRGB code values of ``which`` ('reference' or 'test'), quantised."""
         if self._srgb8[which] is None and self._xyz(which) is not None:
             self._srgb8[which] = mcolour.xyz_to_srgb8(self._xyz(which), self.white_xyz)
+            if which == "reference":
+                self.shared["srgb8_reference"] = self._srgb8[which]
         return self._srgb8[which]
 
     def linear(self, which: str):
         """Linear sRGB of ``which`` with the scene white at 1 (None if absent)."""
         if self._linear[which] is None and self._xyz(which) is not None:
             self._linear[which] = mcolour.xyz_to_linear(self._xyz(which), scale=float(self.white_xyz[1]))
+            if which == "reference":
+                self.shared["linear_reference"] = self._linear[which]
         return self._linear[which]
 
 
@@ -160,7 +171,13 @@ def _delta_e(inp, opts):
 
 def _scielab(inp, opts):
     spd = opts.pop("samples_per_degree", None) or inp.geometry.get("samples_per_degree")
-    return scielab(*_xyz_pair(inp, "scielab"), samples_per_degree=spd, **_accepted(scielab, opts))
+    ref, test, white = _xyz_pair(inp, "scielab")
+    kw = _accepted(scielab, opts)
+    ref_kw = {k: v for k, v in kw.items() if k in ("matrix", "parameters", "lab_constants", "boundary")}
+    key = ("scielab_reference_lab", float(spd), tuple(sorted(ref_kw.items())))
+    if key not in inp.shared:
+        inp.shared[key] = scielab_reference_lab(ref, white, samples_per_degree=spd, **ref_kw)
+    return scielab(ref, test, white, samples_per_degree=spd, reference_lab=inp.shared[key], **kw)
 
 
 def _mtf(inp, opts):

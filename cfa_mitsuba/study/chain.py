@@ -195,8 +195,11 @@ class CameraChain:
         from .. import metrics as m
 
         geo = m.scene_geometry(ideal.meta, ideal.xyz.shape)
+        # what depends on the ideal image alone is computed once per ideal (its sRGB codes, S-CIELAB's
+        # filtered reference), for every CFA, demosaic and realisation compared with it
+        shared = ideal.__dict__.setdefault("_metric_shared", {})
         return m.MetricInputs(ideal.xyz, cam_xyz, np.asarray(ideal.white_xyz, dtype=np.float64), geometry=geo,
-                              pixel_pitch_um=cond.pixel_pitch_um)
+                              pixel_pitch_um=cond.pixel_pitch_um, shared=shared)
 
     def measure(self, ideal, processed, metric_names, cond: Condition) -> tuple[dict, list, float]:
         """(results, failures, mean-match scale) of one processed image.
