@@ -31,6 +31,21 @@ def _score_grid(res: Results):
     return metrics, grid
 
 
+def _score_bands(res: Results, metrics) -> dict:
+    """{(cfa, demosaic): (low, high)} of each spoke's 95 % score interval
+    (scores.csv's score_ci_low / score_ci_high), empty for older results."""
+    s = res.scores
+    if s is None or "score_ci_low" not in s.columns:
+        return {}
+    s = s[s["luminance"] == res.primary_luminance]
+    out = {}
+    for (cfa, dem), g in s.groupby(["cfa", "demosaic"], sort=False):
+        lo = dict(zip(g["metric"], g["score_ci_low"].astype(float)))
+        hi = dict(zip(g["metric"], g["score_ci_high"].astype(float)))
+        out[(cfa, dem)] = (np.array([lo.get(m, np.nan) for m in metrics]), np.array([hi.get(m, np.nan) for m in metrics]))
+    return out
+
+
 def _overflow(grid) -> tuple[bool, bool]:
     vals = np.concatenate([v for v in grid.values()]) if grid else np.array([0.0])
     vals = vals[np.isfinite(vals)]
@@ -68,6 +83,21 @@ class _Radar:
             va = "bottom" if s_ > 0.15 else ("top" if s_ < -0.15 else "center")
             ax.text(1.16 * c, 1.16 * s_, metric_info(m).short, fontsize=label_size, ha=ha, va=va)
         ax.text(0, lim * 1.02, title, ha="center", va="bottom", fontsize=9.5, fontweight="bold")
+
+    def band(self, low, high, color):
+        """The 95 % interval of every spoke's score as a shaded ring between
+        the low and the high polygon."""
+        lo = np.clip(np.asarray(low, dtype=float), 0.0, 1.0)
+        hi = np.clip(np.asarray(high, dtype=float), 0.0, 1.0)
+        if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))) or np.allclose(lo, hi):
+            return
+        c, s_ = np.cos(self.theta), np.sin(self.theta)
+        n = len(lo)
+        for i in range(n):  # one quadrilateral per pair of neighbouring spokes: a ring, not a disc
+            j = (i + 1) % n
+            self.ax.fill([hi[i] * c[i], hi[j] * c[j], lo[j] * c[j], lo[i] * c[i]],
+                         [hi[i] * s_[i], hi[j] * s_[j], lo[j] * s_[j], lo[i] * s_[i]],
+                         color=color, alpha=0.22, linewidth=0, zorder=1)
 
     def polygon(self, values, *, fill=False, **style):
         v = np.asarray(values, dtype=float)
@@ -123,12 +153,15 @@ def radar_per_cfa(res: Results):
     rows, cols = grid_shape(len(cfas), 4)
     fig, axes = panel_grid(rows, cols, 2.7, 2.7, left=0.15, right=0.15, top=0.55, bottom=0.1, wspace=0.25,
                            hspace=0.2, n=len(cfas))
+    bands = _score_bands(res, metrics)
     for ax, cfa in zip(axes, cfas):
         radar = _Radar(ax, metrics, cfa)
         for d in dems:
             v = grid.get((cfa, d))
             if v is not None:
                 st = dst[d]
+                if (cfa, d) in bands:
+                    radar.band(*bands[(cfa, d)], st["color"])
                 radar.polygon(v, fill=len(dems) <= 2, color=st["color"], linestyle=st["linestyle"],
                               marker=st["marker"])
     handles = [Line2D([], [], color=dst[d]["color"], linestyle=dst[d]["linestyle"], marker=dst[d]["marker"],
@@ -136,7 +169,8 @@ def radar_per_cfa(res: Results):
     _legend_top(fig, handles, dems, len(dems))
     cap = (f"Each spoke is one metric's score (eq. 8: 0 = the range's worst end at the centre, 1 = its best; "
            f"outward is better for every metric), at {res.primary_luminance:g} cd/m². One panel per CFA, one "
-           f"polygon per demosaicing method." + _clip_note(grid))
+           f"polygon per demosaicing method; the shaded ring around each is its 95 % interval over the noise "
+           f"realisations." + _clip_note(grid))
     return ReportFigure("radar-cfa", "scores", title, cap, fig)
 
 
@@ -159,17 +193,21 @@ def radar_per_demosaic(res: Results):
     top = 0.35 + 0.2 * legend_rows(len(cfas), ncol)
     fig, axes = panel_grid(rows, cols, size, size, left=0.2, right=0.2, top=top, bottom=0.1, wspace=0.3,
                            hspace=0.25, n=len(dems), width=6.0)
+    bands = _score_bands(res, metrics)
     for ax, d in zip(axes, dems):
         radar = _Radar(ax, metrics, d, label_size=8.5)
         for cfa in cfas:
             v = grid.get((cfa, d))
             if v is not None:
                 st = cst[cfa]
+                if (cfa, d) in bands:
+                    radar.band(*bands[(cfa, d)], st["color"])
                 radar.polygon(v, fill=len(cfas) <= 3, color=st["color"], linestyle=st["linestyle"],
                               marker=st["marker"])
     cfa_legend(fig, cst, cfas, ncol=ncol)
     cap = (f"One panel per demosaicing method, one polygon per CFA, at {res.primary_luminance:g} cd/m²; "
-           "outward is better on every spoke (0 at the centre, 1 at the outer polygon)." + _clip_note(grid))
+           "outward is better on every spoke (0 at the centre, 1 at the outer polygon); the shaded ring around "
+           "each polygon is its 95 % interval over the noise realisations." + _clip_note(grid))
     return ReportFigure("radar-demosaic", "scores", title, cap, fig)
 
 
