@@ -10,11 +10,11 @@ from __future__ import annotations
 
 __all__ = ["srgb_preview", "write_preview"]
 
-import warnings
 from pathlib import Path
 
 import numpy as np
 
+from .. import colorimetry
 from ..io.exr import linear_srgb
 from ..values import SpectralImage
 
@@ -22,12 +22,8 @@ from ..values import SpectralImage
 def srgb_preview(image: SpectralImage, exposure: float = 1.0) -> np.ndarray:
     """(H, W, 3) display sRGB in 0..1 of ``image``; ``exposure`` multiplies
     the linear values before encoding (1: white diffuser at 1.0)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        import colour
-
     rgb = linear_srgb(image.data, image.wavelengths, image.meta) * exposure
-    return np.clip(colour.models.eotf_inverse_sRGB(np.clip(rgb, 0.0, 1.0)), 0.0, 1.0)
+    return np.clip(colorimetry.linear_to_srgb(np.clip(rgb, 0.0, 1.0)), 0.0, 1.0)
 
 
 def write_preview(path, image: SpectralImage, exposure: float = 1.0) -> Path:
@@ -55,13 +51,10 @@ def main(argv=None) -> int:
     if args.width and args.width < rgb.shape[1]:
         # Box-average in linear light, then re-encode: downsizing sRGB codes
         # directly would darken fine detail such as the chirp.
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            import colour
         f = max(1, rgb.shape[1] // args.width)
         h, w = (rgb.shape[0] // f) * f, (rgb.shape[1] // f) * f
-        lin = colour.models.eotf_sRGB(rgb[:h, :w]).reshape(h // f, f, w // f, f, 3).mean(axis=(1, 3))
-        rgb = np.clip(colour.models.eotf_inverse_sRGB(lin), 0, 1)
+        lin = colorimetry.srgb_to_linear(rgb[:h, :w]).reshape(h // f, f, w // f, f, 3).mean(axis=(1, 3))
+        rgb = np.clip(colorimetry.linear_to_srgb(lin), 0, 1)
     from ..io.images import write_image
 
     write_image(args.png, rgb)

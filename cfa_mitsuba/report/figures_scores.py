@@ -261,9 +261,10 @@ def rank_chart(res: Results):
 
 def _dark(hex_colour: str) -> bool:
     """True when white text reads better than black on this colour (WCAG contrast)."""
+    from ..colorimetry import srgb_to_linear
+
     h = hex_colour.lstrip("#")
-    lin = [(c / 12.92) if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
-           for c in (int(h[i:i + 2], 16) / 255 for i in (0, 2, 4))]
+    lin = srgb_to_linear(np.array([int(h[i:i + 2], 16) / 255 for i in (0, 2, 4)]))
     y = 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2]
     return (1.05 / (y + 0.05)) > ((y + 0.05) / 0.05)
 
