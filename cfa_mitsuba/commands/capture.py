@@ -122,10 +122,19 @@ def add_arguments(parser) -> None:
     s.add_argument("--analog-gain", type=_positive_float, metavar="G", help="default 1")
     s.add_argument("--adc-bits", type=positive_int, metavar="BITS", help="default 12")
     s.add_argument("--black-level-dn", type=_non_negative_float, metavar="DN", help="default 64")
+    s.add_argument("--readout", choices=("full", "remosaic", "bin"),
+                   help="full (default), remosaic (the ISP rearranges to Bayer), bin (one pixel per same-colour "
+                        "block); remosaic and bin need a block layout (quad-bayer, nona, tetra2)")
+    s.add_argument("--binning", choices=("charge", "digital"), help="for --readout bin: charge (default) or digital")
+    s.add_argument("--crosstalk", type=_non_negative_float, metavar="FRACTION",
+                   help="fraction of each pixel's electrons that lands in its 4 neighbours (default 0)")
+    s.add_argument("--ir-cut", metavar="none|FILE.csv",
+                   help="IR-cut filter in place of the spectra set's common one (default: the set's own)")
 
 
 _SENSOR_OPTIONS = ("pixel_pitch_um", "fill_factor", "well_capacity_e", "read_noise_e", "dark_current_e_s", "dsnu_e",
-                   "prnu_percent", "analog_gain", "adc_bits", "black_level_dn", "sensor_seed")
+                   "prnu_percent", "analog_gain", "adc_bits", "black_level_dn", "sensor_seed", "readout", "binning",
+                   "crosstalk", "ir_cut")
 
 
 def _check_output(out, given: str) -> None:

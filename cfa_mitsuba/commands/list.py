@@ -51,8 +51,19 @@ def _rows(kind: str) -> list[tuple[str, str]]:
         return rows
     if kind == "demosaics":
         from ..isp import list_demosaics
+        from ..isp.suitability import SUITS_WITHIN_DB, suitability
 
-        return list_demosaics()
+        rows = []
+        for name, text in list_demosaics():
+            suits, avoid = suitability(name)
+            if suits or avoid:
+                text += (f"; suits (within {SUITS_WITHIN_DB:g} dB of the best measured PSNR): "
+                         f"{', '.join(suits) or 'none'}")
+                if avoid:
+                    text += "; avoid (bilinear beats it): " + ", ".join(f"{lay} by {db:.1f} dB" for lay, db in avoid)
+                    text += " (read them with readout remosaic or bin: a Bayer mosaic)"
+            rows.append((name, text))
+        return rows
     from ..metrics import list_metrics
 
     return list_metrics()

@@ -23,6 +23,7 @@ from .colour import (fit_colour_matrix, gray_world_gains, luminance_weights, whi
                      xyz_to_srgb)
 from .demosaic import check_mosaic, demosaic as _demosaic, get_demosaic
 from .mosaic import geometry
+from .remosaic import channel_gain_divisors, readout_of, remosaic, upsample_blocks
 
 #: ``illuminant``: gains from the sensor's response to the scene's white
 #: (known illuminant); ``gray-world``: the image's channel means made equal.
@@ -155,6 +156,10 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     mosaic = geometry(cfa)
     dn = check_mosaic(raw_image.raw, cfa)
     electrons = (dn - float(raw_image.black_level_dn)) / float(raw_image.dn_per_electron)
+    per_channel = channel_gain_divisors(raw_image, cfa.channels)
+    if per_channel is not None:  # each channel's own DN per electron
+        electrons = electrons / per_channel[mosaic.index][np.arange(dn.shape[0])[:, None] % mosaic.tile_shape[0],
+                                                          np.arange(dn.shape[1])[None, :] % mosaic.tile_shape[1]]
     if white_balance == "illuminant":
         gains = white_balance_gains(epr, white)
     else:
@@ -164,11 +169,16 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     for (i, j), c in np.ndenumerate(mosaic.index):
         balanced[i::th, j::tw] = electrons[i::th, j::tw] * gains[c]
 
+    readout = readout_of(raw_image)
+    if readout.get("mode") == "remosaic":
+        balanced, cfa = remosaic(balanced, cfa)
     fn = get_demosaic(demosaic)
     if "luminance_weights" in inspect.signature(fn).parameters and "luminance_weights" not in options:
         options["luminance_weights"] = luminance_weights(epr, white, wl)
     channels = _demosaic(balanced, cfa, demosaic, **options)
     xyz = fit.apply(channels)
+    if readout.get("mode") == "bin":  # back on the full pixel grid (isp/remosaic.py)
+        xyz = upsample_blocks(xyz, int(readout["block"]), readout["full_shape"])
     srgb = xyz_to_srgb(xyz, fit.white_xyz)
 
     ref_gain = gains.min()  # reported relative to the most sensitive channel, as cameras do
@@ -184,6 +194,7 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         "white_balance_gains_per_electron": gains.tolist(),
         "white_xyz": fit.white_xyz.tolist(),
         "saturated_fraction": _saturated_fraction(raw_image),
+        "readout": readout.get("mode", "full"),
         **fit.as_meta(),
     }
     return RenderedImage(xyz=xyz, srgb=srgb, white_xyz=fit.white_xyz.copy(), meta=meta)

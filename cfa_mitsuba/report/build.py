@@ -25,10 +25,12 @@ def _figure_functions(res: Results, thumbnails: bool):
     from . import figures_detail as fd
     from . import figures_sweep as fsw
     from . import figures_scores as fs
+    from . import tiles
 
     yield fs.radar_per_demosaic
     yield fs.radar_per_cfa
     yield fs.rank_chart
+    yield tiles.tiles_by_family
     yield fd.patch_ab
     yield fd.patch_xy
     yield fd.scielab_maps

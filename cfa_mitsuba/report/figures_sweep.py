@@ -19,7 +19,8 @@ from .results import SCORED_METRICS, Results
 from .style import cfa_styles, metric_info
 
 _LABELS = {"f_number": "f-number", "pixel_pitch_um": "pixel pitch", "exposure": "exposure time",
-           "read_noise_e": "read noise", "seed": "noise seed (realisation)", "spectra": "spectra set"}
+           "read_noise_e": "read noise", "seed": "noise seed (realisation)", "spectra": "spectra set",
+           "readout": "read-out mode"}
 
 
 def axis_rows(res: Results, axis: str):
@@ -45,8 +46,8 @@ def axis_rows(res: Results, axis: str):
 def axis_sweep(res: Results, axis: str):
     title = f"Metrics against {_LABELS.get(axis, axis)}"
     m = axis_rows(res, axis)
-    pairs = [(s, k) for (s, k), g in m.groupby(["scene", "metric"], sort=False)
-             if g[axis].astype(str).nunique() > 1 and k in SCORED_METRICS]
+    pairs = [(s, k) for (s, k), g in m.groupby(["scene", "metric"], sort=False)  # varied for one CFA, not across
+             if g.groupby("cfa")[axis].agg(lambda v: v.astype(str).nunique()).max() > 1 and k in SCORED_METRICS]
     if not pairs:
         return Absent("sweep", title, f"a sweep of {axis} ([[sweep]] {axis} = [...])", not_in_study=True)
     pairs.sort(key=lambda p: (SCORED_METRICS.index(p[1]), p[0]))
@@ -57,7 +58,7 @@ def axis_sweep(res: Results, axis: str):
     fig, axes = panel_grid(rows, cols, 2.7, 2.0, left=0.95, right=0.15,
                            top=0.35 + 0.2 * legend_rows(len(res.cfas), ncol), bottom=0.5, wspace=0.15, hspace=0.35,
                            width=6.0)
-    numeric = axis not in ("exposure", "spectra") or (axis == "exposure" and not (m[axis].astype(str) == "auto").any())
+    numeric = axis not in ("exposure", "spectra", "readout") or (axis == "exposure" and not (m[axis].astype(str) == "auto").any())
     drawn = []
     unit = AXIS_UNITS.get(axis, "")
     for r, (scene, metric) in enumerate(pairs):

@@ -41,6 +41,8 @@ from .catalogue import get_cfa
 from .cfa import CFA
 from .noise import collect_electrons, read_out, temporal_rng
 from .params import NOISE_MODES, SensorParams
+from .physics import apply_crosstalk, channel_map, crosstalk_fractions, with_ir_cut
+from .readout import binned_pattern, read_binned, require_block_layout
 
 #: Auto exposure is chosen for the scene scaled to this mean luminance and
 #: kept for any other luminance, so that dim scenes really are noisier
@@ -238,7 +240,8 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     if noise not in NOISE_MODES:
         raise CfaMitsubaError(f"unknown noise mode {noise!r} (choose {', '.join(NOISE_MODES)})")
     seed = _check_seed(seed)
-    cfa = get_cfa(cfa)
+    cfa = with_ir_cut(get_cfa(cfa), sensor.ir_cut)
+    block = require_block_layout(cfa.pattern, sensor.readout, repr(cfa.name))
     oi = optical_image_for(image, sensor, optics, oversample)
     s = _luminance_scale(oi, luminance_cd_m2)
     wl = np.asarray(oi.wavelengths, dtype=np.float64)
@@ -255,16 +258,37 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
         k = _electrons_per_irradiance(wl, sensor) * (exposure * s)  # (B,)
         weights = (qe * k).T  # (B, C)
         photo = _mosaic_response(pix, weights, cfa)
+        if sensor.crosstalk or sensor.crosstalk_700nm:  # before the charge is counted (physics.py)
+            k = crosstalk_fractions(sensor, [400.0, 700.0])
+            t = (wl - 400.0) / 300.0
+            by_wl = _mosaic_response(pix, weights * t[:, None], cfa) if k[1] != k[0] else None
+            photo = apply_crosstalk(photo, by_wl, float(k[0]), float(k[1] - k[0]))
         epr = qe * (factor * _electrons_per_irradiance(wl, sensor) * exposure)[None, :]
     _require_representable(photo, epr, exposure=exposure, scale=s)
 
+    well = gain = None
+    if sensor.channel_well_e:
+        well = channel_map(cfa, photo.shape, {c: sensor.channel_value("channel_well_e", c) for c in cfa.channels})
+    if sensor.channel_gain:
+        gain = channel_map(cfa, photo.shape, {c: sensor.channel_value("channel_gain", c) for c in cfa.channels})
     rng = temporal_rng(seed) if noise != "off" else None
-    electrons = collect_electrons(photo, exposure_s=exposure, sensor=sensor, noise=noise, rng=rng)
-    raw = read_out(electrons, sensor=sensor, noise=noise, rng=rng)
+    electrons = collect_electrons(photo, exposure_s=exposure, sensor=sensor, noise=noise, rng=rng, well_e=well)
+    pattern, dn_per_electron = cfa.pattern.copy(), sensor.dn_per_electron
+    if sensor.readout == "bin":
+        require(h >= 2 * th and w >= 2 * tw, f"binning needs at least two tiles each way ({2 * tw} x {2 * th} pixels)")
+        raw = read_binned(electrons, block, sensor=sensor, noise=noise, rng=rng, gain=gain)
+        pattern, dn_per_electron = binned_pattern(cfa.pattern), sensor.dn_per_electron / block**2
+        epr = epr * block**2
+    else:
+        raw = read_out(electrons, sensor=sensor, noise=noise, rng=rng, gain=gain)
 
     meta = _scaled_meta(oi, s)
     # wells that were full before read-out (read noise then spreads their codes)
-    meta["saturated_fraction"] = float(np.count_nonzero(electrons >= sensor.well_capacity_e)) / electrons.size
+    full = sensor.well_capacity_e if well is None else well
+    meta["saturated_fraction"] = float(np.count_nonzero(electrons >= full)) / electrons.size
+    meta["readout"] = {"mode": sensor.readout, "block": block, "binning": sensor.binning if sensor.readout == "bin"
+                       else None, "native_tile": cfa.tile_text(), "full_shape": [h, w],
+                       "pixel_pitch_um": sensor.pixel_pitch_um * (block if sensor.readout == "bin" else 1)}
     settings = {
         "cfa": {"name": cfa.name, "description": cfa.description, "tile": cfa.tile_text(), "spectra": cfa.spectra},
         "noise": noise,
@@ -279,9 +303,9 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
         "oversample": int(oi.meta["oversample"]),
     }
     return RawImage(
-        raw=raw, pattern=cfa.pattern.copy(), channels=tuple(cfa.channels), spectra=qe, wavelengths=wl.copy(),
+        raw=raw, pattern=pattern, channels=tuple(cfa.channels), spectra=qe, wavelengths=wl.copy(),
         electrons_per_radiance=epr, white_radiance=np.asarray(meta["white_radiance"]), exposure_s=exposure,
-        dn_per_electron=sensor.dn_per_electron,
+        dn_per_electron=dn_per_electron,
         black_level_dn=float(sensor.black_level_dn) if noise == "all" else 0.0,
         seed=seed, settings=settings, meta=meta,
     )

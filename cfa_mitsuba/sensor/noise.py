@@ -74,7 +74,7 @@ def _check_mode(noise: str) -> str:
 
 
 def collect_electrons(photo_e: np.ndarray, *, exposure_s: float, sensor: SensorParams, noise: str,
-                      rng: np.random.Generator | None = None) -> np.ndarray:
+                      rng: np.random.Generator | None = None, well_e=None) -> np.ndarray:
     """Electrons in each well at the end of the exposure, before read-out.
 
     Parameters
@@ -85,13 +85,15 @@ def collect_electrons(photo_e: np.ndarray, *, exposure_s: float, sensor: SensorP
     noise : ``off``, ``shot`` or ``all`` (module doc).
     rng : temporal noise generator (:func:`temporal_rng`); needed unless
         ``noise`` is ``off``.
+    well_e : the full well of each pixel ((H, W), e.g. per channel), or
+        None: ``sensor.well_capacity_e``.
 
     Returns
     -------
     (H, W) float64 electrons in [0, well].
     """
     _check_mode(noise)
-    well = float(sensor.well_capacity_e)
+    well = float(sensor.well_capacity_e) if well_e is None else np.asarray(well_e, dtype=np.float64)
     mean = np.asarray(photo_e, dtype=np.float64)
     if noise == "off":
         return np.minimum(mean, well)
@@ -104,7 +106,7 @@ def collect_electrons(photo_e: np.ndarray, *, exposure_s: float, sensor: SensorP
     # Above this mean a Poisson draw exceeds the well with probability
     # ~1 - 1e-300, so capping the mean changes nothing after clipping and
     # keeps numpy's sampler in range for absurd exposures.
-    cap = 4.0 * well + 100.0 * np.sqrt(well) + 1000.0
+    cap = 4.0 * np.max(well) + 100.0 * np.sqrt(np.max(well)) + 1000.0
     electrons = poisson_quantile(np.minimum(mean, cap), rng.random(mean.shape))
     return np.minimum(electrons, well, out=electrons)
 
@@ -146,15 +148,18 @@ def poisson_quantile(mean: np.ndarray, u: np.ndarray) -> np.ndarray:
 
 
 def read_out(electrons: np.ndarray, *, sensor: SensorParams, noise: str,
-             rng: np.random.Generator | None = None) -> np.ndarray:
+             rng: np.random.Generator | None = None, gain=None) -> np.ndarray:
     """Digital numbers from collected electrons (module doc, steps 4-5).
+
+    ``gain``: a relative analogue gain per pixel ((H, W), e.g. per channel)
+    multiplying ``sensor.dn_per_electron``; None: 1.
 
     Returns (H, W) float64 DN: integer codes in 0 .. 2^bits - 1 for noise
     ``all``; electrons x DN per electron (unquantised, no black level) for
     ``off`` and ``shot``.
     """
     _check_mode(noise)
-    g = sensor.dn_per_electron
+    g = sensor.dn_per_electron if gain is None else sensor.dn_per_electron * np.asarray(gain, dtype=np.float64)
     if noise != "all":
         return electrons * g
     v = electrons.copy()

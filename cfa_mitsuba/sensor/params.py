@@ -30,7 +30,7 @@ s. 1.1), moved to the paper's 2.2 um pitch this way:
 
 from __future__ import annotations
 
-__all__ = ["SensorParams", "NOISE_MODES"]
+__all__ = ["SensorParams", "NOISE_MODES", "READOUT_MODES", "BINNING_MODES"]
 
 import math
 import numbers
@@ -44,11 +44,35 @@ from ..errors import CfaMitsubaError
 #: noise, PRNU, DSNU, read noise, well clipping, analog gain, black level,
 #: ADC quantisation and clipping.
 NOISE_MODES = ("off", "shot", "all")
+#: ``full``: the native mosaic is read and demosaiced; ``remosaic``: read at
+#: full resolution, rearranged to a Bayer mosaic by the image processor;
+#: ``bin``: each same-colour block of a block layout (quad-bayer, nona,
+#: tetra2) summed at read-out into one pixel (:mod:`.readout`).
+READOUT_MODES = ("full", "remosaic", "bin")
+#: ``charge``: a block's charge is summed on the shared sense node and read
+#: once (read noise and DSNU once per binned pixel); ``digital``: every
+#: sub-pixel is read and quantised, the codes averaged (read noise once per
+#: sub-pixel).
+BINNING_MODES = ("charge", "digital")
 
 _AREA_RATIO = (2.2 / 2.8) ** 2
 _WELL_E = 6200.0
 _SWING_V = 1.0
 _CG_V_PER_E = _SWING_V / _WELL_E
+_NOT_NUMBERS = ("readout", "binning", "ir_cut", "channel_well_e", "channel_gain")
+
+
+def _channel_pairs(name: str, value, positive) -> tuple:
+    """A per-channel setting ({channel: number} or pairs) as sorted
+    (channel, float) pairs, so the params stay hashable."""
+    items = value.items() if isinstance(value, dict) else value
+    try:
+        pairs = [(str(k), v) for k, v in items]
+    except (TypeError, ValueError):
+        raise CfaMitsubaError(f"sensor {name} must map channel names to numbers, got {value!r}") from None
+    for k, v in pairs:
+        positive(f"{name}[{k!r}]", v)
+    return tuple(sorted((k, float(v)) for k, v in pairs))
 
 
 @dataclass(frozen=True)
@@ -76,6 +100,22 @@ class SensorParams:
     black_level_dn : offset added before quantisation (DN).  64.
     sensor_seed : seed of the fixed-pattern maps (DSNU, PRNU): one seed is
         one physical sensor.  0.
+    readout : :data:`READOUT_MODES`.  ``"full"``.
+    binning : :data:`BINNING_MODES`, for ``readout = "bin"``.  ``"charge"``.
+    crosstalk : fraction of a pixel's photo-electrons that land in its four
+        nearest neighbours (a quarter each) at 400 nm, and at every
+        wavelength unless ``crosstalk_700nm`` is given (:mod:`.physics`).  0.
+    crosstalk_700nm : the fraction at 700 nm, linear in wavelength from
+        ``crosstalk`` at 400 nm (carrier diffusion grows with silicon's
+        absorption depth).  None: ``crosstalk`` at every wavelength.
+    ir_cut : the IR-cut filter on top of the silicon: ``""`` the spectra
+        set's own (the common Largan K098), ``"none"``, or a CSV file
+        (``wavelength_nm, transmittance``) (:mod:`.physics`).  ``""``.
+    channel_well_e : full well per channel, ``{"R": 5000, ...}`` (electrons;
+        other channels: ``well_capacity_e``).  Stored as sorted pairs.
+    channel_gain : analogue gain per channel, ``{"B": 2.0, ...}``,
+        multiplying ``analog_gain`` (DN clip at the top code).  Stored as
+        sorted pairs.
     """
 
     pixel_pitch_um: float = 2.2
@@ -90,6 +130,13 @@ class SensorParams:
     adc_bits: int = 12
     black_level_dn: float = 64.0
     sensor_seed: int = 0
+    readout: str = "full"
+    binning: str = "charge"
+    crosstalk: float = 0.0
+    crosstalk_700nm: float | None = None
+    ir_cut: str = ""
+    channel_well_e: tuple = ()
+    channel_gain: tuple = ()
 
     def __post_init__(self):
         def positive(name, v, allow_zero=False):
@@ -117,9 +164,29 @@ class SensorParams:
         if isinstance(self.sensor_seed, bool) or not isinstance(self.sensor_seed, numbers.Integral) \
                 or self.sensor_seed < 0:
             raise CfaMitsubaError(f"sensor_seed must be a non-negative integer, got {self.sensor_seed!r}")
+        self._check_readout_and_physics(positive)
         for f in fields(self):  # plain Python numbers (JSON-able settings), whatever numpy type came in
             v = getattr(self, f.name)
+            if f.name in _NOT_NUMBERS or (f.name == "crosstalk_700nm" and v is None):
+                continue
             object.__setattr__(self, f.name, int(v) if f.name in ("adc_bits", "sensor_seed") else float(v))
+
+    def _check_readout_and_physics(self, positive) -> None:
+        if self.readout not in READOUT_MODES:
+            raise CfaMitsubaError(f"sensor readout must be one of {', '.join(READOUT_MODES)}, got {self.readout!r}")
+        if self.binning not in BINNING_MODES:
+            raise CfaMitsubaError(f"sensor binning must be one of {', '.join(BINNING_MODES)}, got {self.binning!r}")
+        for name in ("crosstalk", "crosstalk_700nm"):
+            v = getattr(self, name)
+            if v is None:
+                continue
+            positive(name, v, allow_zero=True)
+            if v > 0.5:
+                raise CfaMitsubaError(f"sensor {name} is a fraction of the signal in [0, 0.5], got {v!r}")
+        if not isinstance(self.ir_cut, str):
+            raise CfaMitsubaError(f"sensor ir_cut must be '', 'none' or a CSV path, got {self.ir_cut!r}")
+        for name in ("channel_well_e", "channel_gain"):
+            object.__setattr__(self, name, _channel_pairs(name, getattr(self, name), positive))
 
     @property
     def conversion_gain_uv_per_e(self) -> float:
@@ -150,8 +217,18 @@ class SensorParams:
             raise CfaMitsubaError(f"unknown sensor setting {unknown[0]!r} (known: {', '.join(sorted(known))})")
         return replace(self, **{k: v for k, v in changes.items() if v is not None})
 
+    def channel_value(self, name: str, channel: str) -> float:
+        """The per-channel full well (``channel_well_e``) or gain
+        (``channel_gain``, relative: 1 when not given) of ``channel``."""
+        pairs = dict(getattr(self, name))
+        if name == "channel_well_e":
+            return float(pairs.get(channel, self.well_capacity_e))
+        return float(pairs.get(channel, 1.0))
+
     def to_dict(self) -> dict:
         d = asdict(self)
+        d["channel_well_e"] = dict(self.channel_well_e)
+        d["channel_gain"] = dict(self.channel_gain)
         d["conversion_gain_uv_per_e"] = self.conversion_gain_uv_per_e
         d["dn_per_electron"] = self.dn_per_electron
         return d

@@ -38,7 +38,7 @@ reuses the other set's letters (``borrow``).
 
 from __future__ import annotations
 
-__all__ = ["SpectraSet", "list_spectra_sets", "get_spectra_set", "read_curve_csv", "silicon_qe", "ir_cut",
+__all__ = ["SpectraSet", "list_spectra_sets", "get_spectra_set", "read_curve_csv", "silicon_qe", "ir_cut", "common_ir_letters",
            "DATA_DIR", "FILTERS_DIR"]
 
 import csv
@@ -301,3 +301,28 @@ def get_spectra_set(name: str) -> SpectraSet:
     if name not in specs:
         raise CfaMitsubaError(f"unknown spectra set {name!r} (known: {', '.join(specs)})")
     return _build(name, specs[name])
+
+
+@functools.lru_cache(maxsize=None)
+def common_ir_letters(name: str) -> frozenset:
+    """The letters of a set whose curve carries the common IR-cut filter
+    (:func:`ir_cut`): the ``dye`` and ``pixel`` curves, a ``clear`` W, sums
+    and stacks of such letters, and borrowed letters that carry it where
+    they come from.  A ``camera`` curve has the camera's own IR cut."""
+    specs = _all_specs()
+    if name not in specs:
+        raise CfaMitsubaError(f"unknown spectra set {name!r} (known: {', '.join(specs)})")
+    spec = specs[name]
+    by_letter = spec.get("curve_by_letter", {})
+    out = {k for k in _raw_columns(name, spec) if by_letter.get(k, spec.get("curve", "camera")) in ("dye", "pixel")}
+    derive = spec.get("derive", [])
+    if "block-dyes" in derive and {"R", "G", "B"} <= out:
+        out |= {"C", "M", "Y", "W"}
+    if "clear" in derive:
+        out.add("W")
+    for letter, ref in spec.get("borrow", {}).items():
+        other, _, src = ref.partition(":")
+        (out.add if (src or letter) in common_ir_letters(other) else out.discard)(letter)
+    if "stacks" in derive and "W" in out:
+        out |= set(_STACKS)
+    return frozenset(out)

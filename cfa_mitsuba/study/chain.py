@@ -67,12 +67,13 @@ class ChainSettings:
         pitch and read noise) at ``luminance``."""
         return Condition(luminance=float(luminance), f_number=self.optics.f_number,
                          pixel_pitch_um=self.sensor.pixel_pitch_um, exposure=exposure,
-                         read_noise_e=self.sensor.read_noise_e, seed=int(seed))
+                         read_noise_e=self.sensor.read_noise_e, seed=int(seed), readout=self.sensor.readout)
 
     def for_condition(self, cond: Condition):
         """(OpticsParams, SensorParams) with the condition's values applied."""
         optics = replace(self.optics, f_number=cond.f_number)
-        sensor = self.sensor.with_(pixel_pitch_um=cond.pixel_pitch_um, read_noise_e=cond.read_noise_e)
+        sensor = self.sensor.with_(pixel_pitch_um=cond.pixel_pitch_um, read_noise_e=cond.read_noise_e,
+                                   readout=cond.readout)
         return optics, sensor
 
     def isp_options(self, method: str) -> dict:

@@ -15,6 +15,8 @@ axis                what it sets                                default
 ``seed``            the noise realisation (the study seed)      the study's
 ``spectra``         the spectra set of every CFA's filters      each layout's
                     (``cfa-mitsuba list spectra``)              family set
+``readout``         ``full``, ``remosaic`` or ``bin`` (the      ``[sensor]
+                    block layouts; others are read full)        readout``
 ==================  ==========================================  ==============
 
 A config's base values come from ``[optics]``, ``[sensor]`` and the top-level
@@ -31,10 +33,10 @@ import itertools
 from dataclasses import asdict, dataclass, replace
 
 #: The study axes, in metrics.csv column order.
-AXES = ("luminance", "f_number", "pixel_pitch_um", "exposure", "read_noise_e", "seed", "spectra")
+AXES = ("luminance", "f_number", "pixel_pitch_um", "exposure", "read_noise_e", "seed", "spectra", "readout")
 #: Units of the axes, for labels.
 AXIS_UNITS = {"luminance": "cd/m²", "f_number": "", "pixel_pitch_um": "µm", "exposure": "s",
-              "read_noise_e": "e⁻", "seed": "", "spectra": ""}
+              "read_noise_e": "e⁻", "seed": "", "spectra": "", "readout": ""}
 
 
 @dataclass(frozen=True)
@@ -44,7 +46,8 @@ class Condition:
     ``f_number`` None means the scene's own (a render's sidecar records the
     aperture it modelled; charts: the optics default f/4).  ``exposure`` is
     ``"auto"`` or a time in seconds.  ``spectra`` None means each CFA's
-    own spectra set (its family's filters).
+    own spectra set (its family's filters).  ``readout`` is the sensor's
+    read-out mode (:data:`cfa_mitsuba.sensor.params.READOUT_MODES`).
     """
 
     luminance: float = 100.0
@@ -54,6 +57,7 @@ class Condition:
     read_noise_e: float = 6.2
     seed: int = 0
     spectra: str | None = None
+    readout: str = "full"
 
     def with_(self, **changes) -> "Condition":
         return replace(self, **changes)
@@ -66,7 +70,7 @@ class Condition:
         luminance when no base), e.g. ``L100 f8 seed2``; file-name safe."""
         parts = [f"L{self.luminance:g}"]
         short = {"f_number": "f", "pixel_pitch_um": "p", "exposure": "t", "read_noise_e": "rn", "seed": "seed",
-                 "spectra": "s-"}
+                 "spectra": "s-", "readout": "ro-"}
         for axis in AXES[1:]:
             v = getattr(self, axis)
             if base is not None and v == getattr(base, axis):

@@ -143,6 +143,8 @@ def _dataclass_table(ck: _Checker, data, key: str, cls, extra: dict) -> dict:
             params[k] = ck.integer(v, path, 0)
         elif isinstance(default, float):
             params[k] = ck.number(v, path)
+        elif isinstance(v, dict):  # per-channel values ({R = 1.5, ...}): the dataclass checks them
+            params[k] = v
         elif isinstance(v, list):  # per-band values
             params[k] = tuple(ck.number(x, f"{path}[{i}]") for i, x in enumerate(v))
         else:
@@ -155,6 +157,58 @@ def _dataclass_table(ck: _Checker, data, key: str, cls, extra: dict) -> dict:
     except TypeError as exc:  # a field the dataclass rejects
         ck.fail(key, str(exc))
     return {**params, **rest}
+
+
+def _sensor_preset(ck: _Checker, data):
+    """(the [sensor] table without ``preset``, the preset or None):
+    ``sensor = "imx363"`` or ``[sensor] preset = "imx363"`` starts from a
+    measured preset's pixel parameters (``cfa-mitsuba list sensors``); the
+    CFAs keep their own spectra sets."""
+    from ..sensor import get_sensor_preset
+
+    name = None
+    if isinstance(data, str):
+        name, data = data, {}
+    elif isinstance(data, dict) and "preset" in data:
+        data = dict(data)
+        name = ck.string(data.pop("preset"), "sensor.preset")
+    if name is None:
+        return data, None
+    try:
+        return data, get_sensor_preset(name)
+    except CfaMitsubaError as exc:
+        ck.fail("sensor" if isinstance(data, dict) and not data else "sensor.preset", str(exc))
+
+
+def _sensor_values(ck: _Checker, preset, given: dict, cfas, base: Path) -> dict:
+    """The [sensor] values over the preset's, checked together; an IR-cut
+    CSV resolved against the config's folder; a base readout that every
+    CFA of the study can use."""
+    from ..sensor import get_cfa
+    from ..sensor.params import SensorParams
+    from ..sensor.readout import readout_applies
+
+    values = dict(given)
+    if preset is not None:
+        values = {**{f.name: getattr(preset.params, f.name) for f in dataclasses.fields(SensorParams)}, **given}
+    ir = values.get("ir_cut", "")
+    if isinstance(ir, str) and ir not in ("", "none"):
+        f = base / ir
+        if not f.is_file():
+            ck.fail("sensor.ir_cut", f"no such file {str(f)!r} (give '', 'none' or a CSV of wavelength_nm, "
+                                     "transmittance)")
+        values["ir_cut"] = str(f.resolve())
+    try:
+        SensorParams(**values)
+    except (CfaMitsubaError, TypeError) as exc:
+        ck.fail("sensor", str(exc))
+    readout = values.get("readout", "full")
+    for i, c in enumerate(cfas):
+        if not readout_applies(get_cfa(c).pattern, readout):
+            ck.fail("sensor.readout", f"{readout!r} applies to the block layouts (quad-bayer, nona, tetra2); "
+                                      f"cfas[{i}] {c!r} has no same-colour blocks (sweep readout instead: "
+                                      "[[sweep]] readout = [...] reads the other CFAs at 'full')")
+    return values
 
 
 def parse_config(data: dict, *, where: str = "config", base: Path | None = None) -> StudyConfig:
@@ -279,8 +333,12 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         "reference_luminance_cd_m2": lambda v, k: ck.number(v, k, positive=True),
         "exposure_policy": lambda v, k: ck.string(v, k, EXPOSURE_POLICIES),
     }
-    sensor_all = _dataclass_table(ck, data.get("sensor", {}), "sensor", SensorParams, capture_extra)
+    sensor_cfg, preset = _sensor_preset(ck, data.get("sensor", {}))
+    sensor_all = _dataclass_table(ck, sensor_cfg, "sensor", SensorParams, capture_extra)
     capture = {k: sensor_all.pop(k) for k in list(sensor_all) if k in capture_extra}
+    sensor_all = _sensor_values(ck, preset, sensor_all, cfas, base)
+    if preset is not None:
+        capture["sensor_preset"] = preset.name
     policy = capture.get("exposure_policy", "reference")
     fixed = capture.get("exposure", "auto") != "auto"
     if policy == "fixed" and not fixed:

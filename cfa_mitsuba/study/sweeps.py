@@ -43,6 +43,10 @@ def _axis_values(ck: _Checker, axis: str, value, key: str) -> tuple:
             from ..sensor import list_spectra_sets
 
             out.append(ck.string(v, k, tuple(list_spectra_sets())))
+        elif axis == "readout":
+            from ..sensor.params import READOUT_MODES
+
+            out.append(ck.string(v, k, READOUT_MODES))
         elif axis == "exposure":
             out.append(v if v == "auto" else ck.number(v, k, positive=True))
         elif axis == "read_noise_e":

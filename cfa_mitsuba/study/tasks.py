@@ -108,6 +108,16 @@ def _spectra_in_effect(cfa, cond) -> str:
     return str(get_cfa(cfa).spectra or "")
 
 
+def _readout_applies(cfa, cond) -> bool:
+    """Whether the condition's read-out mode applies to the CFA: ``full``
+    always, ``remosaic`` and ``bin`` on the block layouts only (a sweep
+    over readout leaves the other CFAs out of its non-full conditions)."""
+    from ..sensor import get_cfa
+    from ..sensor.readout import readout_applies
+
+    return readout_applies(get_cfa(cfa).pattern, getattr(cond, "readout", "full"))
+
+
 def _thumbnail(srgb: np.ndarray, path: Path, longest: int = 240) -> None:
     from ..io import write_image
 
@@ -177,8 +187,12 @@ def evaluate_task(task: dict) -> dict:
         return load_scene_image(task["source"])
 
     spectra_used = _spectra_in_effect(task["cfa"], cond)
-    for i, seed in enumerate(realisation_seeds(cond.seed, task["scene"], task["cfa"], cond.luminance,
-                                               int(task.get("realisations", 1)))):
+    applies = _readout_applies(task["cfa"], cond)
+    if not applies and (task.get("ideal_rows") or details_dir is not None):
+        ideal = chain.ideal(chain.optical(image, cond, scene_key), cond, scene_key)
+    seeds = realisation_seeds(cond.seed, task["scene"], task["cfa"], cond.luminance,
+                              int(task.get("realisations", 1))) if applies else []
+    for i, seed in enumerate(seeds):
         for raw, ideal, method, ev in chain.evaluate(image, task["cfa"], task["demosaics"], task["metrics"], cond,
                                                      seed, scene_key):
             base = {"scene": task["scene"], "cfa": cfa_label, "demosaic": method,
