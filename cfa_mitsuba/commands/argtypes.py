@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["positive_int", "non_negative_int", "check_out_dir"]
+__all__ = ["positive_int", "non_negative_int", "check_out_dir", "write_scene_files"]
 
 
 def _int_at_least(text: str, minimum: int) -> int:
@@ -49,3 +49,26 @@ def check_out_dir(out) -> None:
     except OSError as exc:
         what = "write to" if out.exists() else "create"
         raise CfaMitsubaError(f"cannot {what} output directory {str(out)!r}: {exc.strerror}") from None
+
+
+def write_scene_files(exr, image, *, preview: bool) -> list:
+    """Write a scene's spectral EXR, its sidecar and (``preview``) an sRGB
+    PNG beside them; on any failure remove what was written, so no half
+    set is left.  Returns the paths written, for the command to print."""
+    from ..io.exr import write_spectral_exr
+    from ..io.sidecar import write_sidecar
+
+    side = exr.with_suffix(".json")
+    write_spectral_exr(exr, image)
+    written = [exr, side]
+    try:
+        write_sidecar(side, image.meta)
+        if preview:
+            from ..render.preview import write_preview
+
+            written.append(write_preview(exr.with_suffix(".png"), image))
+    except BaseException:
+        exr.unlink(missing_ok=True)
+        side.unlink(missing_ok=True)
+        raise
+    return written

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from . import render_measured
-from .argtypes import check_out_dir
+from .argtypes import check_out_dir, write_scene_files
 
 HELP = "render a scene to a spectral EXR (JCGT layout) and a sidecar JSON"
 
@@ -69,7 +69,7 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     from ..errors import CfaMitsubaError
-    from ..io import check_writable_dir, write_sidecar, write_spectral_exr
+    from ..io import check_writable_dir
     from ..render import engine, variant
 
     if render_measured.is_measured(args):  # a measured spectral image: converted, not rendered
@@ -109,19 +109,7 @@ def run(args) -> int:
 
     check_writable_dir(out, create=True)
     exr = out / f"{sc.name}.exr"
-    side = exr.with_suffix(".json")
-    write_spectral_exr(exr, image)
-    try:
-        write_sidecar(side, image.meta)
-        written = [exr, side]
-        if args.preview:
-            from ..render.preview import write_preview
-
-            written.append(write_preview(exr.with_suffix(".png"), image))
-    except BaseException:
-        exr.unlink(missing_ok=True)
-        side.unlink(missing_ok=True)
-        raise
+    written = write_scene_files(exr, image, preview=args.preview)
     for p in written:
         print(p)
     if not exr.exists():  # pragma: no cover

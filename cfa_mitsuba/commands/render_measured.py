@@ -55,9 +55,9 @@ def is_measured(args) -> bool:
 def run_measured(args) -> int:
     """Convert the measured image to DIR/<name>.exr + .json (+ .png)."""
     from ..errors import CfaMitsubaError
-    from ..io import check_writable_dir, write_sidecar, write_spectral_exr
+    from ..io import check_writable_dir
     from ..render.measured import measured_cached, measured_image
-    from .argtypes import check_out_dir
+    from .argtypes import check_out_dir, write_scene_files
 
     prog = args._prog
     ignored = [f"--{k.replace('_', '-')}" for k in ("spp", "seed", "variant", "max_depth") if getattr(args, k) is not None]
@@ -84,21 +84,9 @@ def run_measured(args) -> int:
 
     check_writable_dir(out, create=True)
     exr = out / f"{image.meta['scene']}.exr"
-    side = exr.with_suffix(".json")
     if exr.resolve() == Path(args.scene).resolve():
         raise CfaMitsubaError(f"--out {str(out)!r} would overwrite the input {args.scene!r}: choose another folder")
-    write_spectral_exr(exr, image)
-    written = [exr, side]
-    try:
-        write_sidecar(side, image.meta)
-        if args.preview:
-            from ..render.preview import write_preview
-
-            written.append(write_preview(exr.with_suffix(".png"), image))
-    except BaseException:
-        exr.unlink(missing_ok=True)
-        side.unlink(missing_ok=True)
-        raise
+    written = write_scene_files(exr, image, preview=args.preview)
     for p in written:
         print(p)
     return 0

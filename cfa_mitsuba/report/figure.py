@@ -184,3 +184,19 @@ def no_details(section, title, res, metric, what):
                       not_in_study=True)
     return Absent(section, title, f"'{metric}' was measured on {scene!r} but its details "
                   f"(details/{scene}/<cfa>/<demosaic>/L*.json) are missing: rerun the study to rebuild them")
+
+
+def label_sweep_panel(ax, row: int, col: int, rows: int, title: str, xlabel: str, info, scene: str) -> None:
+    """Titles and labels of one panel of a metric-against-axis grid (rows
+    are (scene, metric), columns demosaics): the method on the top row, the
+    axis under the bottom row, the metric, its unit and direction at the left."""
+    if row == 0:
+        ax.set_title(title)
+    if row == rows - 1:
+        ax.set_xlabel(xlabel)
+    if col == 0:
+        unit = f" ({info.unit})" if info.unit else ""
+        better = "higher" if info.higher_better else "lower"
+        ax.set_ylabel(f"{info.short}{unit}\n{scene}, {better} is better")
+    else:
+        ax.tick_params(labelleft=False)

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from .figure import Absent, ReportFigure, cfa_legend, grid_shape, legend_rows, panel_grid
+from .figure import Absent, ReportFigure, cfa_legend, grid_shape, label_sweep_panel, legend_rows, panel_grid
 from .results import SCORED_METRICS, Results
 from .style import cfa_styles, demosaic_styles, metric_info
 
@@ -316,16 +316,7 @@ def luminance_sweep(res: Results):
             ax.minorticks_off()
             if res.primary_luminance is not None and min(lums) <= res.primary_luminance <= max(lums):
                 ax.axvline(res.primary_luminance, color="#999999", linewidth=0.8, linestyle=":")
-            if r == 0:
-                ax.set_title(d)
-            if r == rows - 1:
-                ax.set_xlabel("scene luminance (cd/m²)")
-            if c == 0:
-                unit = f" ({info.unit})" if info.unit else ""
-                better = "higher" if info.higher_better else "lower"
-                ax.set_ylabel(f"{info.short}{unit}\n{scene}, {better} is better")
-            else:
-                ax.tick_params(labelleft=False)
+            label_sweep_panel(ax, r, c, rows, d, "scene luminance (cd/m²)", info, scene)
     cfa_legend(fig, cst, [c for c in res.cfas if c in cfas_drawn], ncol=ncol)
     cap = ("Each metric that was measured at several luminances, against the scene's mean luminance "
            "(log axis; the dotted line is the luminance the scores use). The exposure is the one chosen at the "

@@ -14,7 +14,7 @@ __all__ = ["axis_sweep", "axis_rows"]
 import numpy as np
 
 from ..study.conditions import AXES, AXIS_UNITS
-from .figure import Absent, ReportFigure, cfa_legend, legend_rows, panel_grid
+from .figure import Absent, ReportFigure, cfa_legend, label_sweep_panel, legend_rows, panel_grid
 from .results import SCORED_METRICS, Results
 from .style import cfa_styles, metric_info
 
@@ -86,16 +86,8 @@ def axis_sweep(res: Results, axis: str):
             if not numeric:
                 ax.set_xticks(range(len(levels)))
                 ax.set_xticklabels(levels, fontsize=7)
-            if r == 0:
-                ax.set_title(d)
-            if r == rows - 1:
-                ax.set_xlabel(f"{_LABELS.get(axis, axis)}" + (f" ({unit})" if unit else ""))
-            if c == 0:
-                u = f" ({info.unit})" if info.unit else ""
-                better = "higher" if info.higher_better else "lower"
-                ax.set_ylabel(f"{info.short}{u}\n{scene}, {better} is better")
-            else:
-                ax.tick_params(labelleft=False)
+            label_sweep_panel(ax, r, c, rows, d, f"{_LABELS.get(axis, axis)}" + (f" ({unit})" if unit else ""),
+                              info, scene)
     cfa_legend(fig, cst, [c for c in res.cfas if c in drawn], ncol=ncol)
     lum = f" at {res.primary_luminance:g} cd/m²" if res.primary_luminance is not None else ""
     cap = (f"Each scored metric that a sweep measured at several values of {_LABELS.get(axis, axis)}{lum}, "
