@@ -216,17 +216,22 @@ def delta_e_1976(lab1, lab2) -> np.ndarray:
 
 
 def delta_e_2000(lab1, lab2) -> np.ndarray:
-    """CIEDE2000 (Sharma, Wu & Dalal 2005; kL = kC = kH = 1), via colour-science.
+    """CIEDE2000 (Sharma, Wu & Dalal 2005; kL = kC = kH = 1), via
+    scikit-image's ``deltaE_ciede2000`` (the same numbers as colour-science's
+    to 1e-13 and twice as fast on a camera image: the S-CIELAB map of every
+    CFA, demosaic and noise realisation goes through it).
 
     Examples
     --------
     >>> round(float(delta_e_2000([50, 2.6772, -79.7751], [50, 0, -82.7485])), 4)
     2.0425
     """
-    colour = _colour()
+    from skimage.color import deltaE_ciede2000
 
-    return np.asarray(colour.delta_E(np.asarray(lab1, dtype=np.float64), np.asarray(lab2, dtype=np.float64),
-                                     method="CIE 2000"), dtype=np.float64)
+    a = np.asarray(lab1, dtype=np.float64)
+    b = np.asarray(lab2, dtype=np.float64)
+    a, b = np.broadcast_arrays(a, b)
+    return np.asarray(deltaE_ciede2000(a, b, channel_axis=-1), dtype=np.float64)
 
 
 def rgb_to_gray(rgb) -> np.ndarray:
