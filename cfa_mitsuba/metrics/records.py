@@ -230,6 +230,12 @@ METRICS: dict[str, MetricRecord] = {r.name: r for r in (
     MetricRecord("delta-l", None, ("macbeth",), "xyz", "L*", False, False, "ΔL grey",
                  "mean |ΔL*| over the six grey patches (the paper's Table 1 'Mean ΔL')", 2, "Table 1",
                  parent="delta-e", detail_key="mean_dl_grey"),
+    MetricRecord("mtf50p", None, ("slanted-edge",), "linear", "cy/mm", True, False, "MTF50P",
+                 "luminance MTF50P: where the MTF falls to half its peak (Imatest; not raised by overshoot)", 1,
+                 parent="mtf", detail_key="mtf50p_cy_mm"),
+    MetricRecord("mtf-peak", None, ("slanted-edge",), "linear", "", False, False, "MTF peak",
+                 "peak of the luminance MTF up to Nyquist (1 without overshoot; above 1: sharpening)", 3,
+                 parent="mtf", detail_key="mtf_peak"),
     MetricRecord("scielab-interior", None, (NATURAL,), "xyz", "dE00", False, False, "S-CIELAB interior",
                  "S-CIELAB mean ΔE00 away from the image border", 2, parent="scielab", detail_key="mean_interior"),
 )}
