@@ -116,6 +116,10 @@ class MetricRecord:
     needs : geometry keys it cannot run without, each with what it means.
     parent, detail_key : for a secondary value (``delta-l``): the metric
         whose details hold it and the key.
+    censored_key : the details key (a bool) that says the headline is a
+        bound, not a measurement (``moire``: no moire found up to the chirp's
+        top frequency, so the MSP is at least that); None for metrics whose
+        value is always measured.
     """
 
     name: str
@@ -135,6 +139,7 @@ class MetricRecord:
     needs: dict = field(default_factory=dict)
     parent: str | None = None
     detail_key: str | None = None
+    censored_key: str | None = None
     compute: Callable[["MetricInputs", dict], Any] | None = field(default=None, repr=False)
 
     @property
@@ -213,7 +218,7 @@ METRICS: dict[str, MetricRecord] = {r.name: r for r in (
     MetricRecord("moire", moire, ("chirp",), "xyz", "cy/deg", True, True, "MSP",
                  "moiré starting point: first frequency where the block-mean C*ab passes 25", 2,
                  "MSP (s. 2.2.5, Figs 12-13)", (0.04, 0.30), "chirp_cy_px", needs=_GEOMETRY_NEEDS["moire"],
-                 compute=_moire),
+                 censored_key="censored", compute=_moire),
     MetricRecord("achromatic", achromatic, ("gray-bar",), "xyz", "L*", False, True, "AR error",
                  "achromatic reproduction error, mean |ΔL*| along the gray bar", 3, "ΔR (s. 2.2.6, Fig 14)",
                  (1.0, 0.5), compute=_achromatic),
@@ -281,7 +286,7 @@ def record_json(r: MetricRecord) -> dict:
         "score_range": None if r.score_range is None else {"worst": r.score_range[0], "best": r.score_range[1],
                                                            "scaling": r.range_scaling},
         "label": r.label, "description": r.description, "paper": r.paper,
-        "derived_from": r.parent, "function": None if r.function is None else f"cfa_mitsuba.metrics.{r.function.__name__}",
+        "derived_from": r.parent, "censored_key": r.censored_key, "function": None if r.function is None else f"cfa_mitsuba.metrics.{r.function.__name__}",
     }
 
 
