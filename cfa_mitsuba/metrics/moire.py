@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import require, require_finite
 from ._common import as_pair, as_white
 from ._result import MetricResult
-from .colour import xyz_to_lab
+from .colour import realisable, xyz_to_lab
 
 
 def block_chroma(xyz, white_xyz, *, row: int, block: int = 15) -> tuple[np.ndarray, np.ndarray]:
@@ -115,5 +115,6 @@ def moire(reference_xyz, test_xyz, white_xyz, *, frequency_cy_per_deg, row: int 
         "block_mean_test": bm_t, "block_mean_reference": bm_r,
         "threshold": float(threshold), "block": block, "row": row,
         "reference_passes": bool(np.nanmax(bm_r) > threshold),
+        "out_of_gamut_fraction": float(np.mean(~realisable(test[row - half:row + half + 1]))),
     }
     return MetricResult(float(freq[col]), name="moire", unit="cy/deg", details=details)
