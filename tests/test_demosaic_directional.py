@@ -31,7 +31,7 @@ def test_rgb2_reproduces_achromatic_vertical_stripes(method, freq):
     opts = {"weighting": "hard"} if method == "adaptive-laplacian" else {}
     out = cm.isp.demosaic(scene, "rgb2", method, **opts)
     err = np.abs(out - scene[..., None])[8:-8, 8:-8]
-    # measured before the fix: 0.05-0.16 (adaptive, hard), now 0 to rounding
+    # measured before the fix: 0.07-0.35 (adaptive, hard), now 0 to rounding
     assert err.max() < (1e-9 if method == "adaptive-laplacian" else 5e-3)  # pocs: 1.2e-3 to 2.4e-3
     # the colour channels agree: no false colour on an achromatic scene
     assert np.ptp(out[8:-8, 8:-8], axis=-1).max() < (1e-9 if method == "adaptive-laplacian" else 1e-2)
