@@ -37,6 +37,7 @@ __all__ = [
     "rgb_to_gray",
     "xyz_to_srgb",
     "delta_e00",
+    "realisable",
 ]
 
 import numpy as np
@@ -243,3 +244,53 @@ def delta_e00(xyz_a, xyz_b, white_xyz) -> np.ndarray:
     """CIEDE2000 between two absolute XYZ arrays (..., 3), CIELAB relative to
     ``white_xyz`` (same scale): :func:`delta_e_2000` of :func:`xyz_to_lab`."""
     return delta_e_2000(xyz_to_lab(xyz_a, white_xyz), xyz_to_lab(xyz_b, white_xyz))
+
+
+_LOCUS_HALF_PLANES = None
+
+
+def _locus_half_planes() -> np.ndarray:
+    """(n, 3) half-planes a x + b y + c <= 0 of the convex hull of the CIE
+    1931 2-degree spectral locus and the purple line (360-830 nm, 1 nm)."""
+    global _LOCUS_HALF_PLANES
+    if _LOCUS_HALF_PLANES is None:
+        from scipy.spatial import ConvexHull
+
+        cmfs = _colour().MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].values
+        xy = cmfs[:, :2] / cmfs.sum(axis=1, keepdims=True)
+        _LOCUS_HALF_PLANES = ConvexHull(xy).equations
+    return _LOCUS_HALF_PLANES
+
+
+def realisable(xyz, *, tolerance: float = 1e-6) -> np.ndarray:
+    """Whether each XYZ is the colour of some light (the tristimulus values
+    of a non-negative spectrum): Y >= 0, X, Z >= 0 and a chromaticity on or
+    inside the spectral locus and the purple line.  Black (0, 0, 0) is
+    realisable.  A camera's colour matrix can output values outside this
+    cone (negative X, a chromaticity past the locus): no light has them and
+    CIELAB's a*, b* of them are unbounded (C*ab of thousands).
+
+    Parameters
+    ----------
+    xyz : (..., 3) CIE 1931 XYZ, any scale.
+    tolerance : slack of the chromaticity test and of the sign test relative
+        to the value's X + Y + Z (rounding).
+
+    Returns
+    -------
+    (...) bool.
+
+    Examples
+    --------
+    >>> realisable([[95.05, 100.0, 108.9], [0, 0, 0], [-5.0, 10.0, 10.0], [80.0, 10.0, 0.0]]).tolist()
+    [True, True, False, False]
+    """
+    a = np.asarray(xyz, dtype=np.float64)
+    s = a.sum(axis=-1)
+    scale = np.maximum(np.abs(s), np.finfo(float).tiny)
+    nonneg = np.all(a >= -tolerance * scale[..., None], axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        xy = a[..., :2] / np.where(s > 0, s, 1.0)[..., None]
+    eq = _locus_half_planes()
+    inside = np.all(xy @ eq[:, :2].T + eq[:, 2] <= tolerance, axis=-1)
+    return nonneg & ((s <= 0) | inside)

@@ -92,7 +92,7 @@ def test_moire_start_is_the_first_column_above_threshold_in_cpd():
     r = cm.moire(ideal, camera, WHITE, frequency_cy_per_deg=freq)
     a = np.linspace(0.0, 60.0, w)
     col = int(np.flatnonzero(a > 25.0)[0])
-    assert r.details["passed"] and r.details["msp_px"] == col
+    assert r.details["passed"] and r.details["msp_px"] == col and r.details["censored"] is False
     assert float(r) == pytest.approx(freq[col]) and r.unit == "cy/deg"
     # a chirp whose frequency falls left to right is searched from the right
     r2 = cm.moire(ideal[:, ::-1], camera[:, ::-1], WHITE, frequency_cy_per_deg=freq[::-1])
@@ -106,6 +106,9 @@ def test_chirp_without_moire_reports_the_highest_frequency_with_a_flag():
     freq = np.linspace(1.0, 40.0, 100)
     r = cm.moire(ideal, ideal, WHITE, frequency_cy_per_deg=freq)
     assert not r.details["passed"] and np.isfinite(float(r))
+    assert r.details["censored"] is True  # a bound: stored and shown as one (issue 12.5)
+    assert cm.METRICS["moire"].censored_key == "censored"
+    assert all(rec.censored_key is None for rec in cm.METRICS.values() if rec.name != "moire")
     assert float(r) == pytest.approx(freq[100 - 1 - 7])  # last column where a 15-px block fits
 
 

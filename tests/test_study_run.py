@@ -97,6 +97,23 @@ def test_quick_study_means_and_intervals(quick):
     assert (scores["total_rank"] <= scores["total_rank_worst"]).all()
 
 
+def test_moire_bounds_are_censored(quick):
+    """No MSP at the chirp's top analysed frequency is stored as a
+    measurement: every such value is marked censored (a lower bound), and
+    every censored value is that top frequency."""
+    out, _, _ = quick
+    every = pd.read_csv(out / "metrics_realisations.csv")
+    msp = every[every["metric"] == "moire"]
+    assert len(msp) and msp["censored"].dtype == bool
+    top = msp["value"].max()
+    at_top = np.isclose(msp["value"], top, rtol=1e-9)
+    assert (msp.loc[at_top, "censored"]).all()
+    assert (np.isclose(msp.loc[msp["censored"], "value"], top, rtol=1e-9)).all()
+    assert not every.loc[every["metric"] != "moire", "censored"].any()
+    means = pd.read_csv(out / "metrics.csv")
+    assert means.loc[means["metric"] == "moire", "censored"].any()
+
+
 def _tasks_done(out: Path) -> int:
     return len(list((out / ".work").glob("*.json"))) if (out / ".work").is_dir() else 0
 

@@ -246,10 +246,15 @@ def reference_adaptive(raw: np.ndarray, mosaic: Mosaic, ref: Reference, alpha: f
     (t+ > 0 > t-): ``lin_ref + correction``.  The correction is the centre
     channel's directional second difference, ``a_d (y - lin_k)``, when its
     own samples along d are close (s+ <= 2 t+ and -s- <= -2 t-, as on Bayer
-    where t = 1, s = 2); otherwise the non-directional gradient correction
-    of 'laplacian' (a second difference over a span wider than the
-    interpolation's measures a different scale: measured worse on rgb5,
-    rgbw2, rgb1 and rgb2).  The cost is ``|ref(t+) - ref(t-)| +
+    where t = 1, s = 2) or the reference's samples along d are at unequal
+    distances (t+ != -t-: rgb2's vertical); otherwise the non-directional
+    gradient correction of 'laplacian' (a second difference over a span
+    wider than the interpolation's measures a different scale: measured
+    worse on rgb5, rgbw2, rgb1 and rgb2).  With unequal distances and no
+    own sample along d, no correction: the 2-D correction compensates the
+    2-D stencil's blur, which the line interpolation does not have, and
+    adding it sharpened rgb2 past the ideal sensor and made false colour on
+    the chirp (docs/isp.md).  The cost is ``|ref(t+) - ref(t-)| +
     2 |y - lin_k|`` (the second term omitted where k has no sample along d).
     With fewer than two directions, the non-adaptive estimate.
     """
@@ -283,8 +288,17 @@ def reference_adaptive(raw: np.ndarray, mosaic: Mosaic, ref: Reference, alpha: f
             c = np.abs(a1 - a2)
             sp, sm = own.get(d, (None, None))
             curv = None if sp is None else y0 - _lin(at(sp, d), at(sm, d), sp, sm)
-            if curv is not None and sp <= 2 * tp and -sm <= -2 * tm:
+            # Reference samples at unequal distances along d (rgb2's G at +2 and
+            # -1 vertically) make lin_ref a different interpolation from the 2-D
+            # stencil the non-directional correction compensates: adding it would
+            # add the cross-direction curvature (measured: MTF50 1.11 x the ideal
+            # sensor's, false colour at 0.17 cy/px on the chirp).  There the
+            # directional second difference is used, or none.
+            asymmetric = tp != -tm
+            if curv is not None and ((sp <= 2 * tp and -sm <= -2 * tm) or asymmetric):
                 e = _lin(a1, a2, tp, tm) + (4.0 * alpha * (tp * -tm) / (sp * -sm)) * curv
+            elif asymmetric:
+                e = _lin(a1, a2, tp, tm)
             else:
                 if corr is None:
                     corr = evaluate_stencil(ext, ph, pw, shape, tile, i, j,

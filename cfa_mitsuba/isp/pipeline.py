@@ -19,8 +19,9 @@ import numpy as np
 
 from ..errors import CfaMitsubaError
 from ..values import RawImage, RenderedImage
-from .colour import (fit_colour_matrix, gray_world_gains, luminance_weights, white_balance_gains, white_response,
-                     xyz_to_srgb)
+from ..colorimetry import realisable
+from .colour import (channel_noise, fit_colour_matrix, gray_world_gains, luminance_weights, white_balance_gains,
+                     white_response, xyz_to_srgb)
 from .demosaic import check_mosaic, demosaic as _demosaic, get_demosaic
 from .mosaic import geometry
 from .remosaic import channel_gain_divisors, readout_of, remosaic, upsample_blocks
@@ -73,6 +74,36 @@ def _saturated_fraction(raw: RawImage) -> float | None:
     return float(np.mean(raw.raw >= 2**bits - 1))
 
 
+def _sensor_settings(raw: RawImage) -> dict:
+    settings = raw.settings if isinstance(raw.settings, dict) else {}
+    sensor = settings.get("sensor")
+    return sensor if isinstance(sensor, dict) else {}
+
+
+def _saturation_electrons(raw: RawImage) -> float | None:
+    """The most electrons a pixel of this capture can report: the full well
+    or the ADC's top code, whichever comes first (None when the capture
+    does not record its sensor)."""
+    sensor = _sensor_settings(raw)
+    bits, well = sensor.get("adc_bits"), sensor.get("well_capacity_e")
+    levels = []
+    if isinstance(bits, int):
+        levels.append((2**bits - 1 - float(raw.black_level_dn)) / float(raw.dn_per_electron))
+    if isinstance(well, (int, float)) and well > 0:
+        levels.append(float(well))
+    return min(levels) if levels else None
+
+
+def _fit_noise(raw: RawImage, epr: np.ndarray, white: np.ndarray) -> np.ndarray | None:
+    """The capture's own noise at an 18 % grey per balanced channel (the
+    colour fit's Tikhonov weights); None for a noise-free capture."""
+    mode = (raw.settings or {}).get("noise") if isinstance(raw.settings, dict) else None
+    if mode == "off":
+        return None
+    read = float(_sensor_settings(raw).get("read_noise_e") or 0.0) if mode == "all" else 0.0
+    return channel_noise(epr @ white, read_noise_e=read)
+
+
 def _check_white_signal(raw: RawImage, epr: np.ndarray, white: np.ndarray) -> None:
     """Refuse a capture whose channels collect (next to) nothing from the
     scene white: their white-balance gains would be infinite or overflow."""
@@ -89,7 +120,8 @@ def _check_white_signal(raw: RawImage, epr: np.ndarray, white: np.ndarray) -> No
 
 
 def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: str = "illuminant",
-            white_preserving: bool = True, **options) -> RenderedImage:
+            white_preserving: bool = True, regularise: bool = True, clip_highlights: bool = True,
+            **options) -> RenderedImage:
     """Process a raw capture into XYZ (absolute, cd/m^2) and display sRGB.
 
     Parameters
@@ -102,6 +134,17 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         to ``white_radiance``) or 'gray-world'.
     white_preserving : constrain the colour fit so the scene white maps
         exactly to its XYZ (default True).
+    regularise : fit the colour matrix for the capture's own noise (default
+        True): Tikhonov weights sigma_c = the relative noise of each balanced
+        channel at an 18 % grey, shot noise (and read noise with noise
+        'all') from the electrons the channel collects from the scene white
+        (:func:`~cfa_mitsuba.isp.colour.channel_noise`); a noise-free capture
+        gets the exact fit.  False: always the exact fit.
+    clip_highlights : clip every balanced channel at the lowest balanced
+        level at which any channel saturates (default True; dcraw's
+        highlight mode 0), so a pixel whose wells are full reads the same in
+        every channel and maps to a grey, not to the unequal clipped
+        channels' colour (a negative XYZ through cmy2's matrix).
     **options : passed to the demosaicing method (e.g. ``iterations=``).
         Methods that take ``luminance_weights`` receive the channels'
         luminance weights under this illuminant unless given.
@@ -114,9 +157,13 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     ``isp`` (CFA, method, options, white-balance gains, colour matrix,
     condition number, noise gain) and ``capture`` (the sensor settings).
 
-    Saturated pixels are processed like any other (the white balance may
-    tint a clipped highlight); ``meta['isp']['saturated_fraction']``
-    reports how many there were.  Negative values after black-level
+    Saturated pixels are clipped consistently (``clip_highlights``);
+    ``meta['isp']['saturated_fraction']`` reports how many there were,
+    ``highlight_clipped_fraction`` how many balanced values the clip
+    lowered, ``colour_fit_noise`` the Tikhonov weights (None: exact fit) and
+    ``out_of_gamut_fraction`` the output pixels whose XYZ no light has
+    (:func:`~cfa_mitsuba.colorimetry.realisable`: negative, or past the
+    spectral locus; kept, not clipped, and flagged).  Negative values after black-level
     subtraction (read noise) are kept, not clipped, so noise stays unbiased
     until the final sRGB encoding clips to 0..1.
 
@@ -136,7 +183,10 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     white = np.asarray(raw_image.white_radiance, dtype=np.float64)
     if not raw_image.is_ideal:
         _check_white_signal(raw_image, epr, white)
-    fit = fit_colour_matrix(epr, white, wl, white_preserving=white_preserving) if not raw_image.is_ideal else None
+    fit = fit_noise = None
+    if not raw_image.is_ideal:
+        fit_noise = _fit_noise(raw_image, epr, white) if regularise else None
+        fit = fit_colour_matrix(epr, white, wl, white_preserving=white_preserving, channel_noise=fit_noise)
     meta = dict(raw_image.meta or {})
     meta.setdefault("capture", raw_image.settings)
 
@@ -168,6 +218,13 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     balanced = np.empty_like(electrons)
     for (i, j), c in np.ndenumerate(mosaic.index):
         balanced[i::th, j::tw] = electrons[i::th, j::tw] * gains[c]
+    sat_e = _saturation_electrons(raw_image) if clip_highlights else None
+    clip_level, clipped = None, 0.0
+    if sat_e is not None:
+        clip_level = sat_e * float(gains.min())  # where the channel of least headroom saturates, balanced
+        over = balanced > clip_level
+        clipped = float(np.mean(over))
+        balanced = np.where(over, clip_level, balanced)
 
     readout = readout_of(raw_image)
     if readout.get("mode") == "remosaic":
@@ -179,6 +236,7 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     xyz = fit.apply(channels)
     if readout.get("mode") == "bin":  # back on the full pixel grid (isp/remosaic.py)
         xyz = upsample_blocks(xyz, int(readout["block"]), readout["full_shape"])
+    out_of_gamut = float(np.mean(~realisable(xyz)))
     srgb = xyz_to_srgb(xyz, fit.white_xyz)
 
     ref_gain = gains.min()  # reported relative to the most sensitive channel, as cameras do
@@ -195,6 +253,10 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         "white_xyz": fit.white_xyz.tolist(),
         "saturated_fraction": _saturated_fraction(raw_image),
         "readout": readout.get("mode", "full"),
+        "highlight_clip_balanced": clip_level,
+        "highlight_clipped_fraction": clipped,
+        "colour_fit_noise": None if fit_noise is None else fit_noise.tolist(),
+        "out_of_gamut_fraction": out_of_gamut,
         **fit.as_meta(),
     }
     return RenderedImage(xyz=xyz, srgb=srgb, white_xyz=fit.white_xyz.copy(), meta=meta)

@@ -9,7 +9,7 @@ import numpy as np
 from ..errors import require
 from ._common import as_pair, as_white
 from ._result import MetricResult
-from .colour import lightness
+from .colour import lightness, realisable
 
 
 def achromatic(reference_xyz, test_xyz, white_xyz, *, row: int | None = None, border: int = 10,
@@ -39,7 +39,10 @@ def achromatic(reference_xyz, test_xyz, white_xyz, *, row: int | None = None, bo
     MetricResult
         Headline: mean |dL*| (unit ``'L*'``; lower is better).  Details:
         ``l_reference`` / ``l_test`` (W,) L* profiles, ``abs_dl`` (W,),
-        ``columns`` [x0, x1) used, ``row``, ``per_step`` (if ``steps``).
+        ``columns`` [x0, x1) used, ``row``, ``per_step`` (if ``steps``),
+        ``out_of_gamut_fraction`` (XYZ input: the fraction of the analysed
+        row's camera pixels whose XYZ no light has, see
+        :func:`~cfa_mitsuba.colorimetry.realisable`).
 
     References
     ----------
@@ -65,6 +68,8 @@ def achromatic(reference_xyz, test_xyz, white_xyz, *, row: int | None = None, bo
     d = np.abs(l_t - l_r)
     x0, x1 = border, w - border
     details = {"l_reference": l_r, "l_test": l_t, "abs_dl": d, "columns": [x0, x1], "row": row, "border": border}
+    if test.ndim == 3:  # a value no light has (negative, past the locus) is flagged, not hidden
+        details["out_of_gamut_fraction"] = float(np.mean(~realisable(test[row, x0:x1])))
     if steps is not None:
         per = []
         for s in steps:

@@ -18,7 +18,7 @@ import numpy as np
 from ..errors import require, require_finite
 from ._common import as_pair, as_white
 from ._result import MetricResult
-from .colour import xyz_to_lab
+from .colour import realisable, xyz_to_lab
 
 
 def block_chroma(xyz, white_xyz, *, row: int, block: int = 15) -> tuple[np.ndarray, np.ndarray]:
@@ -68,6 +68,9 @@ def moire(reference_xyz, test_xyz, white_xyz, *, frequency_cy_per_deg, row: int 
         better).  Details: ``msp_px`` (column), ``passed`` (False when the
         camera's block mean never exceeds the threshold: the headline is
         then the highest analysed frequency, a lower bound, not NaN),
+        ``censored`` (``not passed``: the headline is a bound, right-censored
+        at the chirp's top analysed frequency, and must be stored and shown
+        as one),
         ``frequency_cy_per_deg`` (W,), ``chroma_test`` / ``chroma_reference``
         (W,) along the row, ``block_mean_test`` / ``block_mean_reference``
         (W,; NaN within ``block // 2`` of the sides), ``threshold``,
@@ -82,8 +85,8 @@ def moire(reference_xyz, test_xyz, white_xyz, *, frequency_cy_per_deg, row: int 
     --------
     >>> grey = np.full((20, 40, 3), [47.5, 50.0, 54.45])
     >>> r = moire(grey, grey, [95.05, 100, 108.9], frequency_cy_per_deg=np.linspace(0, 30, 40), block=5)
-    >>> float(r), r.details["passed"]
-    (28.461538461538463, False)
+    >>> float(r), r.details["passed"], r.details["censored"]
+    (28.461538461538463, False, True)
     """
     ref, test = as_pair(reference_xyz, test_xyz)
     white = as_white(white_xyz)
@@ -106,11 +109,12 @@ def moire(reference_xyz, test_xyz, white_xyz, *, frequency_cy_per_deg, row: int 
     passed = hits.size > 0
     col = int(hits[0]) if passed else int(order[-1])
     details = {
-        "msp_px": col, "passed": bool(passed),
+        "msp_px": col, "passed": bool(passed), "censored": not passed,
         "frequency_cy_per_deg": freq,
         "chroma_test": c_t, "chroma_reference": c_r,
         "block_mean_test": bm_t, "block_mean_reference": bm_r,
         "threshold": float(threshold), "block": block, "row": row,
         "reference_passes": bool(np.nanmax(bm_r) > threshold),
+        "out_of_gamut_fraction": float(np.mean(~realisable(test[row - half:row + half + 1]))),
     }
     return MetricResult(float(freq[col]), name="moire", unit="cy/deg", details=details)

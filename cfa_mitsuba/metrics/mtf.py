@@ -18,6 +18,9 @@ sfrmat3's conventions.  Steps (P. D. Burns' sfrmat3, ISO 12233:2014):
 
 MTF50 is the first crossing of 0.5, linearly interpolated between the two
 samples around it (not snapped to a grid, unlike ISETCam's ISO12233).
+MTF50P (Imatest's measure for sharpened images) is the first crossing of
+half the MTF's peak (the peak up to Nyquist) above the peak's frequency: a
+sharpening overshoot raises the peak above 1 and MTF50, not MTF50P.
 """
 
 from __future__ import annotations
@@ -142,6 +145,20 @@ def _mtf50(freq, m):
     return float(f0 + (m0 - 0.5) * (f1 - f0) / (m0 - m1)), True
 
 
+def _mtf50p(freq, m, nyquist: float = 0.5):
+    """(MTF50P, peak, peak frequency, found): the first frequency above the
+    peak where the MTF falls below half the peak, the peak taken over
+    0..``nyquist`` cy/px (beyond it aliasing, not the lens or the
+    sharpening, lifts the curve).  Without overshoot the peak is the DC
+    value 1 and MTF50P is MTF50 exactly."""
+    band = np.flatnonzero(freq <= nyquist + 1e-12)
+    ipk = int(band[np.argmax(m[band])])
+    peak = float(m[ipk])
+    f, v = freq[ipk:], m[ipk:] / peak
+    m50p, found = _mtf50(f, v)
+    return m50p, peak, float(freq[ipk]), found
+
+
 def find_edge_roi(image, *, margin_px: int = 64):
     """Locate a single straight edge and return a ROI ``(y0, x0, y1, x1)`` around it.
 
@@ -262,9 +279,15 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
     MetricResult
         Headline: luminance (or gray) MTF50, unit ``'cy/px'`` or ``'cy/mm'``.
         Details: ``records`` {name: {freq_cy_px, mtf, mtf50_cy_px,
-        mtf50_cy_mm, mtf_at_nyquist, mtf50_found}} for R, G, B and lum (or
+        mtf50_cy_mm, mtf_at_nyquist, mtf50_found, mtf50p_cy_px,
+        mtf50p_cy_mm, mtf50p_found, mtf_peak, mtf_peak_cy_px}} for R, G, B and lum (or
         gray; a colour channel without an edge gets ``None`` values and an
         ``error`` text instead of failing the luminance result); ``mtf50_cy_px``, ``mtf50_cy_mm``, ``mtf_at_nyquist``,
+        the luminance ``mtf_peak`` (the MTF's maximum up to Nyquist, 1 at DC
+        without overshoot; unitless) at ``mtf_peak_cy_px``, ``mtf50p_cy_px``
+        / ``mtf50p_cy_mm`` (the first frequency above the peak where the MTF
+        falls below half the peak, Imatest's MTF50P; MTF50 when the peak is
+        the DC value),
         ``percent_alias`` (100 x sum of the luminance MTF above Nyquist over
         its sum, up to 1 cy/px, as ISETCam's ISO12233 but on luminance as the
         paper says), ``edge_angle_deg``, ``orientation``, ``roi``,
@@ -358,13 +381,20 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
             if name == main:
                 raise
             out[name] = {"mtf50_cy_px": None, "mtf50_cy_mm": None, "mtf_at_nyquist": None,
-                         "mtf50_found": False, "error": str(exc)}  # a channel without an edge
+                         "mtf50_found": False, "mtf50p_cy_px": None, "mtf50p_cy_mm": None,
+                         "mtf50p_found": False, "mtf_peak": None, "mtf_peak_cy_px": None,
+                         "error": str(exc)}  # a channel without an edge
             continue
         m50, found = _mtf50(freq, m)
+        m50p, peak, f_peak, found_p = _mtf50p(freq, m)
+        per_mm = 1.0 / (pixel_pitch_um * 1e-3) if pixel_pitch_um else None
         out[name] = {
             "freq_cy_px": freq, "mtf": m,
             "mtf50_cy_px": m50, "mtf50_found": found,
-            "mtf50_cy_mm": m50 / (pixel_pitch_um * 1e-3) if pixel_pitch_um else None,
+            "mtf50_cy_mm": m50 * per_mm if per_mm else None,
+            "mtf50p_cy_px": m50p, "mtf50p_found": found_p,
+            "mtf50p_cy_mm": m50p * per_mm if per_mm else None,
+            "mtf_peak": peak, "mtf_peak_cy_px": f_peak,
             "mtf_at_nyquist": float(np.interp(0.5, freq, m)),
         }
     lum = out[main]
@@ -375,6 +405,8 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
         "records": out,
         "mtf50_cy_px": lum["mtf50_cy_px"], "mtf50_cy_mm": lum["mtf50_cy_mm"],
         "mtf50_found": lum["mtf50_found"],
+        "mtf50p_cy_px": lum["mtf50p_cy_px"], "mtf50p_cy_mm": lum["mtf50p_cy_mm"],
+        "mtf50p_found": lum["mtf50p_found"], "mtf_peak": lum["mtf_peak"], "mtf_peak_cy_px": lum["mtf_peak_cy_px"],
         "mtf_at_nyquist": lum["mtf_at_nyquist"], "percent_alias": float(alias),
         "nyquist_cy_px": 0.5,
         "nyquist_cy_mm": 0.5 / (pixel_pitch_um * 1e-3) if pixel_pitch_um else None,

@@ -127,6 +127,10 @@ class MetricRecord:
     needs : geometry keys it cannot run without, each with what it means.
     parent, detail_key : for a secondary value (``delta-l``): the metric
         whose details hold it and the key.
+    censored_key : the details key (a bool) that says the headline is a
+        bound, not a measurement (``moire``: no moire found up to the chirp's
+        top frequency, so the MSP is at least that); None for metrics whose
+        value is always measured.
     """
 
     name: str
@@ -146,6 +150,7 @@ class MetricRecord:
     needs: dict = field(default_factory=dict)
     parent: str | None = None
     detail_key: str | None = None
+    censored_key: str | None = None
     compute: Callable[["MetricInputs", dict], Any] | None = field(default=None, repr=False)
 
     @property
@@ -230,7 +235,7 @@ METRICS: dict[str, MetricRecord] = {r.name: r for r in (
     MetricRecord("moire", moire, ("chirp",), "xyz", "cy/deg", True, True, "MSP",
                  "moiré starting point: first frequency where the block-mean C*ab passes 25", 2,
                  "MSP (s. 2.2.5, Figs 12-13)", (0.04, 0.30), "chirp_cy_px", needs=_GEOMETRY_NEEDS["moire"],
-                 compute=_moire),
+                 censored_key="censored", compute=_moire),
     MetricRecord("achromatic", achromatic, ("gray-bar",), "xyz", "L*", False, True, "AR error",
                  "achromatic reproduction error, mean |ΔL*| along the gray bar", 3, "ΔR (s. 2.2.6, Fig 14)",
                  (1.0, 0.5), compute=_achromatic),
@@ -247,6 +252,12 @@ METRICS: dict[str, MetricRecord] = {r.name: r for r in (
     MetricRecord("delta-l", None, ("macbeth",), "xyz", "L*", False, False, "ΔL grey",
                  "mean |ΔL*| over the six grey patches (the paper's Table 1 'Mean ΔL')", 2, "Table 1",
                  parent="delta-e", detail_key="mean_dl_grey"),
+    MetricRecord("mtf50p", None, ("slanted-edge",), "linear", "cy/mm", True, False, "MTF50P",
+                 "luminance MTF50P: where the MTF falls to half its peak (Imatest; not raised by overshoot)", 1,
+                 parent="mtf", detail_key="mtf50p_cy_mm"),
+    MetricRecord("mtf-peak", None, ("slanted-edge",), "linear", "", False, False, "MTF peak",
+                 "peak of the luminance MTF up to Nyquist (1 without overshoot; above 1: sharpening)", 3,
+                 parent="mtf", detail_key="mtf_peak"),
     MetricRecord("scielab-interior", None, (NATURAL,), "xyz", "dE00", False, False, "S-CIELAB interior",
                  "S-CIELAB mean ΔE00 away from the image border", 2, parent="scielab", detail_key="mean_interior"),
 )}
@@ -292,7 +303,7 @@ def record_json(r: MetricRecord) -> dict:
         "score_range": None if r.score_range is None else {"worst": r.score_range[0], "best": r.score_range[1],
                                                            "scaling": r.range_scaling},
         "label": r.label, "description": r.description, "paper": r.paper,
-        "derived_from": r.parent, "function": None if r.function is None else f"cfa_mitsuba.metrics.{r.function.__name__}",
+        "derived_from": r.parent, "censored_key": r.censored_key, "function": None if r.function is None else f"cfa_mitsuba.metrics.{r.function.__name__}",
     }
 
 
@@ -335,15 +346,22 @@ def evaluate_many(names, inputs: MetricInputs, failures: list | None = None) -> 
 
 
 def result_rows(results: dict) -> list[dict]:
-    """Tidy rows ``{metric, value, unit}`` for results of :func:`evaluate_many`:
-    each headline value, then the secondary values its details hold."""
+    """Tidy rows ``{metric, value, unit, censored}`` for results of
+    :func:`evaluate_many`: each headline value, then the secondary values its
+    details hold.  ``censored`` is True where the value is a bound, not a
+    measurement (the record's ``censored_key``: an MSP with no moire up to
+    the chirp's top frequency)."""
     rows = []
     for name, res in results.items():
-        rows.append({"metric": name, "value": float(res), "unit": getattr(res, "unit", None) or METRICS[name].unit})
+        rec = METRICS[name]
+        details = getattr(res, "details", {}) or {}
+        censored = bool(details.get(rec.censored_key, False)) if rec.censored_key else False
+        rows.append({"metric": name, "value": float(res), "unit": getattr(res, "unit", None) or rec.unit,
+                     "censored": censored})
         for sec in METRICS.values():
             if sec.parent != name:
                 continue
-            v = getattr(res, "details", {}).get(sec.detail_key)
+            v = details.get(sec.detail_key)
             if v is not None and np.isfinite(v):
-                rows.append({"metric": sec.name, "value": float(v), "unit": sec.unit})
+                rows.append({"metric": sec.name, "value": float(v), "unit": sec.unit, "censored": False})
     return rows

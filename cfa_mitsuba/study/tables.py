@@ -27,11 +27,13 @@ KEY_COLUMNS = ["scene", "cfa", "demosaic", *AXES, "base", "metric"]
 
 def metric_columns(*, realisations: bool = False) -> list[str]:
     """metrics.csv's columns: the keys, one per condition axis, ``base``,
-    the metric, its mean ``value`` with ``ci_low``, ``ci_high``, ``n``, and
-    ``unit``; per realisation: ``realisation`` and ``value``, ``unit``."""
+    the metric, its mean ``value`` with ``ci_low``, ``ci_high``, ``n``,
+    ``unit`` and ``censored`` (the value is a bound: True when any
+    realisation's is); per realisation: ``realisation``, ``value``, ``unit``,
+    ``censored``."""
     if realisations:
-        return [*KEY_COLUMNS[:-1], "realisation", "metric", "value", "unit"]
-    return [*KEY_COLUMNS, "value", "ci_low", "ci_high", "n", "unit"]
+        return [*KEY_COLUMNS[:-1], "realisation", "metric", "value", "unit", "censored"]
+    return [*KEY_COLUMNS, "value", "ci_low", "ci_high", "n", "unit", "censored"]
 
 
 def order_rows(rows, config_order: dict, columns: list[str] | None = None):
@@ -77,6 +79,9 @@ def mean_table(realisations):
     agg = aggregate(keyed, KEY_COLUMNS, "value").drop(columns=["std"])
     unit = keyed.drop_duplicates(KEY_COLUMNS)[KEY_COLUMNS + ["unit"]]
     out = agg.merge(unit, on=KEY_COLUMNS, how="left")
+    bound = keyed.assign(censored=keyed["censored"].fillna(False).astype(bool)).groupby(
+        KEY_COLUMNS, sort=False, dropna=False)["censored"].any().reset_index()
+    out = out.merge(bound, on=KEY_COLUMNS, how="left")
     return out[metric_columns()]
 
 
