@@ -249,16 +249,24 @@ def delta_e00(xyz_a, xyz_b, white_xyz) -> np.ndarray:
 _LOCUS_HALF_PLANES = None
 
 
+def _half_planes(vertices) -> np.ndarray:
+    """(n, 3) half-planes a x + b y + c <= 0 of the convex hull of ``vertices``."""
+    from scipy.spatial import ConvexHull
+
+    return ConvexHull(np.asarray(vertices, dtype=np.float64)).equations
+
+
+#: The sRGB primaries' triangle in xy (IEC 61966-2-1): inside the spectral locus.
+_SRGB_TRIANGLE = _half_planes([[0.64, 0.33], [0.30, 0.60], [0.15, 0.06]])
+
+
 def _locus_half_planes() -> np.ndarray:
     """(n, 3) half-planes a x + b y + c <= 0 of the convex hull of the CIE
     1931 2-degree spectral locus and the purple line (360-830 nm, 1 nm)."""
     global _LOCUS_HALF_PLANES
     if _LOCUS_HALF_PLANES is None:
-        from scipy.spatial import ConvexHull
-
         cmfs = _colour().MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].values
-        xy = cmfs[:, :2] / cmfs.sum(axis=1, keepdims=True)
-        _LOCUS_HALF_PLANES = ConvexHull(xy).equations
+        _LOCUS_HALF_PLANES = _half_planes(cmfs[:, :2] / cmfs.sum(axis=1, keepdims=True))
     return _LOCUS_HALF_PLANES
 
 
@@ -291,6 +299,16 @@ def realisable(xyz, *, tolerance: float = 1e-6) -> np.ndarray:
     nonneg = np.all(a >= -tolerance * scale[..., None], axis=-1)
     with np.errstate(invalid="ignore", divide="ignore"):
         xy = a[..., :2] / np.where(s > 0, s, 1.0)[..., None]
-    eq = _locus_half_planes()
-    inside = np.all(xy @ eq[:, :2].T + eq[:, 2] <= tolerance, axis=-1)
-    return nonneg & ((s <= 0) | inside)
+    # Two stages, so a camera image costs little, not an (n_pixels, n_planes) product: sRGB's
+    # triangle lies inside the locus, so a point inside it is realisable; only the points outside it
+    # (saturated colours, errors) meet the locus's half-planes, in blocks that keep memory small.
+    flat = xy.reshape(-1, 2)
+    inside = np.ones(flat.shape[0], dtype=bool)
+    for a_, b_, c_ in _SRGB_TRIANGLE:
+        inside &= a_ * flat[:, 0] + b_ * flat[:, 1] + c_ <= 0.0
+    rest = np.flatnonzero(~inside)
+    outer = _locus_half_planes()
+    for i in range(0, rest.size, 16384):
+        idx = rest[i:i + 16384]
+        inside[idx] = np.all(flat[idx] @ outer[:, :2].T + outer[:, 2] <= tolerance, axis=-1)
+    return nonneg & ((s <= 0) | inside.reshape(s.shape))
