@@ -23,6 +23,10 @@ from .figure import Absent, ReportFigure, no_details as _no_details, cfa_legend,
 from .results import Results
 from .style import cfa_styles, fmt_value
 
+#: Block-mean chroma above this is named in the chirp figure's caption as
+#: false colour (issue 12: no surface colour of our scenes comes near it).
+CHROMA_NO_SURFACE = 200.0
+
 #: The ideal sensor: a broad grey line under the cameras' (unlike any CFA's line).
 _IDEAL = dict(color="#000000", alpha=0.35, linestyle="-", linewidth=3.2, solid_capstyle="butt")
 
@@ -207,6 +211,22 @@ def moire_curves(res: Results):
     if clipped:
         cap += (" Cut off at the top of the axis: " + "; ".join(clipped[:6]) + (" …" if len(clipped) > 6 else "")
                 + ".")
+    beyond = []
+    for c, d, det in pairs:
+        pixel = _arr(det.get("chroma_test") or [])
+        top_pixel = float(np.nanmax(pixel)) if pixel.size and np.isfinite(pixel).any() else 0.0
+        if max(top_pixel, peaks.get((c, d), 0.0)) > CHROMA_NO_SURFACE:
+            oog = det.get("out_of_gamut_fraction")
+            beyond.append(f"{c} ({d}): C*ab up to {top_pixel:.0f} on the row, block mean up to "
+                          f"{peaks.get((c, d), float('nan')):.0f}"
+                          + (f", {100 * float(oog):.1f} % of the row's pixels outside the colours any light has"
+                             if oog else ""))
+    if beyond:
+        cap += (f" Above C*ab {CHROMA_NO_SURFACE:g}, which no surface colour reaches (the ColorChecker's most "
+                "saturated patch is below 100), the chroma is false colour, not a colour of the scene: a CFA whose "
+                "channels are each sampled sparsely aliases each at its own phase on the chirp, and the colour "
+                "matrix turns their disagreement into colours no light has (docs/isp.md): "
+                + "; ".join(beyond[:8]) + (" …" if len(beyond) > 8 else "") + ".")
     if lower_bounds:
         cap += (" A ▷ marker means the camera never passed the threshold: its MSP is the chirp's top frequency, "
                 "a lower bound (" + ", ".join(lower_bounds[:8]) + (" …" if len(lower_bounds) > 8 else "") + ").")
