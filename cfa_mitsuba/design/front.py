@@ -21,7 +21,7 @@ Two CFAs whose intervals overlap everywhere are ties: both stay.
 
 from __future__ import annotations
 
-__all__ = ["proxy_scores", "select", "dominates", "pareto", "fullchain_scores", "agreement"]
+__all__ = ["proxy_scores", "select", "dominates", "pareto", "separating", "fullchain_scores", "agreement"]
 
 import numpy as np
 
@@ -96,11 +96,24 @@ def pareto(table, objectives) -> list:
     return out
 
 
+def separating(table, o) -> bool:
+    """Whether objective ``o`` tells the evaluated CFAs apart: the spread of
+    their means exceeds the median width of their 95 % intervals."""
+    v = table[o.label].to_numpy(dtype=float)
+    width = (table[f"{o.label} high"] - table[f"{o.label} low"]).to_numpy(dtype=float)
+    return bool(np.nanmax(v) - np.nanmin(v) > np.nanmedian(width))
+
+
 def fullchain_scores(table, objectives) -> np.ndarray:
     """(N,) combined full-chain score, higher is better: each objective's
-    mean min-max normalised over the evaluated CFAs (1 best), averaged."""
+    mean min-max normalised over the evaluated CFAs (1 best), averaged over
+    the objectives that separate the CFAs (:func:`separating`; an objective
+    whose differences are all within the noise would only add noise to the
+    score, as the study leaves a constant metric out); all of them if none
+    does."""
+    keep = [o for o in objectives if separating(table, o)] or list(objectives)
     per = []
-    for o in objectives:
+    for o in keep:
         v = table[o.label].to_numpy(dtype=float)
         n = _normalise(v)
         per.append(1.0 - n if o.goal == "min" else n)

@@ -20,7 +20,12 @@
   a natural-image spectrum 1 / (|f|^2 + f0^2) (f0 = 0.05) times the squared
   system MTF (diffraction at 550 nm at the study's f-number, times the
   pixel aperture's sinc), so a carrier the lens already suppresses costs
-  little.  aliasing = crosstalk + sampling.
+  little.  aliasing = crosstalk + sampling.  ``aliasing_h`` is the same sum
+  over the carriers with f_y = 0 only: what a near-vertical slanted edge
+  measures (its profile varies along x; a carrier with f_y != 0 puts its
+  alias at a vertical frequency that the edge's projection averages out),
+  so a tile with a luminance-heavy channel in full columns scores worse
+  than its transpose.
 * ``noise`` (lower is better): relative rms noise of the luminance Y on an
   18 % grey after the colour matrix, at the objectives' lowest luminance
   (``noise_xyz``, the rms over X, Y and Z, is reported beside it).  Each
@@ -56,7 +61,7 @@ from ..colorimetry import delta_e00
 from ..isp.colour import electrons_per_radiance_of, fit_colour_matrix
 
 #: The proxies, each lower-is-better.
-PROXY_NAMES = ("aliasing", "noise", "colour")
+PROXY_NAMES = ("aliasing", "aliasing_h", "noise", "colour")
 _F0 = 0.05
 _GREY = 0.18
 _AE_LEVEL = 0.95
@@ -163,7 +168,7 @@ def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings
 
     ``models``: a function or dict from the tuple of letter indices present
     (ascending) to that set's :class:`ColourModel` (channels in that order).
-    Returns {name: (N,) array} for ``aliasing``, ``crosstalk``, ``sampling``,
+    Returns {name: (N,) array} for ``aliasing``, ``aliasing_h``, ``crosstalk``, ``sampling``,
     ``noise``, ``noise_xyz``, ``colour``, ``vora_trussell``.
     """
     layouts = np.atleast_2d(np.asarray(layouts, dtype=np.uint8))
@@ -177,9 +182,11 @@ def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings
     s = frequency_weights(h, w, float(settings.f_number), float(settings.pixel_pitch_um))
     per_channel = np.einsum("nkij,ij->nk", power, s)
     crosstalk = per_channel.sum(axis=1)
+    horizontal = np.einsum("nkj,j->nk", power[:, :, 0, :], s[0, :])  # carriers with f_y = 0
     gain = interpolation_gain(masks)
     present = dens > 0
-    out = {name: np.zeros(n) for name in ("sampling", "noise", "noise_xyz", "colour", "vora_trussell")}
+    out = {name: np.zeros(n) for name in ("sampling", "aliasing_h", "noise", "noise_xyz",
+                                                  "colour", "vora_trussell")}
     keys = present @ (1 << np.arange(k))
     for key in np.unique(keys):
         rows = np.flatnonzero(keys == key)
@@ -187,6 +194,7 @@ def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings
         m = get(idx)
         d = dens[rows][:, idx]
         out["sampling"][rows] = np.sum(m.luminance_share[None, :] * per_channel[rows][:, idx] / d ** 2, axis=1)
+        out["aliasing_h"][rows] = np.sum((1 + m.luminance_share[None, :] / d ** 2) * horizontal[rows][:, idx], axis=1)
         electrons = (_GREY * _AE_LEVEL * settings.well_e * settings.luminance_ratio
                      * m.white_response / m.white_response.max())
         var = (electrons + settings.read_noise_e ** 2) / electrons ** 2

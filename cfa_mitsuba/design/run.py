@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io import atomic_output, check_writable_dir
+from .proxy import PROXY_NAMES
 
 
 @dataclass
@@ -56,11 +57,11 @@ def _fullchain_table(config, search, values, names, named_proxies):
     rows = []
     for cfa in [c for c in values if c not in {n for n, _ in names.values()}]:
         rows.append({"cfa": cfa, "kind": "named", "key": "", "toml": "", "tile_text": named_proxies[cfa]["tile_text"],
-                     **{p: named_proxies[cfa].get(p) for p in ("aliasing", "noise", "colour")}, "proxy_score": np.nan})
+                     **{p: named_proxies[cfa].get(p) for p in PROXY_NAMES}, "proxy_score": np.nan})
     for key, (name, path) in names.items():
         c = cands.loc[key]
         rows.append({"cfa": name, "kind": "candidate", "key": key, "toml": path, "tile_text": c["tile_text"],
-                     "aliasing": c["aliasing"], "noise": c["noise"], "colour": c["colour"],
+                     **{p: c[p] for p in PROXY_NAMES},
                      "proxy_score": c["proxy_score"], "proxy_rank": int(c["proxy_rank"]), "chosen": c["chosen"]})
     table = pd.DataFrame(rows)
     for o in (*config.objectives, *config.constraints):

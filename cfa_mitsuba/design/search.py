@@ -123,7 +123,7 @@ def _exhaustive(config, h, w, state: Path, settings, models, log) -> tuple[list[
     k = len(config.alphabet)
     lo, hi = L.density_limits(config.density, config.alphabet, h * w)
     rows, evaluated, reused = [], 0, 0
-    names = ("aliasing", "crosstalk", "sampling", "noise", "noise_xyz", "colour", "vora_trussell")
+    names = ("aliasing", "aliasing_h", "crosstalk", "sampling", "noise", "noise_xyz", "colour", "vora_trussell")
     for i in range(L.n_chunks(h, w, k)):
         f = state / f"exhaustive-{h}x{w}-{i:05d}.npz"
         if f.exists():
