@@ -134,7 +134,7 @@ def test_a_rerun_evaluates_nothing_again(brute):
     d, first = brute
     proc = run_cli("design", d / "d.toml", "--out", d / "out", "--quiet", "--workers", "1")
     assert proc.returncode == 0, proc.stderr
-    assert "(0 evaluated now, 9 from an earlier run)" in proc.stderr
+    assert "(0 evaluated now, 9 taken from saved state)" in proc.stderr
     assert "22 evaluation task(s), 22 already done" in proc.stderr  # 11 CFAs x 2 scenes, all saved
     assert (d / "out" / "design.html").stat().st_size > 1000
 

@@ -38,7 +38,7 @@ PROXIES_OF = {
     "delta-e": ("colour", "noise"), "delta-e76": ("colour", "noise"), "delta-l": ("noise",),
     "scielab": ("colour", "noise", "aliasing"), "scielab-interior": ("colour", "noise", "aliasing"),
     "ssim": ("noise", "aliasing"), "mdsi": ("noise", "aliasing"), "haarpsi": ("noise", "aliasing"),
-    "mtf": ("aliasing_h",), "moire": ("aliasing",), "achromatic": ("noise",),
+    "mtf": ("aliasing", "aliasing_h"), "moire": ("aliasing",), "achromatic": ("noise",),
 }
 #: Raw layouts (alphabet ** pixels) per tile size that exhaustive search takes on.
 MAX_EXHAUSTIVE = 50_000_000

@@ -97,7 +97,7 @@ def run_design(config, out_dir, *, workers=None, scheduler=None, progress=True, 
     res = run_search(config, out, log=log)
     cands = res.candidates
     timing["search_s"] = time.perf_counter() - t0
-    log(f"proxy: {len(cands):,} candidates ({res.evaluated:,} evaluated now, {res.reused:,} from an earlier run) "
+    log(f"proxy: {len(cands):,} candidates ({res.evaluated:,} evaluated now, {res.reused:,} taken from saved state) "
         f"in {timing['search_s']:.1f} s")
 
     cands["proxy_score"] = front.proxy_scores(cands, config.objectives)

@@ -210,7 +210,8 @@ def _nsga2(config, h, w, state: Path, settings, models, objectives, log) -> tupl
     ok = np.all((counts >= lo) & (counts <= hi), axis=1) if rows else np.zeros(0, bool)
     rows = [r for r, good in zip(rows, ok) if good]
     log(f"  {h}x{w}: NSGA-II, population {config.population} x {config.generations} generations, "
-        f"{archive.evaluated} candidates evaluated now, {archive.reused} taken from an earlier run; "
+        f"{archive.evaluated} candidates evaluated now, {archive.reused} answered from the archive (repeats or an "
+        f"earlier run); "
         f"{len(rows)} distinct within the density bounds")
     import pandas as pd
 
