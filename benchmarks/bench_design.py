@@ -69,7 +69,7 @@ def fullchain() -> None:
         res = run_design(cfg, Path(d) / "out", progress=False, log=lambda m: None)
         n = len(res.fullchain)
         print(f"full chain (design-quick: {n} CFAs x {cfg.study.seeds} realisations, 3 scenes, renders "
-              f"{'cached' if 'CFA_MITSUBA_CACHE' in os.environ else 'fresh'}): {res.timing['fullchain_s']:.1f} s, "
+              f"{'from $CFA_MITSUBA_CACHE' if cached else 'made fresh'}): {res.timing['fullchain_s']:.1f} s, "
               f"{res.timing['fullchain_s'] / n:.2f} s per CFA; search {res.timing['search_s']:.1f} s for "
               f"{len(res.candidates):,} candidates; total {res.timing['total_s']:.1f} s")
 
