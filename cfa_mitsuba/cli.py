@@ -30,6 +30,7 @@ COMMANDS = (
     "study",
     "report",
     "convergence",
+    "design",
 )
 
 

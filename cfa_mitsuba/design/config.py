@@ -1,0 +1,348 @@
+"""Design configs: the search space, the objectives and the study the
+candidates are measured in, validated before any work starts with the
+study's checker (``design.toml: layout.alphabet: must not be empty``).
+
+A config has five parts (docs/design.md lists every key):
+
+* ``[layout]``: tile sizes, the filter alphabet, the spectra set of its
+  letters, density bounds per letter, mirror folding;
+* ``[spectra]`` (optional): parametric filters (``bandpass``: smooth
+  band-pass transmittances with centre, width and peak; ``mixture``:
+  non-negative mixtures of a spectra set's curves) for some letters;
+* ``[search]``: the engine (exhaustive, NSGA-II, or auto), its sizes, how
+  many candidates go through the full chain;
+* ``[[objective]]`` / ``[[constraint]]``: study metrics on a scene, a
+  luminance and a demosaic, minimised or maximised; constraints bound a
+  metric by a number or by a named CFA's value in the same run;
+* ``[study]``: an ordinary study config (docs/study.md) without
+  ``luminances`` (taken from the objectives): scenes, demosaics, seeds,
+  render sizes, sensor, and ``cfas``, the named CFAs compared with.
+"""
+
+from __future__ import annotations
+
+__all__ = ["DesignConfig", "Objective", "SpectraSpec", "load_design", "parse_design", "PROXIES_OF",
+           "MAX_EXHAUSTIVE", "ENGINES", "FAMILIES"]
+
+import dataclasses
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..errors import CfaMitsubaError
+from ..study.checker import _Checker
+
+#: The proxies (design/proxy.py) that predict each metric: where the
+#: full-chain value comes from (colour fit, noise, frequency structure).
+PROXIES_OF = {
+    "delta-e": ("colour", "noise"), "delta-e76": ("colour", "noise"), "delta-l": ("noise",),
+    "scielab": ("colour", "noise", "aliasing"), "scielab-interior": ("colour", "noise", "aliasing"),
+    "ssim": ("noise", "aliasing"), "mdsi": ("noise", "aliasing"), "haarpsi": ("noise", "aliasing"),
+    "mtf": ("aliasing", "aliasing_h"), "moire": ("aliasing",), "achromatic": ("noise",),
+}
+#: Raw layouts (alphabet ** pixels) per tile size that exhaustive search takes on.
+MAX_EXHAUSTIVE = 50_000_000
+ENGINES = ("auto", "exhaustive", "nsga2")
+FAMILIES = ("bandpass", "mixture")
+
+
+@dataclass(frozen=True)
+class Objective:
+    """One full-chain value: ``metric`` on ``scene`` at ``luminance`` with
+    ``demosaic``; ``goal`` 'min' or 'max'.  As a constraint, ``bound`` is a
+    number or a named CFA (its value in the same run) and ``goal`` says
+    which side is allowed ('max': value <= bound)."""
+
+    metric: str
+    scene: str
+    luminance: float
+    demosaic: str
+    goal: str
+    bound: object = None
+
+    @property
+    def label(self) -> str:
+        return f"{self.metric}@{self.scene}/L{self.luminance:g}/{self.demosaic}"
+
+    @property
+    def proxies(self) -> tuple[str, ...]:
+        return PROXIES_OF.get(self.metric, ("colour", "noise", "aliasing"))
+
+
+@dataclass(frozen=True)
+class SpectraSpec:
+    """Parametric filters for ``letters``: ``family`` 'bandpass' with
+    (centre_nm, width_nm, peak) bounds, or 'mixture' of ``basis`` (a spectra
+    set) with weights in ``weight``."""
+
+    family: str
+    letters: tuple[str, ...]
+    centre_nm: tuple[float, float] = (400.0, 700.0)
+    width_nm: tuple[float, float] = (30.0, 200.0)
+    peak: tuple[float, float] = (0.2, 1.0)
+    basis: str = ""
+    weight: tuple[float, float] = (0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class DesignConfig:
+    name: str
+    description: str
+    path: str | None
+    seed: int
+    tiles: tuple[tuple[int, int], ...]
+    alphabet: tuple[str, ...]
+    spectra_set: str
+    density: dict            # letter -> (min, max) fraction
+    mirrors: bool
+    spectra: SpectraSpec | None
+    engine: dict             # (h, w) -> 'exhaustive' | 'nsga2'
+    population: int
+    generations: int
+    full_chain: int
+    agreement_sample: int
+    objectives: tuple[Objective, ...]
+    constraints: tuple[Objective, ...]
+    study: object            # a StudyConfig; its cfas are the named CFAs compared with
+    workers: int | None
+
+
+def _tiles(ck: _Checker, value) -> tuple:
+    if not isinstance(value, list) or not value:
+        ck.fail("layout.tiles", "must be a non-empty list of sizes like \"2x2\"")
+    out = []
+    for i, t in enumerate(value):
+        key = f"layout.tiles[{i}]"
+        try:
+            h, w = (int(x) for x in ck.string(t, key).lower().split("x"))
+        except ValueError:
+            ck.fail(key, f"must be HEIGHTxWIDTH, e.g. \"4x4\" (got {t!r})")
+        if not (1 <= h <= 16 and 1 <= w <= 16) or h * w < 2:
+            ck.fail(key, f"tile {h}x{w} out of range (1..16 each side, at least 2 pixels)")
+        if (h, w) in out:
+            ck.fail(key, f"lists {h}x{w} twice")
+        out.append((h, w))
+    return tuple(out)
+
+
+def _pair(ck: _Checker, v, key: str, lo=None, hi=None) -> tuple[float, float]:
+    if not isinstance(v, list) or len(v) != 2:
+        ck.fail(key, "must be [min, max]")
+    a, b = ck.number(v[0], f"{key}[0]"), ck.number(v[1], f"{key}[1]")
+    if a > b:
+        ck.fail(key, f"min {a:g} above max {b:g}")
+    if (lo is not None and a < lo) or (hi is not None and b > hi):
+        ck.fail(key, f"must lie within [{lo:g}, {hi:g}] (got [{a:g}, {b:g}])")
+    return a, b
+
+
+def _layout(ck: _Checker, data: dict):
+    from ..sensor import get_spectra_set, list_spectra_sets
+
+    ck.table(data, "layout", {"tiles": None, "alphabet": None, "spectra_set": None, "density": None,
+                              "mirrors": None})
+    tiles = _tiles(ck, data.get("tiles"))
+    if "alphabet" not in data:
+        ck.fail("layout.alphabet", "missing (the filter letters, e.g. [\"R\", \"G\", \"B\"])")
+    alphabet = ck.string_list(data["alphabet"], "layout.alphabet")
+    if len(alphabet) < 2:
+        ck.fail("layout.alphabet", "needs at least 2 letters")
+    set_name = ck.string(data.get("spectra_set", "isetcam-rgb"), "layout.spectra_set", tuple(list_spectra_sets()))
+    sset = get_spectra_set(set_name)
+    density_in = data.get("density", {})
+    ck.table(density_in, "layout.density", {a: None for a in alphabet})
+    density = {a: _pair(ck, density_in[a], f"layout.density.{a}", 0.0, 1.0) if a in density_in else None
+               for a in alphabet}
+    for h, w in tiles:
+        n = h * w
+        lo = {a: (max(1, _ceil(d[0] * n)) if d else 1) for a, d in density.items()}
+        hi = {a: (int(d[1] * n + 1e-9) if d else n) for a, d in density.items()}
+        bad = next((a for a in alphabet if lo[a] > hi[a]), None)
+        if bad or sum(lo.values()) > n or sum(hi.values()) < n:
+            key = f"layout.density.{bad}" if bad else "layout.density"
+            ck.fail(key, f"no {h}x{w} tile meets the density bounds (each letter needs between "
+                         f"{', '.join(f'{a} {lo[a]}..{hi[a]}' for a in alphabet)} of {n} pixels)")
+    mirrors = ck.boolean(data.get("mirrors", True), "layout.mirrors")
+    return tiles, alphabet, set_name, sset, density, mirrors
+
+
+def _ceil(x: float) -> int:
+    import math
+
+    return int(math.ceil(x - 1e-9))
+
+
+def _spectra(ck: _Checker, data, alphabet, sset) -> SpectraSpec | None:
+    from ..sensor import list_spectra_sets
+
+    if data is None:
+        missing = [a for a in alphabet if a not in sset.curves]
+        if missing:
+            ck.fail("layout.alphabet", f"letter {missing[0]!r} is not a filter of spectra set {sset.name!r} "
+                                       f"(it has {', '.join(sset.letters)}); give it under [spectra]")
+        return None
+    ck.table(data, "spectra", {"family": None, "letters": None, "centre_nm": None, "width_nm": None, "peak": None,
+                               "basis": None, "weight": None})
+    family = ck.string(data.get("family", ""), "spectra.family", FAMILIES)
+    letters = ck.string_list(data.get("letters", list(alphabet)), "spectra.letters")
+    for i, a in enumerate(letters):
+        if a not in alphabet:
+            ck.fail(f"spectra.letters[{i}]", f"{a!r} is not in layout.alphabet")
+    fixed = [a for a in alphabet if a not in letters and a not in sset.curves]
+    if fixed:
+        ck.fail("spectra.letters", f"letter {fixed[0]!r} has no curve in spectra set {sset.name!r}: make it free")
+    if family == "bandpass":
+        extra = [k for k in ("basis", "weight") if k in data]
+        if extra:
+            ck.fail(f"spectra.{extra[0]}", "applies to family 'mixture' only")
+        return SpectraSpec(family, letters, _pair(ck, data.get("centre_nm", [400, 700]), "spectra.centre_nm", 350, 800),
+                           _pair(ck, data.get("width_nm", [30, 200]), "spectra.width_nm", 5, 1000),
+                           _pair(ck, data.get("peak", [0.2, 1.0]), "spectra.peak", 0.0, 1.0))
+    extra = [k for k in ("centre_nm", "width_nm", "peak") if k in data]
+    if extra:
+        ck.fail(f"spectra.{extra[0]}", "applies to family 'bandpass' only")
+    basis = ck.string(data.get("basis", sset.name), "spectra.basis", tuple(list_spectra_sets()))
+    weight = _pair(ck, data.get("weight", [0.0, 1.0]), "spectra.weight", 0.0, 10.0)
+    if weight[1] <= 0:
+        ck.fail("spectra.weight", "the largest weight must be positive")
+    return SpectraSpec(family, letters, basis=basis, weight=weight)
+
+
+def _objective(ck: _Checker, o, key: str, study, constraint: bool) -> Objective:
+    from ..metrics import METRICS, get_metric
+
+    allowed = {"metric": None, "scene": None, "luminance": None, "demosaic": None, "goal": None}
+    if constraint:
+        allowed.update(max=None, min=None)
+    ck.table(o, key, allowed)
+    known = [m for m in METRICS]
+    metric = ck.string(o.get("metric", ""), f"{key}.metric")
+    if metric not in known:
+        ck.fail(f"{key}.metric", f"unknown objective metric {metric!r} (known: {', '.join(known)})")
+    feeding = [s.name for s in study.scenes if metric in s.metrics or get_metric(metric).parent in s.metrics]
+    if not feeding:
+        ck.fail(f"{key}.metric", f"no scene of [study] feeds {metric!r}")
+    scene = ck.string(o.get("scene", feeding[0]), f"{key}.scene", tuple(feeding))
+    lum = ck.number(o.get("luminance", study.luminances[0]), f"{key}.luminance", positive=True)
+    if lum != study.luminances[0] and "scene" not in o:
+        ck.fail(f"{key}.scene", "an objective at another luminance than the first objective's must name its scene")
+    demosaic = ck.string(o.get("demosaic", study.demosaics[0]), f"{key}.demosaic", tuple(study.demosaics))
+    default_goal = "max" if get_metric(metric).higher_is_better else "min"
+    bound = None
+    if constraint:
+        if ("max" in o) == ("min" in o):
+            ck.fail(key, "give exactly one of max = ... or min = ... (a number or a named CFA of [study] cfas)")
+        side = "max" if "max" in o else "min"
+        v = o[side]
+        if isinstance(v, str):
+            if v not in study.cfas:
+                ck.fail(f"{key}.{side}", f"{v!r} is not one of [study] cfas ({', '.join(study.cfas)})")
+            bound = v
+        else:
+            bound = ck.number(v, f"{key}.{side}")
+        return Objective(metric, scene, lum, demosaic, side, bound)
+    goal = ck.string(o.get("goal", default_goal), f"{key}.goal", ("min", "max"))
+    return Objective(metric, scene, lum, demosaic, goal)
+
+
+def parse_design(data: dict, *, where: str = "design", base: Path | None = None) -> DesignConfig:
+    """Validate a design config already parsed from TOML (see :func:`load_design`)."""
+    from ..study.config import parse_config
+
+    ck = _Checker(where)
+    base = base or Path(".")
+    ck.table(data, "", {"name": None, "description": None, "seed": None, "layout": None, "spectra": None,
+                        "search": None, "objective": None, "constraint": None, "study": None, "workers": None})
+    for required in ("layout", "objective", "study"):
+        if required not in data:
+            ck.fail(required, "missing (required)")
+    name = ck.string(data.get("name", Path(where).stem), "name")
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        ck.fail("description", "must be a string")
+    seed = ck.integer(data.get("seed", 0), "seed", 0)
+    workers = data.get("workers")
+    if workers is not None:
+        workers = ck.integer(workers, "workers", 1)
+    tiles, alphabet, set_name, sset, density, mirrors = _layout(ck, ck.table(data["layout"], "layout", {
+        "tiles": None, "alphabet": None, "spectra_set": None, "density": None, "mirrors": None}))
+    spectra = _spectra(ck, data.get("spectra"), alphabet, sset)
+
+    search = data.get("search", {})
+    ck.table(search, "search", {"engine": None, "population": None, "generations": None, "full_chain": None,
+                                "agreement_sample": None, "max_exhaustive": None})
+    engine = ck.string(search.get("engine", "auto"), "search.engine", ENGINES)
+    limit = ck.integer(search.get("max_exhaustive", MAX_EXHAUSTIVE), "search.max_exhaustive", 1)
+    engines = {}
+    for h, w in tiles:
+        raw = len(alphabet) ** (h * w)
+        fits = raw <= limit and spectra is None
+        if engine == "exhaustive" and not fits:
+            why = ("continuous spectra need the stochastic engine" if spectra is not None else
+                   f"{h}x{w} tiles of {len(alphabet)} letters are {raw:.3g} raw layouts, above the exhaustive "
+                   f"limit {limit:.3g}")
+            ck.fail("search.engine", f"'exhaustive' cannot search this space: {why}; use engine = \"nsga2\" "
+                                     "(or \"auto\")")
+        engines[(h, w)] = "exhaustive" if (engine == "exhaustive" or (engine == "auto" and fits)) else "nsga2"
+    population = ck.integer(search.get("population", 40), "search.population", 4)
+    generations = ck.integer(search.get("generations", 20), "search.generations", 1)
+    full_chain = ck.integer(search.get("full_chain", 6), "search.full_chain", 1)
+    sample = ck.integer(search.get("agreement_sample", 3), "search.agreement_sample", 0)
+
+    # the study: the objectives' luminances become its luminances (scored)
+    study_in = data["study"]
+    if not isinstance(study_in, dict):
+        ck.fail("study", "must be a table")
+    if "luminances" in study_in:
+        ck.fail("study.luminances", "set by the objectives' luminance (give luminance = ... per objective)")
+    objs_in, cons_in = data["objective"], data.get("constraint", [])
+    for key, v in (("objective", objs_in), ("constraint", cons_in)):
+        if not isinstance(v, list) or (key == "objective" and not v):
+            ck.fail(key, f"must be one or more [[{key}]] tables")
+        for i, o in enumerate(v):
+            if not isinstance(o, dict):
+                ck.fail(f"{key}[{i}]", "must be a table")
+            if "luminance" in o:
+                ck.number(o["luminance"], f"{key}[{i}].luminance", positive=True)
+    # the first objective's luminance is the study's; any other (scene,
+    # luminance) an objective names is a sweep of that scene's metrics there
+    lums = [float(o.get("luminance", 100.0)) for o in [*objs_in, *cons_in]]
+    sweeps = list(study_in.get("sweep", [])) if isinstance(study_in.get("sweep", []), list) else study_in["sweep"]
+    extra: dict = {}
+    for o in [*objs_in, *cons_in]:
+        lum = float(o.get("luminance", lums[0]))
+        if lum != lums[0] and isinstance(o.get("scene"), str) and isinstance(o.get("metric"), str):
+            extra.setdefault((o["scene"], lum), []).append(o["metric"])
+    from ..metrics import METRICS
+
+    for (scene, lum), ms in extra.items():
+        fed = list(dict.fromkeys((METRICS[m].parent or m) if m in METRICS else m for m in ms))
+        sweeps.append({"scene": scene, "luminance": [lum], "metrics": fed})
+    study_data = {"name": name, "seed": seed, "cfas": ["bayer"], **study_in, "luminances": [lums[0]]}
+    if sweeps:
+        study_data["sweep"] = sweeps
+    study = parse_config(study_data, where=f"{where}: study", base=base)
+    objectives = tuple(_objective(ck, o, f"objective[{i}]", study, False) for i, o in enumerate(objs_in))
+    if len({o.label for o in objectives}) != len(objectives):
+        ck.fail("objective", "lists the same objective twice")
+    constraints = tuple(_objective(ck, o, f"constraint[{i}]", study, True) for i, o in enumerate(cons_in))
+    return DesignConfig(name=name, description=description, path=None, seed=seed, tiles=tiles, alphabet=alphabet,
+                        spectra_set=set_name, density=density, mirrors=mirrors, spectra=spectra, engine=engines,
+                        population=population, generations=generations, full_chain=full_chain,
+                        agreement_sample=sample, objectives=objectives, constraints=constraints, study=study,
+                        workers=workers)
+
+
+def load_design(path) -> DesignConfig:
+    """Read and validate a design config (TOML); a problem raises
+    :class:`~cfa_mitsuba.errors.CfaMitsubaError` naming the file and the key."""
+    p = Path(path)
+    if not p.is_file():
+        raise CfaMitsubaError(f"no such design config: {str(p)!r}")
+    try:
+        data = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise CfaMitsubaError(f"{p.name}: invalid TOML: {exc}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CfaMitsubaError(f"cannot read design config {str(p)!r}: {exc}") from None
+    return dataclasses.replace(parse_design(data, where=p.name, base=p.parent), path=str(p.resolve()))

@@ -1,0 +1,161 @@
+"""The design report's figures (matplotlib's object interface on Agg, the
+report stage's settings :data:`cfa_mitsuba.report.figure.RC`).
+
+* the Pareto front: the full chain's objectives pairwise, each CFA with
+  its 95 % intervals, named CFAs labelled;
+* the proxy space: every candidate, the chosen ones and the named CFAs;
+* the agreement: proxy score against full-chain score;
+* a CFA card: the tile drawn in its filters' colours (each letter's colour
+  is the sRGB of D65 seen through its QE curve, brightest channel at 1)
+  beside its QE curves.
+"""
+
+from __future__ import annotations
+
+__all__ = ["letter_colours", "front_figure", "proxy_figure", "agreement_figure", "card_figure"]
+
+import numpy as np
+
+from .. import spectra as _spectra
+from ..colorimetry import XYZ_TO_SRGB, linear_to_srgb
+from ..report.figure import new_figure
+
+_NAMED = ("#332288", "#CC6677", "#117733", "#DDCC77", "#88CCEE", "#882255", "#44AA99", "#999933")
+
+
+def letter_colours(cfa) -> dict:
+    """{letter: sRGB (3,) in 0..1} of a built CFA's filters (module doc)."""
+    wl = _spectra.DEFAULT_WAVELENGTHS
+    qe = cfa.sensitivities(wl)
+    light = _spectra.illuminant("D65", wl)
+    out = {}
+    for c, q in zip(cfa.channels, qe):
+        lin = XYZ_TO_SRGB @ ((q * light) @ _spectra.cmfs_xyz(wl))
+        lin = np.clip(lin, 0, None)
+        lin = lin / lin.max() if lin.max() > 0 else lin
+        out[c] = np.clip(linear_to_srgb(lin), 0, 1)
+    return out
+
+
+def _pairs(objectives):
+    n = len(objectives)
+    if n == 1:
+        return [(0, None)]
+    return [(i, j) for i in range(n) for j in range(i + 1, n)][:3]
+
+
+def front_figure(table, objectives):
+    """Each pair of objectives: every CFA run through the full chain, mean
+    and 95 % interval; Pareto candidates filled, dominated ones hollow,
+    named CFAs as labelled squares."""
+    pairs = _pairs(objectives)
+    fig = new_figure(4.4 * len(pairs) + 0.4, 4.0)
+    named = table[table["kind"] == "named"]
+    for k, (i, j) in enumerate(pairs):
+        ax = fig.add_axes((0.07 + k / len(pairs) * 0.95, 0.14, 0.95 / len(pairs) - 0.09, 0.76))
+        ox = objectives[i]
+        oy = objectives[j] if j is not None else None
+
+        def xy(rows):
+            x = rows[ox.label].to_numpy(float)
+            xe = np.abs(np.stack([x - rows[f"{ox.label} low"], rows[f"{ox.label} high"] - x]))
+            if oy is None:
+                return x, np.zeros_like(x), xe, None
+            y = rows[oy.label].to_numpy(float)
+            ye = np.abs(np.stack([y - rows[f"{oy.label} low"], rows[f"{oy.label} high"] - y]))
+            return x, y, xe, ye
+
+        for sel, style in ((table[(table["kind"] == "candidate") & ~table["pareto"]],
+                            dict(fmt="o", color="#999999", mfc="white", label="candidate (dominated or infeasible)")),
+                           (table[table["pareto"]], dict(fmt="*", color="#CC3311", ms=10, label="Pareto candidate"))):
+            if len(sel):
+                x, y, xe, ye = xy(sel)
+                ax.errorbar(x, y, xerr=xe, yerr=ye, linestyle="none", capsize=2, **style)
+        for n, (_, r) in enumerate(named.iterrows()):
+            x, y, xe, ye = xy(named.loc[[_]])
+            ax.errorbar(x, y, xerr=xe, yerr=ye, fmt="s", color=_NAMED[n % len(_NAMED)], capsize=2, ms=7)
+            ax.annotate(r["cfa"], (x[0], y[0]), textcoords="offset points", xytext=(5, 5), fontsize=8,
+                        color=_NAMED[n % len(_NAMED)])
+        ax.set_xlabel(f"{ox.label} ({'lower' if ox.goal == 'min' else 'higher'} is better)", fontsize=8)
+        if oy is not None:
+            ax.set_ylabel(f"{oy.label} ({'lower' if oy.goal == 'min' else 'higher'} is better)", fontsize=8)
+        else:
+            ax.set_yticks([])
+        if k == 0:
+            ax.legend(loc="best", fontsize=7)
+    return fig
+
+
+def proxy_figure(cands, named_proxies):
+    """aliasing against noise for every candidate (colour: the colour proxy
+    when it varies), the chosen ones ringed, the named CFAs as squares."""
+    fig = new_figure(6.4, 4.4)
+    ax = fig.add_axes((0.12, 0.12, 0.72, 0.8))
+    c = cands["colour"].to_numpy(float)
+    varies = np.ptp(c) > 1e-9
+    kw = dict(c=c, cmap="viridis") if varies else dict(color="#88CCEE")
+    sc = ax.scatter(cands["aliasing"], cands["noise"], s=4, alpha=0.6, rasterized=True,
+                    label=f"{len(cands):,} candidates", **kw)
+    if varies:
+        cb = fig.colorbar(sc, cax=fig.add_axes((0.86, 0.12, 0.025, 0.8)))
+        cb.set_label("colour proxy (training-fit ΔE00)")
+    for kind, mk, col in (("best", "o", "#CC3311"), ("sample", "o", "#222222")):
+        sel = cands[cands["chosen"] == kind]
+        ax.scatter(sel["aliasing"], sel["noise"], s=40, facecolors="none", edgecolors=col, linewidths=1.2,
+                   label=f"full chain: {'best by proxy' if kind == 'best' else 'agreement sample'}")
+    for n, (name, p) in enumerate(named_proxies.items()):
+        ax.scatter([p["aliasing"]], [p["noise"]], marker="s", s=40, color=_NAMED[n % len(_NAMED)])
+        ax.annotate(name, (p["aliasing"], p["noise"]), textcoords="offset points", xytext=(4, 4), fontsize=8)
+    ax.set_xlabel("aliasing proxy (carrier crosstalk + channel sampling; lower is better)")
+    ax.set_ylabel("noise proxy (relative luminance noise; lower is better)")
+    ax.legend(loc="best", fontsize=7)
+    return fig
+
+
+def agreement_figure(table, agree):
+    fig = new_figure(4.6, 3.8)
+    ax = fig.add_axes((0.16, 0.14, 0.78, 0.74))
+    cand = table[table["kind"] == "candidate"]
+    for kind, col in (("best", "#CC3311"), ("sample", "#222222")):
+        sel = cand[cand["chosen"] == kind]
+        ax.scatter(sel["proxy_score"], sel["score"], color=col, s=25, label=kind)
+    ax.set_xlabel("proxy score (lower is better)")
+    ax.set_ylabel("full-chain score (higher is better)")
+    rho = agree.get("combined")
+    ax.set_title("Spearman " + ("n/a" if rho is None else f"{-rho:+.2f} (proxy vs full chain, sign: lower-better)"),
+                 fontsize=8)
+    ax.legend(fontsize=7)
+    return fig
+
+
+def card_figure(cfa, title: str):
+    """The tile in its filters' colours, letters written in, beside the QE curves."""
+    colours = letter_colours(cfa)
+    fig = new_figure(6.2, 2.4)
+    h, w = cfa.tile_shape
+    side = 1.9
+    ax = fig.add_axes((0.02, 0.08, side * min(1, w / h) / 6.2, side * min(1, h / w) / 2.4))
+    img = np.array([[colours[c] for c in row] for row in cfa.pattern])
+    ax.imshow(img, interpolation="nearest")
+    for r in range(h):
+        for c in range(w):
+            lum = float(img[r, c] @ [0.2126, 0.7152, 0.0722])
+            ax.text(c, r, cfa.pattern[r, c], ha="center", va="center", fontsize=9 if max(h, w) <= 4 else 6,
+                    color="black" if lum > 0.5 else "white")
+    ax.set_xticks(np.arange(-0.5, w, 1), minor=True)
+    ax.set_yticks(np.arange(-0.5, h, 1), minor=True)
+    ax.grid(which="minor", color="white", linewidth=1.0)
+    ax.grid(which="major", visible=False)
+    ax.tick_params(which="both", length=0, labelbottom=False, labelleft=False)
+    ax.set_title(title, fontsize=8, loc="left")
+    sx = fig.add_axes((0.43, 0.2, 0.54, 0.7))
+    wl = _spectra.DEFAULT_WAVELENGTHS
+    for c, q in zip(cfa.channels, cfa.sensitivities(wl)):
+        col = colours[c] * 0.85
+        sx.plot(wl, q, color=col, label=c, linewidth=1.6)
+    sx.set_xlabel("wavelength (nm)", fontsize=8)
+    sx.set_ylabel("QE (e⁻/photon)", fontsize=8)
+    sx.set_xlim(400, 700)
+    sx.set_ylim(bottom=0)
+    sx.legend(fontsize=7, ncol=min(4, len(cfa.channels)))
+    return fig

@@ -1,0 +1,139 @@
+"""design.html: the Pareto front against the named CFAs, the proxy space,
+the proxy's agreement with the full chain, a card (tile in colour, QE
+curves) per Pareto candidate, and the side-by-side of Bayer, the best
+named CFA and the best candidates with their camera outputs.  Figures are
+written under ``figures/`` (PNG) and linked from the page."""
+
+from __future__ import annotations
+
+__all__ = ["build_design_report"]
+
+import html
+from pathlib import Path
+
+import numpy as np
+
+from ..io import atomic_output
+from ..report.figure import RC, figure_bytes
+from . import figures as F
+
+_CSS = """body{font:14px/1.5 'DejaVu Sans',Helvetica,Arial,sans-serif;color:#1f2328;margin:0 28px 40px;max-width:1400px}
+h1{font-size:22px}h2{font-size:18px;border-bottom:1px solid #d0d7de;margin-top:30px}
+table{border-collapse:collapse;font-size:12px;margin:8px 0}td,th{border:1px solid #d0d7de;padding:3px 7px;
+text-align:right}th{background:#f6f8fa}td.l{text-align:left;font-family:monospace}
+.note{color:#59636e}.side{display:flex;flex-wrap:wrap;gap:14px}.side div{border:1px solid #d0d7de;padding:6px}
+tr.front td{background:#fff4e5}img{max-width:100%}"""
+
+
+def _save(out: Path, key: str, fig) -> str:
+    import matplotlib as mpl
+
+    with mpl.rc_context(RC):
+        data = figure_bytes(fig, "png")
+    path = out / "figures" / f"{key}.png"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_output(path) as tmp:
+        tmp.write_bytes(data)
+    return f"figures/{key}.png"
+
+
+def _e(x) -> str:
+    return html.escape(str(x))
+
+
+def _fmt(v, lo, hi) -> str:
+    if not np.isfinite(v):
+        return "—"
+    return f"{v:.4g} <span class=note>[{lo:.4g}, {hi:.4g}]</span>"
+
+
+def _values_table(table, objectives, constraints) -> str:
+    cols = [*objectives, *constraints]
+    head = "".join(f"<th>{_e(o.label)}{' (constraint)' if o in constraints else ''}</th>" for o in cols)
+    rows = []
+    order = table.sort_values(["kind", "score"], ascending=[False, False])
+    for _, r in order.iterrows():
+        cls = " class=front" if r["pareto"] else ""
+        cells = "".join(f"<td>{_fmt(r[o.label], r[f'{o.label} low'], r[f'{o.label} high'])}</td>" for o in cols)
+        rows.append(f"<tr{cls}><td class=l>{_e(r['cfa'])}</td><td>{_e(r['kind'])}</td><td class=l>"
+                    f"{_e(r['tile_text'])}</td>{cells}<td>{r['score']:.3f}</td><td class=l>"
+                    f"{_e(r['dominated_by'] or ('Pareto' if r['pareto'] else ''))}</td></tr>")
+    return (f"<table><tr><th>CFA</th><th>kind</th><th>tile</th>{head}<th>score</th><th>dominated by</th></tr>"
+            + "".join(rows) + "</table>")
+
+
+def _thumb(study_dir: Path, out: Path, config, label: str) -> str:
+    """The camera output of ``label`` on the first natural scene (or the first
+    scene) at the first objective's luminance and demosaic, if the study kept it."""
+    from ..study.tasks import safe_label
+
+    o = config.objectives[0]
+    scenes = [s.name for s in config.study.scenes if "ssim" in s.metrics] or [o.scene]
+    p = study_dir / "details" / scenes[0] / safe_label(label) / o.demosaic / f"L{o.luminance:g}.png"
+    if not p.exists():
+        return ""
+    return f"<br><img src='{_e(p.relative_to(out))}' style='width:300px' alt='camera output'>"
+
+
+def build_design_report(out: Path, config, cands, table, agree, named_proxies, study_dir) -> Path:
+    """Write ``out/design.html`` and its figures; returns the page's path."""
+    from ..sensor import get_cfa
+
+    objectives, constraints = list(config.objectives), list(config.constraints)
+    figs = {
+        "front": _save(out, "front", F.front_figure(table, objectives)),
+        "proxy": _save(out, "proxy", F.proxy_figure(cands, named_proxies)),
+        "agreement": _save(out, "agreement", F.agreement_figure(table, agree)),
+    }
+    named = table[table["kind"] == "named"].sort_values("score", ascending=False)
+    pareto = table[table["pareto"]].sort_values("score", ascending=False)
+    side = []
+    show = []
+    if "bayer" in set(named["cfa"]):
+        show.append(("bayer", get_cfa("bayer")))
+    best_named = next((c for c in named["cfa"] if c != "bayer"), None)
+    if best_named is not None:
+        spec = next(c for c in config.study.cfas if get_cfa(c).name == best_named)
+        show.append((f"best named: {best_named}", get_cfa(spec)))
+    for _, r in pareto.head(4).iterrows():
+        show.append((r["cfa"], get_cfa(r["toml"])))
+    for title, cfa in show:
+        key = "card-" + "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in cfa.name)
+        src = _save(out, key, F.card_figure(cfa, title))
+        row = table[table["cfa"] == cfa.name]
+        vals = ""
+        if len(row):
+            r = row.iloc[0]
+            vals = "<br>".join(f"{_e(o.label)}: {_fmt(r[o.label], r[f'{o.label} low'], r[f'{o.label} high'])}"
+                               for o in objectives)
+        side.append(f"<div><img src='{src}' style='width:460px'><br><b>{_e(title)}</b> "
+                    f"<span class=note>{_e(cfa.tile_text())}</span><br>{vals}"
+                    f"{_thumb(Path(study_dir), out, config, cfa.name)}</div>")
+    rho = agree.get("combined")
+    per = agree.get("per_objective", {})
+    agree_txt = ("not measured (fewer than 3 candidates)" if rho is None else
+                 f"Spearman {rho:+.2f} over {agree['n']} candidates (combined scores; +1: the proxy orders them as "
+                 "the full chain does); per objective: "
+                 + ", ".join(f"{_e(k)} {('n/a' if v is None else f'{v:+.2f}')}" for k, v in per.items()))
+    n_best = int((cands["chosen"] == "best").sum())
+    page = f"""<!doctype html><html><head><meta charset=utf-8><title>design {_e(config.name)}</title>
+<style>{_CSS}</style></head><body>
+<h1>CFA design: {_e(config.name)}</h1><p class=note>{_e(config.description)}</p>
+<p>{len(cands):,} candidate layouts ({', '.join(f'{h}x{w} by {config.engine[(h, w)]}' for h, w in config.tiles)};
+alphabet {' '.join(config.alphabet)}, spectra {_e(config.spectra_set)}{'; ' + _e(config.spectra.family) + ' filters for '
+ + ' '.join(config.spectra.letters) if config.spectra else ''}) ranked by the proxy; the {n_best} best and
+{int((cands['chosen'] == 'sample').sum())} sampled ones through the full chain with {', '.join(map(_e, named['cfa']))},
+{config.study.seeds} noise realisations each (95 % intervals). <b>{len(pareto)}</b> Pareto candidate(s).</p>
+<h2>Pareto front against the named CFAs</h2><img src='{figs['front']}'>
+<p class=note>A CFA is dominated when another CFA's interval is wholly better on one objective and wholly worse
+on none; the front is the feasible candidates nobody dominates so.</p>
+{_values_table(table, objectives, constraints)}
+<h2>Side by side: Bayer, the best named CFA, the best Pareto candidates</h2><div class=side>{''.join(side)}</div>
+<h2>The proxy</h2><img src='{figs['proxy']}' style='width:640px'>
+<h2>Proxy against full chain</h2><p>{agree_txt}</p><img src='{figs['agreement']}' style='width:460px'>
+<p class=note>Files: candidates.csv, fullchain.csv, pareto.csv, cfas/*.toml, agreement.json, study/.</p>
+</body></html>"""
+    path = out / "design.html"
+    with atomic_output(path) as tmp:
+        tmp.write_text(page)
+    return path
