@@ -163,9 +163,9 @@ def smooth_noise(shape, scale: float, seed: int) -> np.ndarray:
 
 
 def fur_strands(size: int, n_strands: int, length: tuple[float, float], angle_deg: float, seed: int,
-                density=None) -> np.ndarray:
+                density=None, width: int = 1) -> np.ndarray:
     """Count of hair strands per texel on a tileable ``size`` x ``size``
-    tile: straight strands one texel wide, lengths uniform in ``length``
+    tile: straight strands ``width`` texels wide, lengths uniform in ``length``
     (texels), running along the rows' direction (down the tile) within
     +-``angle_deg``, start points drawn with probability ``density`` (a
     (size, size) map; uniform if None)."""
@@ -187,8 +187,8 @@ def fur_strands(size: int, n_strands: int, length: tuple[float, float], angle_de
     idx = rows * size + cols
     keep = np.ones(idx.shape, dtype=bool)
     keep[:, 1:] = idx[:, 1:] != idx[:, :-1]
-    counts = np.bincount(idx[keep], minlength=size * size)
-    return counts.reshape(size, size).astype(np.float32)
+    counts = np.bincount(idx[keep], minlength=size * size).reshape(size, size)
+    return sum(np.roll(counts, k, axis=1) for k in range(int(width))).astype(np.float32)
 
 
 def plain_weave(threads_per_tile: int, thread: int, colours_warp, colours_weft) -> tuple[np.ndarray, np.ndarray]:

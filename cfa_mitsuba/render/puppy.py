@@ -165,7 +165,8 @@ _OBJECTS = (
     {"name": "card posts", "shape": "cylinders", "reflectance": "neutral 5 (.70 D)", "depth_m": 1.25},
     {"name": "table", "shape": "rectangle", "reflectance": "light skin", "texture": "tablecloth",
      "depth_m": "0.75 to 3.25"},
-    {"name": "backdrop", "shape": "rectangle", "reflectance": "neutral 6.5 (.44 D)", "depth_m": 3.0},
+    {"name": "backdrop", "shape": "rectangle", "reflectance": "neutral 6.5 (.44 D)", "texture": "wallpaper",
+     "depth_m": 3.0},
 )
 
 
@@ -234,7 +235,8 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
         # several depths.
         "table": {"type": "rectangle", "bsdf": tex.tablecloth().bsdf(mi, config, uv_scale=_CLOTH_REPEATS),
                   "to_world": T().translate([0.0, _TABLE_Y, -2.0]).rotate([1, 0, 0], -90).scale([1.0, 1.25, 1.0])},
-        "backdrop": panel((0.0, 0.0, -3.0), (2.0, 0.75), 0.0, _lambert(config, "neutral 6.5 (.44 D)")),
+        "backdrop": panel((0.0, 0.0, -3.0), (2.0, 0.75), 0.0,
+                          tex.wallpaper().bsdf(mi, config, uv_scale=(4.0 / 0.048, 1.5 / 0.048))),
         "panel_yellow": panel((-0.115, 0.115, -2.2), (0.075, 0.055), 20.0, _lambert(config, "yellow")),
         "panel_orange_yellow": panel((-0.045, 0.165, -2.5), (0.06, 0.045), -10.0, _lambert(config, "orange yellow")),
         "panel_blue_green": panel((0.035, 0.13, -2.7), (0.085, 0.055), 0.0, _lambert(config, "bluish green")),

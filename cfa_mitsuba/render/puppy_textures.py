@@ -6,11 +6,16 @@ pixel is 0.29 mm on the dog (1.2 m) and the sensor's Nyquist period is two
 pixels, 0.58 mm; at the quick study's 240 x 212 a pixel is 0.88 mm.
 
 - ``fur`` (dog's body, head, legs, tail): a 1024-texel tile of 0.1 mm
-  texels, 'red' with one-texel hair strands 6-30 texels long running down
-  the body, dark ('black 2 (1.5 D)', in patches a few mm across and locks
-  of about 1 mm: smooth noise) and light ('orange', between the patches).
+  texels, 'red' with hair strands two texels wide and 10-40 long running
+  down the body, dark ('black 2 (1.5 D)': in wavy tabby bands 6.4 mm apart,
+  patches a few mm across and locks of about 1 mm, from smooth noise) and
+  light ('light skin', between the bands).  Luminance contrast, not only
+  red-black chroma: a red surface alone leaves the green pixels dark and
+  noisy, where bilinear's smoothing wins every image metric.
 - ``fur_brown`` (ears, snout): the same construction on 'dark skin' with
   'black 2 (1.5 D)' and 'light skin' strands.
+- ``wallpaper`` (backdrop, 3 m): grey discs 16 mm across and dark lines on
+  'neutral 6.5 (.44 D)' (0.25 mm texels; defocused by the thin lens).
 - ``tablecloth``: a plain-weave gingham of 1-mm threads, 'light skin' and
   'purplish blue' in bands of 6 threads (a 12 mm tile), the grooves between
   threads mixed with 'neutral 5 (.70 D)'.  Seen at a grazing angle, its
@@ -55,8 +60,14 @@ def _fur_weights(seed: int) -> np.ndarray:
     n = _FUR_SIZE
     patches = P.smooth_noise((n, n), 40.0, seed)  # darker patches, ~4 mm
     locks = P.smooth_noise((n, n), 8.0, seed + 3)  # locks of hair, ~1 mm
-    dark = P.fur_strands(n, 40000, (6.0, 30.0), 12.0, seed + 1, density=0.01 + patches ** 3 * (0.2 + locks ** 2))
-    light = P.fur_strands(n, 24000, (6.0, 24.0), 12.0, seed + 2, density=0.05 + (1.0 - patches) ** 3 * locks ** 2)
+    # Tabby stripes: wavy dark bands along the strands, 64 texels (6.4 mm) apart.
+    warp = P.smooth_noise((n, n), 24.0, seed + 4)
+    cols = np.arange(n)[None, :] / 64.0
+    stripes = (0.5 + 0.5 * np.sin(2 * np.pi * (cols + 1.5 * warp))) ** 4
+    dark = P.fur_strands(n, 30000, (10.0, 40.0), 12.0, seed + 1,
+                         density=0.01 + (0.3 * patches ** 3 + stripes) * (0.2 + locks ** 2), width=2)
+    light = P.fur_strands(n, 12000, (10.0, 30.0), 12.0, seed + 2, density=0.05 + (1.0 - stripes) * locks ** 2,
+                          width=2)
     w_dark = np.minimum(0.85, 0.6 * dark)
     w_light = np.minimum(0.7, 0.5 * light) * (1.0 - w_dark)
     return np.stack([1.0 - w_dark - w_light, w_dark, w_light], axis=-1).astype(np.float32)
@@ -64,7 +75,7 @@ def _fur_weights(seed: int) -> np.ndarray:
 
 @functools.lru_cache(maxsize=1)
 def fur() -> SpectralTexture:
-    return SpectralTexture("fur: red with black and orange hair strands", ("red", _BLACK, "orange"),
+    return SpectralTexture("fur: red with black and light hair strands, tabby bands", ("red", _BLACK, "light skin"),
                            _fur_weights(11), _FUR_TEXEL)
 
 
@@ -160,6 +171,26 @@ def colour_print() -> SpectralTexture:
 
 
 @functools.lru_cache(maxsize=1)
+def wallpaper() -> SpectralTexture:
+    """Grey wallpaper: light discs 16 mm across on a 24 mm grid, offset
+    every other row, and dark lines 1 mm wide between the rows (a 48 mm
+    tile of 0.25 mm texels)."""
+    n = 192
+    y, x = np.mgrid[0:n, 0:n] + 0.5
+    d = np.full((n, n), np.inf)
+    for cy, cx in ((24, 24), (24, 120), (120, 72), (120, 168), (120, -24), (216, 24), (216, 120), (24, 216),
+                   (216, 216)):
+        d = np.minimum(d, np.hypot(y - cy, x - cx))
+    c = P.Canvas(n, n, 3)
+    c.paint((d < 32).astype(np.float32), 1)
+    lines = np.zeros((n, n), np.float32)
+    lines[70:74] = lines[166:170] = 1.0
+    c.paint(lines, 2)
+    return SpectralTexture("wallpaper: light discs and dark lines on grey",
+                           ("neutral 6.5 (.44 D)", "neutral 8 (.23 D)", "neutral 3.5 (1.05 D)"), c.weights, 2.5e-4)
+
+
+@functools.lru_cache(maxsize=1)
 def toy_block() -> SpectralTexture:
     """A letter block's face: a yellow letter in a yellow frame on blue
     (Mitsuba's cube repeats a face's uv square on every face)."""
@@ -174,4 +205,4 @@ def toy_block() -> SpectralTexture:
 def all_textures() -> dict[str, SpectralTexture]:
     """Every puppy texture by name."""
     return {"fur": fur(), "fur_brown": fur_brown(), "tablecloth": tablecloth(), "chart": chart(),
-            "colour_print": colour_print(), "toy_block": toy_block()}
+            "colour_print": colour_print(), "toy_block": toy_block(), "wallpaper": wallpaper()}
