@@ -10,28 +10,30 @@ upsampled (Mitsuba's ``bitmap`` texture evaluates 3-channel data as RGB,
 turned into a smooth Jakob-Hanika spectrum; research/mitsuba-spectral.md
 s. 4).
 
-How Mitsuba evaluates it, exactly and with stock plugins only: the texture
-becomes a chain of ``blendbsdf`` nodes (stick-breaking: node k mixes the
-Lambertian BSDF of palette spectrum k with the rest of the chain, with the
-1-channel weight map ``1 - w_k / (w_k + ... + w_K-1)``, a ``bitmap`` with
-``raw`` values and ``nearest`` lookup).  A ``blendbsdf`` evaluates
-``(1 - t) f_0 + t f_1``, so the chain's value is ``sum_k w_k rho_k / pi``:
-linear in the weights, exactly the texel's mixed reflectance, at whatever
-wavelengths ``si.wavelengths`` holds.  That is what keeps it spectral with
-the project's integrator (:mod:`.integrator`), which evaluates every BSDF
-band group by band group through ``si.wavelengths``: each palette spectrum
-is a band spectrum (:func:`.light.band_spectrum`), and the weights do not
-depend on wavelength.  It also works unchanged in ``scalar_spectral``
-(stock C++ plugins, no Python per lookup).  Sampling picks one node by its
-weight and returns that spectrum's albedo as the path throughput: unbiased,
-with a little extra noise in the indirect light only (direct light uses
-the evaluated mix).
+How Mitsuba evaluates it, exactly, at whatever wavelengths
+``si.wavelengths`` holds (the project's integrator, :mod:`.integrator`,
+evaluates every BSDF band group by band group through that slot):
 
-Alternatives measured or considered (docs/scenes.md, "Spectral textures"):
-a Python ``mi.Texture`` subclass with an index map is as exact, but runs
-Python per lookup in ``scalar_spectral`` (about 80 us each); a 3-channel
-bitmap per band group cannot be read as 4 band values, since a spectral
-variant upsamples 3 channels as RGB.
+- JIT variants: a Lambertian BSDF whose reflectance is a small Python
+  ``mi.Texture`` (:func:`mix_texture_class`): the nearest texel's K weights
+  (one gather each) times each palette spectrum's value in the band of each
+  of the 4 wavelengths (one gather each from a (K, B) table).  The kernel
+  compiles in 1.5-4 s for the puppy and a lookup costs a few gathers.
+- ``scalar_spectral`` (stock C++ plugins only; a Python texture there runs
+  Python per lookup, about 80 us): a chain of ``blendbsdf`` nodes
+  (stick-breaking: node k mixes the Lambertian BSDF of palette spectrum k
+  with the rest of the chain, with the 1-channel weight map ``1 - w_k /
+  (w_k + ... + w_K-1)``, a ``bitmap`` with ``raw`` values and ``nearest``
+  lookup).  ``blendbsdf`` evaluates ``(1 - t) f_0 + t f_1``, so the
+  chain's value is ``sum_k w_k rho_k / pi``.  Sampling picks one node by
+  its weight: unbiased, a little extra noise in indirect light only.  The
+  same chain in the JIT variants compiled for 26-38 s (each distinct BSDF
+  is traced into each of the integrator's 8 band-group BSDF calls), and
+  a Python texture calling K ``regular`` spectrum plugins for 10-12 s.
+
+A 3-channel bitmap per band group would not do: a spectral variant reads 3
+channels as sRGB and upsamples them.  Measurements: docs/scenes.md,
+"Textures".
 
 Texel orientation: ``weights[r, c]`` sits at uv ((c + 0.5) / W, (r + 0.5) /
 H), i.e. row r at v = (r + 0.5) / H (Mitsuba's bitmap convention, checked in
