@@ -1,12 +1,17 @@
 """``puppy``: a 3D scene in the spirit of the paper's PUPPY.
 
-A toy dog built from shapes (a red body, brown ears and snout, black nose
-and eye) stands on a beige table in front of a grey backdrop, with yellow
+A toy dog built from shapes (a red furry body, brown furry ears and snout,
+black nose and eye) stands on a table with a gingham cloth in front of a
+grey backdrop, with two printed cards on posts just behind it (a black and
+white test chart at the right, a colour print at the upper left), yellow
 panels at the upper left, a blue-green panel at the upper centre, a blue
 block in the near foreground at the lower right and more objects at several
 depths (0.9 to 3 m).  Every surface is Lambertian with a measured
 reflectance from colour-science's 'ColorChecker N Ohta' set, constant inside
-each band at its band mean (see :mod:`.light`).  Light: one 0.6 m square
+each band at its band mean (see :mod:`.light`); the fur, the cloth and the
+cards are spectral textures (:mod:`.texture`, :mod:`.puppy_textures`):
+per-texel mixes of a few of those reflectances, with detail from a few
+centimetres down to well below a pixel (the sensor's Nyquist).  Light: one 0.6 m square
 D65 area light (band-constant D65) up and to the left of the camera, aimed
 at the dog; the shadows are filled by the light the table and the backdrop
 reflect.  Path tracing with two bounces (:data:`MAX_DEPTH` = 3: direct light
@@ -22,7 +27,10 @@ moves the *differences* between CFAs by up to 15 % of their spread (MDSI at
 full size); 256 spp brings that to about 6 % for 2.6x the render time
 (measured at 256 spp, 636 x 720: 0.36 % luminance noise, 160 s per render)
 (about 2.8 us of CPU per sample: some 330 CPU seconds at 636 x 720, paid
-once per study because renders are cached).  (A uniform D65 sky as extra
+once per study because renders are cached).  With the textures (issue 13):
+0.76 % median luminance noise at 720 x 636 and 256 spp (a pixel's samples
+also integrate sub-pixel texture now) and 131-132 s per render on a busy
+2-core machine.  (A uniform D65 sky as extra
 fill cost 35 % more per sample and raised the noise; a second area light as
 fill raised the noise too.)
 
@@ -56,6 +64,7 @@ import math
 import numpy as np
 
 from .. import spectra
+from . import puppy_textures as tex
 from .light import band_spectrum, d65_white_radiance
 from .types import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene
 
@@ -69,6 +78,14 @@ FOCAL_LENGTH_M = 0.5 * 720 * 2.2e-6 / math.tan(math.radians(5.0))
 MAX_DEPTH = 3
 _TABLE_Y = -0.07  # table top height (m); the camera's axis is y = 0
 _DOG_Z = -FOCUS_DISTANCE_M
+# The cards: centres and half sizes (m); the chart's texture is 1136 x 1008
+# texels of 0.075 mm, the colour print's 1072 x 672.
+_CHART_CENTRE, _CHART_HALF = (0.0585, 0.047, -1.24), (0.0426, 0.0378)
+_PRINT_CENTRE, _PRINT_HALF = (-0.064, 0.066, -1.26), (0.0402, 0.0252)
+# Fur tile repeats (around, along) on the body and head, and on the thin parts.
+_FUR_BODY, _FUR_THIN = (2.0, 1.0), (1.0, 0.5)
+# The gingham tile (12 mm) repeated over the 2 x 2.5 m table.
+_CLOTH_REPEATS = (2.0 / 0.012, 2.5 / 0.012)
 
 
 def _lambert(config: RenderConfig, name: str) -> dict:
@@ -77,28 +94,34 @@ def _lambert(config: RenderConfig, name: str) -> dict:
 
 
 def _unit_sphere(n_lon: int = 48, n_lat: int = 24):
-    """Vertices (= normals) and triangles of a UV sphere of radius 1."""
+    """Vertices (= normals), texture coordinates and triangles of a UV
+    sphere of radius 1 about the y axis: u = longitude / 2 pi, v = polar
+    angle from +y / pi (the seam and the poles have their own vertices, so
+    that uv never wraps inside a triangle)."""
     theta = np.linspace(0.0, np.pi, n_lat + 1)[:, None]
-    phi = np.linspace(0.0, 2 * np.pi, n_lon + 1)[None, :-1]
+    phi = np.linspace(0.0, 2 * np.pi, n_lon + 1)[None, :]
     v = np.stack(np.broadcast_arrays(np.sin(theta) * np.cos(phi), np.cos(theta) + 0 * phi,
                                      np.sin(theta) * np.sin(phi)), axis=-1).reshape(-1, 3)
+    uv = np.stack(np.broadcast_arrays(phi / (2 * np.pi), theta / np.pi), axis=-1).reshape(-1, 2)
     faces = []
+    cols = n_lon + 1
     for i in range(n_lat):
         for j in range(n_lon):
-            a, b = i * n_lon + j, i * n_lon + (j + 1) % n_lon
-            c, d = a + n_lon, b + n_lon
+            a, b = i * cols + j, i * cols + j + 1
+            c, d = a + cols, b + cols
             # Counter-clockwise seen from outside (normal = d phi x d theta).
             if i > 0:
                 faces.append((a, b, c))
             if i < n_lat - 1:
                 faces.append((b, d, c))
-    return v, np.array(faces, dtype=np.uint32)
+    return v, uv, np.array(faces, dtype=np.uint32)
 
 
 def _ellipsoid(mi, name, center, radii, bsdf, yaw_deg=0.0, roll_deg=0.0):
-    """A smooth triangle-mesh ellipsoid (Mitsuba's sphere allows only
-    uniform scale), rotated by ``roll`` about z then ``yaw`` about y."""
-    v, f = _unit_sphere()
+    """A smooth triangle-mesh ellipsoid with texture coordinates (Mitsuba's
+    sphere allows only uniform scale), rotated by ``roll`` about z then
+    ``yaw`` about y."""
+    v, uv, f = _unit_sphere()
     r = np.asarray(radii, dtype=np.float64)
     cz, sz = math.cos(math.radians(roll_deg)), math.sin(math.radians(roll_deg))
     cy, sy = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
@@ -107,12 +130,13 @@ def _ellipsoid(mi, name, center, radii, bsdf, yaw_deg=0.0, roll_deg=0.0):
     nrm = (v / r) @ rot.T  # normals transform with the inverse transpose
     nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
     props = mi.Properties()
-    props["bsdf"] = mi.load_dict(bsdf)
-    mesh = mi.Mesh(name, len(pos), len(f), props=props, has_vertex_normals=True)
+    props["bsdf"] = bsdf if isinstance(bsdf, mi.BSDF) else mi.load_dict(bsdf)
+    mesh = mi.Mesh(name, len(pos), len(f), props=props, has_vertex_normals=True, has_vertex_texcoords=True)
     params = mi.traverse(mesh)
     vt, ft = type(params["vertex_positions"]), type(params["faces"])
     params["vertex_positions"] = vt(pos.astype(np.float32).ravel())
     params["vertex_normals"] = vt(nrm.astype(np.float32).ravel())
+    params["vertex_texcoords"] = type(params["vertex_texcoords"])(uv.astype(np.float32).ravel())
     params["faces"] = ft(f.ravel())
     params.update()
     return mesh
@@ -125,18 +149,27 @@ def objects() -> list[dict]:
 
 
 _OBJECTS = (
-    {"name": "dog body, head, legs, tail", "shape": "ellipsoids, sphere, cylinders", "reflectance": "red", "depth_m": 1.2},
-    {"name": "dog ears and snout", "shape": "ellipsoids", "reflectance": "dark skin", "depth_m": 1.2},
+    {"name": "dog body, head, legs, tail", "shape": "ellipsoids, sphere, cylinders", "reflectance": "red",
+     "texture": "fur", "depth_m": 1.2},
+    {"name": "dog ears and snout", "shape": "ellipsoids", "reflectance": "dark skin", "texture": "fur_brown",
+     "depth_m": 1.2},
     {"name": "dog nose and eye", "shape": "spheres", "reflectance": "black 2 (1.5 D)", "depth_m": 1.18},
-    {"name": "blue block", "shape": "cube", "reflectance": "blue", "depth_m": 0.88},
+    {"name": "blue letter block", "shape": "cube", "reflectance": "blue", "texture": "toy_block", "depth_m": 0.88},
     {"name": "yellow-green ball", "shape": "sphere", "reflectance": "yellow green", "depth_m": 1.55},
     {"name": "magenta post", "shape": "cylinder", "reflectance": "magenta", "depth_m": 1.8},
     {"name": "yellow panel", "shape": "rectangle", "reflectance": "yellow", "depth_m": 2.2},
     {"name": "orange-yellow panel", "shape": "rectangle", "reflectance": "orange yellow", "depth_m": 2.5},
     {"name": "grey ball", "shape": "sphere", "reflectance": "neutral 8 (.23 D)", "depth_m": 2.4},
     {"name": "blue-green panel", "shape": "rectangle", "reflectance": "bluish green", "depth_m": 2.7},
-    {"name": "table", "shape": "rectangle", "reflectance": "light skin", "depth_m": "0.75 to 3.25"},
-    {"name": "backdrop", "shape": "rectangle", "reflectance": "neutral 6.5 (.44 D)", "depth_m": 3.0},
+    {"name": "test chart card on a post", "shape": "rectangle", "reflectance": "white 9.5 (.05 D)",
+     "texture": "chart", "depth_m": 1.24},
+    {"name": "colour print card on a post", "shape": "rectangle", "reflectance": "white 9.5 (.05 D)",
+     "texture": "colour_print", "depth_m": 1.26},
+    {"name": "card posts", "shape": "cylinders", "reflectance": "neutral 5 (.70 D)", "depth_m": 1.25},
+    {"name": "table", "shape": "rectangle", "reflectance": "light skin", "texture": "tablecloth",
+     "depth_m": "0.75 to 3.25"},
+    {"name": "backdrop", "shape": "rectangle", "reflectance": "neutral 6.5 (.44 D)", "texture": "wallpaper",
+     "depth_m": 3.0},
 )
 
 
@@ -146,9 +179,22 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
     T = mi.ScalarTransform4f
     wl = config.wl
     white = d65_white_radiance(wl)
-    red, brown, black = (_lambert(config, n) for n in ("red", "dark skin", "black 2 (1.5 D)"))
+    black = _lambert(config, "black 2 (1.5 D)")
+    fur, fur_brown = tex.fur(), tex.fur_brown()
     z = _DOG_Z
     body_y = _TABLE_Y + 0.052
+
+    # Fur BSDFs are shared between parts (each distinct BSDF adds code to
+    # every BSDF call of the JIT kernel: compile time): one scale for the
+    # body and head (texels 0.08-0.12 mm), one for the thin parts (legs,
+    # tail, snout, ears: 0.02-0.1 mm).
+    shared = {}
+
+    def furry(texture, scale):
+        key = (texture.name, scale)
+        if key not in shared:
+            shared[key] = mi.load_dict(texture.bsdf(mi, config, uv_scale=scale))
+        return shared[key]
 
     def cyl(p0, p1, r, bsdf):
         return {"type": "cylinder", "p0": list(p0), "p1": list(p1), "radius": r, "bsdf": bsdf}
@@ -156,35 +202,57 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
     def sphere(c, r, bsdf):
         return {"type": "sphere", "center": list(c), "radius": r, "bsdf": bsdf}
 
-    def panel(c, half, yaw, bsdf):
-        return {"type": "rectangle", "bsdf": bsdf,
-                "to_world": T().translate(list(c)).rotate([0, 1, 0], yaw).scale([half[0], half[1], 1.0])}
+    def panel(c, half, yaw, bsdf, roll=0.0):
+        return {"type": "rectangle", "bsdf": bsdf, "to_world": T().translate(list(c)).rotate([0, 1, 0], yaw)
+                .rotate([0, 0, 1], roll).scale([half[0], half[1], 1.0])}
+
+    def card(c, half, roll, texture):
+        # A rectangle's uv runs from its lower left; the texture's row 0 is its top.
+        flipped = type(texture)(texture.name, texture.palette, texture.weights[::-1], texture.texel_m)
+        return panel(c, half, 0.0, flipped.bsdf(mi, config, wrap="clamp"), roll)
 
     head_c = np.array([-0.047, body_y + 0.036, z])
     eye_dir = np.array([-0.45, 0.30, 0.84]) / np.linalg.norm([-0.45, 0.30, 0.84])
+    ear = dict(radii=(0.007, 0.019, 0.005), bsdf=furry(fur_brown, _FUR_THIN), roll_deg=-20)
+    legs = ((-0.024, 0.013), (-0.024, -0.013), (0.042, 0.013), (0.042, -0.013))
+    leg_len = body_y - 0.01 - _TABLE_Y
     obj = {
-        # The dog, facing left, its right side towards the camera.
-        "dog_body": _ellipsoid(mi, "dog_body", (0.012, body_y, z), (0.052, 0.027, 0.025), red),
-        "dog_head": sphere(head_c, 0.026, red),
-        "dog_snout": _ellipsoid(mi, "dog_snout", head_c + (-0.026, -0.008, 0.0), (0.019, 0.011, 0.012), brown),
+        # The dog, facing left, its right side towards the camera; fur
+        # textures (puppy_textures) with the strands running down its sides.
+        "dog_body": _ellipsoid(mi, "dog_body", (0.012, body_y, z), (0.052, 0.027, 0.025),
+                               furry(fur, _FUR_BODY)),
+        # Mitsuba's sphere has its poles on local z: turned so they are on y.
+        "dog_head": {"type": "sphere", "bsdf": furry(fur, _FUR_BODY),
+                     "to_world": T().translate(head_c.tolist()).rotate([1, 0, 0], -90).scale(0.026)},
+        "dog_snout": _ellipsoid(mi, "dog_snout", head_c + (-0.026, -0.008, 0.0), (0.019, 0.011, 0.012),
+                                furry(fur_brown, _FUR_THIN)),
         "dog_nose": sphere(head_c + (-0.044, -0.004, 0.0), 0.0055, black),
         "dog_eye": sphere(head_c + 0.026 * eye_dir, 0.0035, black),
-        "dog_ear_near": _ellipsoid(mi, "dog_ear_near", head_c + (0.010, 0.010, 0.020), (0.007, 0.019, 0.005), brown,
-                                   roll_deg=-20),
-        "dog_ear_far": _ellipsoid(mi, "dog_ear_far", head_c + (0.010, 0.010, -0.020), (0.007, 0.019, 0.005), brown,
-                                  roll_deg=-20),
-        **{f"dog_leg_{i}": cyl((x, _TABLE_Y, z + dz), (x, body_y - 0.01, z + dz), 0.0075, red)
-           for i, (x, dz) in enumerate(((-0.024, 0.013), (-0.024, -0.013), (0.042, 0.013), (0.042, -0.013)))},
-        "dog_tail": cyl((0.058, body_y + 0.008, z), (0.078, body_y + 0.040, z), 0.0045, red),
-        "dog_tail_tip": sphere((0.078, body_y + 0.040, z), 0.0045, red),
-        # The table, the backdrop, panels and props at several depths.
-        "table": {"type": "rectangle", "bsdf": _lambert(config, "light skin"),
+        "dog_ear_near": _ellipsoid(mi, "dog_ear_near", head_c + (0.010, 0.010, 0.020), **ear),
+        "dog_ear_far": _ellipsoid(mi, "dog_ear_far", head_c + (0.010, 0.010, -0.020), **ear),
+        **{f"dog_leg_{i}": cyl((x, _TABLE_Y, z + dz), (x, body_y - 0.01, z + dz), 0.0075, furry(fur, _FUR_THIN))
+           for i, (x, dz) in enumerate(legs)},
+        "dog_tail": cyl((0.058, body_y + 0.008, z), (0.078, body_y + 0.040, z), 0.0045, furry(fur, _FUR_THIN)),
+        "dog_tail_tip": sphere((0.078, body_y + 0.040, z), 0.0045, furry(fur, _FUR_THIN)),
+        # The table and its gingham cloth, the backdrop, panels and props at
+        # several depths.
+        "table": {"type": "rectangle", "bsdf": tex.tablecloth().bsdf(mi, config, uv_scale=_CLOTH_REPEATS),
                   "to_world": T().translate([0.0, _TABLE_Y, -2.0]).rotate([1, 0, 0], -90).scale([1.0, 1.25, 1.0])},
-        "backdrop": panel((0.0, 0.0, -3.0), (2.0, 0.75), 0.0, _lambert(config, "neutral 6.5 (.44 D)")),
+        "backdrop": panel((0.0, 0.0, -3.0), (2.0, 0.75), 0.0,
+                          tex.wallpaper().bsdf(mi, config, uv_scale=(4.0 / 0.048, 1.5 / 0.048))),
         "panel_yellow": panel((-0.115, 0.115, -2.2), (0.075, 0.055), 20.0, _lambert(config, "yellow")),
         "panel_orange_yellow": panel((-0.045, 0.165, -2.5), (0.06, 0.045), -10.0, _lambert(config, "orange yellow")),
         "panel_blue_green": panel((0.035, 0.13, -2.7), (0.085, 0.055), 0.0, _lambert(config, "bluish green")),
-        "block_blue": {"type": "cube", "bsdf": _lambert(config, "blue"),
+        # Two printed cards on thin posts just behind the dog (near focus).
+        "card_chart": card(_CHART_CENTRE, _CHART_HALF, 4.0, tex.chart()),
+        "card_chart_post": cyl((_CHART_CENTRE[0], _TABLE_Y, _CHART_CENTRE[2] - 0.003),
+                               (_CHART_CENTRE[0], _CHART_CENTRE[1], _CHART_CENTRE[2] - 0.003), 0.002,
+                               _lambert(config, "neutral 5 (.70 D)")),
+        "card_colour": card(_PRINT_CENTRE, _PRINT_HALF, -3.0, tex.colour_print()),
+        "card_colour_post": cyl((_PRINT_CENTRE[0], _TABLE_Y, _PRINT_CENTRE[2] - 0.003),
+                                (_PRINT_CENTRE[0], _PRINT_CENTRE[1], _PRINT_CENTRE[2] - 0.003), 0.002,
+                                _lambert(config, "neutral 5 (.70 D)")),
+        "block_blue": {"type": "cube", "bsdf": tex.toy_block().bsdf(mi, config, wrap="clamp"),
                        "to_world": T().translate([0.07, _TABLE_Y + 0.026, -0.88]).rotate([0, 1, 0], 25).scale(0.026)},
         "ball_yellow_green": sphere((-0.085, _TABLE_Y + 0.021, -1.55), 0.021, _lambert(config, "yellow green")),
         "post_magenta": cyl((0.12, _TABLE_Y, -1.8), (0.12, _TABLE_Y + 0.075, -1.8), 0.016, _lambert(config, "magenta")),
@@ -214,6 +282,7 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
         "geometry": {
             "objects": objects(),
             "reflectance_set": "ColorChecker N Ohta",
+            "textures": [t.record() for t in tex.all_textures().values()],
             "focus_distance_m": FOCUS_DISTANCE_M,
             "aperture_radius_m": aperture,
             "f_number": f_number,
