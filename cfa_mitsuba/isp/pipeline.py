@@ -19,8 +19,8 @@ import numpy as np
 
 from ..errors import CfaMitsubaError
 from ..values import RawImage, RenderedImage
-from .colour import (fit_colour_matrix, gray_world_gains, luminance_weights, white_balance_gains, white_response,
-                     xyz_to_srgb)
+from .colour import (colour_fit_reflectances, fit_colour_matrix, gray_world_gains, luminance_weights,
+                     white_balance_gains, white_response, xyz_to_srgb)
 from .demosaic import check_mosaic, demosaic as _demosaic, get_demosaic
 from .mosaic import geometry
 
@@ -88,7 +88,7 @@ def _check_white_signal(raw: RawImage, epr: np.ndarray, white: np.ndarray) -> No
 
 
 def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: str = "illuminant",
-            white_preserving: bool = True, **options) -> RenderedImage:
+            white_preserving: bool = True, colour_fit: str = "training", **options) -> RenderedImage:
     """Process a raw capture into XYZ (absolute, cd/m^2) and display sRGB.
 
     Parameters
@@ -101,6 +101,10 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         to ``white_radiance``) or 'gray-world'.
     white_preserving : constrain the colour fit so the scene white maps
         exactly to its XYZ (default True).
+    colour_fit : the reflectances the colour matrix is fitted on:
+        'training' (default, the 190 training patches) or 'mcc' (the 24
+        ColorChecker patches, ISETCam's 'MCC optimized';
+        :data:`~cfa_mitsuba.isp.colour.COLOUR_FITS`).
     **options : passed to the demosaicing method (e.g. ``iterations=``).
         Methods that take ``luminance_weights`` receive the channels'
         luminance weights under this illuminant unless given.
@@ -135,7 +139,10 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     white = np.asarray(raw_image.white_radiance, dtype=np.float64)
     if not raw_image.is_ideal:
         _check_white_signal(raw_image, epr, white)
-    fit = fit_colour_matrix(epr, white, wl, white_preserving=white_preserving) if not raw_image.is_ideal else None
+    fit = None
+    if not raw_image.is_ideal:
+        refl = colour_fit_reflectances(colour_fit, wl)
+        fit = fit_colour_matrix(epr, white, wl, white_preserving=white_preserving, reflectances=refl)
     meta = dict(raw_image.meta or {})
     meta.setdefault("capture", raw_image.settings)
 
@@ -180,6 +187,7 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         "demosaic_options": {k: (np.asarray(v).tolist() if isinstance(v, np.ndarray) else v)
                              for k, v in options.items() if k != "info"},
         "white_balance": white_balance,
+        "colour_fit": colour_fit,
         "white_balance_gains": (gains / ref_gain).tolist(),
         "white_balance_gains_per_electron": gains.tolist(),
         "white_xyz": fit.white_xyz.tolist(),
