@@ -239,6 +239,10 @@ def test_verdicts_follow_the_numbers():
                "max_range": 0.5}
     assert paper_data.judge(run({"rgbw1": (2.0, 0.1), "bayer": (2.4, 0.1)}), similar)[0] == "holds"
     assert paper_data.judge(run({"rgbw1": (2.0, 0.1), "bayer": (2.6, 0.1)}), similar)[0] == "differs"
+    at_most = {"kind": "at_most", "metric": "delta-e76", "demosaic": "bilinear", "cfas": ["rgbw1", "bayer"],
+               "max_value": 1.0}
+    assert paper_data.judge(run({"rgbw1": (0.5, 0.1), "bayer": (0.8, 0.1)}), at_most)[0] == "holds"
+    assert paper_data.judge(run({"rgbw1": (0.5, 0.1), "bayer": (0.95, 0.1)}), at_most)[0] == "differs"
 
 
 def test_paper_values_are_placed_once_per_cfa_and_metric():

@@ -58,6 +58,8 @@ def _ours(run: Run, metric: str, cfa: str, demosaic: str = "bilinear") -> str:
     if v is None:
         return "-"
     d = get_metric(metric).decimals
+    if run.is_bound(metric, demosaic, cfa):
+        return f">= {v[0]:.{d}f} (no moire up to the chirp's top)"
     return f"{v[0]:.{d}f} [{v[1]:.{d}f}, {v[2]:.{d}f}]"
 
 

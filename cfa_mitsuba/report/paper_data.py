@@ -91,6 +91,22 @@ class Run:
         hi = r["ci_high"] if "ci_high" in r and np.isfinite(r["ci_high"]) else r["value"]
         return float(r["value"]), float(lo), float(hi), str(r["unit"]) if isinstance(r["unit"], str) else ""
 
+    def is_bound(self, metric: str, demosaic: str, cfa: str) -> bool:
+        """Whether a value is a bound, not a measurement (the MSP of a chirp
+        with no moire up to its top): metrics.csv's ``censored`` column where
+        the study wrote one, else the first realisation's ``passed`` flag."""
+        m = self.metrics
+        if "censored" in m.columns:
+            sel = m[(m["metric"] == metric) & (m["demosaic"] == demosaic) & (m["cfa"] == cfa)]
+            return bool(len(sel)) and str(sel["censored"].iloc[0]).lower() in ("true", "1")
+        if metric != "moire":
+            return False
+        f = self.path / "details" / "chirp" / cfa / demosaic / "L100.json"
+        try:
+            return json.loads(f.read_text())["moire"].get("passed") is False
+        except (OSError, ValueError, KeyError):
+            return False
+
     def scores_of(self, demosaic: str):
         """{cfa: (score, lo, hi, rank, rank_best, rank_worst)} for a demosaic or 'total'."""
         s = self.scores
@@ -161,7 +177,8 @@ def _order(run: Run, claim: dict) -> tuple[str, str]:
         if claim.get("strict"):  # every member counts: the group's best and worst member
             ranked = sorted(g, key=lambda r: r[1], reverse=hib)
             ends.append((ranked[0][1:], ranked[-1][1:]))
-            parts.append(f"{_group_name(names)} {_fmt(ranked[-1][1], dec)}..{_fmt(ranked[0][1], dec)}")
+            parts.append(f"{_group_name(names)} from {cfa_label(ranked[0][0])} {_fmt(ranked[0][1], dec)} "
+                         f"to {cfa_label(ranked[-1][0])} {_fmt(ranked[-1][1], dec)}")
         else:  # the group's mean, with the mean of its members' interval ends
             mean = tuple(float(np.mean([r[k] for r in g])) for k in (1, 2, 3))
             ends.append((mean, mean))
@@ -189,6 +206,17 @@ def _similar(run: Run, claim: dict) -> tuple[str, str]:
     return ("holds" if spread <= claim["max_range"] else "differs"), detail
 
 
+def _at_most(run: Run, claim: dict) -> tuple[str, str]:
+    g = _group(run, claim["metric"], claim["demosaic"], claim["cfas"])
+    if not g:
+        return "not measured", "no value in this run"
+    dec = get_metric(claim["metric"]).decimals + 1
+    top = max(g, key=lambda r: r[3])
+    detail = (f"every CFA's interval below {_fmt(top[3], dec)} (the highest: {cfa_label(top[0])} "
+              f"{_fmt(top[1], dec)}) against at most {claim['max_value']:g}")
+    return ("holds" if top[3] <= claim["max_value"] else "differs"), detail
+
+
 def _best(run: Run, claim: dict) -> tuple[str, str]:
     got = run.scores_of(claim["demosaic"])
     if claim["cfa"] not in got:
@@ -207,6 +235,8 @@ def judge(run: Run, claim: dict) -> tuple[str, str]:
         return _order(run, claim)
     if kind == "similar":
         return _similar(run, claim)
+    if kind == "at_most":
+        return _at_most(run, claim)
     if kind == "best":
         return _best(run, claim)
     raise CfaMitsubaError(f"claim {claim.get('id')!r}: unknown kind {kind!r}")
