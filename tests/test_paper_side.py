@@ -204,7 +204,7 @@ def test_comparison_page_has_every_section(tiny_runs, tmp_path):
     assert paper_comparison.main(["--default", str(tiny_runs["default"]), "--isetcam", str(tiny_runs["isetcam"]),
                                   "--out", str(out)]) == 0
     text = out.read_text()
-    for heading in ["# The paper side by side", "## The runs", "## Verdicts at a glance",
+    for heading in ["# The paper side by side", "## The runs", "## Verdicts at a glance", "## Where the paper is wrong",
                     *[f"## {h}" for _, h, _ in paper_comparison.SECTIONS],
                     "## Table 3: mean normalised score per demosaic",
                     *[f"### {d}" for d in paper_comparison.DEMOSAICS], "## Not compared"]:
