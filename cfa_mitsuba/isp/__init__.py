@@ -12,6 +12,7 @@ from .bilinear import bilinear as _bilinear
 from .laplacian import adaptive_laplacian as _adaptive_laplacian, laplacian as _laplacian
 from .pocs import pocs as _pocs
 from .colour import (  # noqa: F401
+    COLOUR_FITS,
     ColourFit,
     delta_e00,
     fit_colour_matrix,

@@ -22,7 +22,9 @@ Scales (DESIGN.md: radiometry is absolute):
 The ISETCam route (research/isetcam.md s. 4.4) differs: it fits on the 24
 Macbeth patches (the test chart itself), clips at 0 and normalises every
 image by its own maximum; here the fit never sees the test chart and the
-output stays on the absolute scale.
+output stays on the absolute scale.  ``colour_fit="mcc"``
+(:func:`colour_fit_reflectances`) fits on the chart as ISETCam's 'MCC
+optimized' does, for a like-for-like comparison with the paper.
 """
 
 from __future__ import annotations
@@ -35,6 +37,8 @@ __all__ = [
     "fit_colour_matrix",
     "channel_noise",
     "GREY_REFLECTANCE",
+    "COLOUR_FITS",
+    "colour_fit_reflectances",
     "luminance_weights",
     "cfa_luminance_weights",
     "electrons_per_radiance_of",
@@ -146,6 +150,28 @@ class ColourFit:
             "white_preserving": self.white_preserving,
             "fit_rank": self.rank,
         }
+
+
+#: The reflectances a colour matrix can be fitted on: ``training`` (the 190
+#: rawtoaces training patches, never the test chart: the default) or ``mcc``
+#: (the 24 ColorChecker patches, the Macbeth test chart itself: ISETCam's
+#: 'MCC optimized' sensor conversion, research/isetcam.md s. 4.4).
+COLOUR_FITS = ("training", "mcc")
+
+
+def colour_fit_reflectances(name: str, wavelengths=spectra.DEFAULT_WAVELENGTHS) -> np.ndarray:
+    """(K, B) reflectances of the colour fit called ``name`` (:data:`COLOUR_FITS`).
+
+    Examples
+    --------
+    >>> colour_fit_reflectances("mcc").shape, colour_fit_reflectances("training").shape
+    ((24, 31), (190, 31))
+    """
+    if name == "training":
+        return spectra.training_reflectances(wavelengths)
+    if name == "mcc":
+        return spectra.colorchecker(wavelengths)[1]
+    raise CfaMitsubaError(f"unknown colour fit {name!r} (choose {', '.join(COLOUR_FITS)})")
 
 
 def _balanced_responses(epr, white, reflectances):

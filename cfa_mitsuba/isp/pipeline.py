@@ -20,8 +20,8 @@ import numpy as np
 from ..errors import CfaMitsubaError
 from ..values import RawImage, RenderedImage
 from ..colorimetry import realisable
-from .colour import (channel_noise, fit_colour_matrix, gray_world_gains, luminance_weights, white_balance_gains,
-                     white_response, xyz_to_srgb)
+from .colour import (channel_noise, colour_fit_reflectances, fit_colour_matrix, gray_world_gains, luminance_weights,
+                     white_balance_gains, white_response, xyz_to_srgb)
 from .demosaic import check_mosaic, demosaic as _demosaic, get_demosaic
 from .mosaic import geometry
 from .remosaic import channel_gain_divisors, readout_of, remosaic, upsample_blocks
@@ -121,7 +121,7 @@ def _check_white_signal(raw: RawImage, epr: np.ndarray, white: np.ndarray) -> No
 
 def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: str = "illuminant",
             white_preserving: bool = True, regularise: bool = True, clip_highlights: bool = True,
-            **options) -> RenderedImage:
+            colour_fit: str = "training", **options) -> RenderedImage:
     """Process a raw capture into XYZ (absolute, cd/m^2) and display sRGB.
 
     Parameters
@@ -145,6 +145,10 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         highlight mode 0), so a pixel whose wells are full reads the same in
         every channel and maps to a grey, not to the unequal clipped
         channels' colour (a negative XYZ through cmy2's matrix).
+    colour_fit : the reflectances the colour matrix is fitted on:
+        'training' (default, the 190 training patches) or 'mcc' (the 24
+        ColorChecker patches, ISETCam's 'MCC optimized';
+        :data:`~cfa_mitsuba.isp.colour.COLOUR_FITS`).
     **options : passed to the demosaicing method (e.g. ``iterations=``).
         Methods that take ``luminance_weights`` receive the channels'
         luminance weights under this illuminant unless given.
@@ -185,8 +189,10 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         _check_white_signal(raw_image, epr, white)
     fit = fit_noise = None
     if not raw_image.is_ideal:
+        refl = colour_fit_reflectances(colour_fit, wl)
         fit_noise = _fit_noise(raw_image, epr, white) if regularise else None
-        fit = fit_colour_matrix(epr, white, wl, white_preserving=white_preserving, channel_noise=fit_noise)
+        fit = fit_colour_matrix(epr, white, wl, white_preserving=white_preserving, channel_noise=fit_noise,
+                                reflectances=refl)
     meta = dict(raw_image.meta or {})
     meta.setdefault("capture", raw_image.settings)
 
@@ -248,6 +254,7 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         "demosaic_options": {k: (np.asarray(v).tolist() if isinstance(v, np.ndarray) else v)
                              for k, v in options.items() if k != "info"},
         "white_balance": white_balance,
+        "colour_fit": colour_fit,
         "white_balance_gains": (gains / ref_gain).tolist(),
         "white_balance_gains_per_electron": gains.tolist(),
         "white_xyz": fit.white_xyz.tolist(),

@@ -328,16 +328,18 @@ def evaluate(name: str, inputs: MetricInputs, **options):
     return out
 
 
-def evaluate_many(names, inputs: MetricInputs, failures: list | None = None) -> dict:
+def evaluate_many(names, inputs: MetricInputs, failures: list | None = None, *, options: dict | None = None) -> dict:
     """{name: MetricResult} for each name.  A metric that cannot be computed
     on this image (a user-facing :class:`CfaMitsubaError`, e.g. an edge the
     analysis cannot locate) is left out and its message appended to
     ``failures`` when given, so one unmeasurable camera does not end a
-    study; without ``failures`` it raises."""
+    study; without ``failures`` it raises.  ``options``: {name: {keyword:
+    value}} passed to :func:`evaluate` (a study's ``[metrics.<name>]``)."""
     out = {}
+    options = options or {}
     for name in names:
         try:
-            out[name] = evaluate(name, inputs)
+            out[name] = evaluate(name, inputs, **options.get(name, {}))
         except CfaMitsubaError as exc:
             if failures is None:
                 raise

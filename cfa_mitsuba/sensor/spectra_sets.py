@@ -16,6 +16,11 @@ ISETCam's ``ircf_public`` (Largan K098):
 * ``pixel`` (filter x silicon, no IR cut): Q x IR;
 * ``camera`` (the whole camera): Q.
 
+A set with ``model = "flat"`` is used as ISETCam uses its filter files:
+photodiode QE 1 and no IR-cut filter at every wavelength (ISETCam's
+``pixelCreate`` and ``sensorCreate`` defaults), so each curve is taken as
+it stands and a clear pixel is 1 everywhere (the ``*-raw`` sets).
+
 Peak-normalised ("relative") sets get one factor per set, so that the sum
 of their effective R, G, B peaks at :data:`cfa_mitsuba.spectra.CAMERA_PEAK_QE`.
 A product or sum of curves on different grids is tabulated on the union of
@@ -57,6 +62,9 @@ FILTERS_DIR = DATA_DIR / "filters"
 _SETS_FILE = DATA_DIR / "spectra_sets.toml"
 
 _CURVES = ("dye", "pixel", "camera")
+_MODELS = ("common", "flat")
+#: ISETCam's default pixel: photodiode QE 1, IR filter 1 (``model = "flat"``).
+_FLAT = (np.array([300.0, 1100.0]), np.array([1.0, 1.0]))
 _DERIVES = ("block-dyes", "clear", "stacks")
 _STACKS = {"C2": "CC", "M2": "MM", "Y2": "YY", "MY": "MY", "CY": "CY", "CM": "CM"}
 
@@ -247,13 +255,19 @@ def _raw_columns(name: str, spec: dict) -> dict:
 def _build(name: str, spec: dict) -> SpectraSet:
     where = f"spectra set {name!r}"
     raw = _raw_columns(name, spec)
-    si, ir = silicon_qe(), ir_cut()
+    model = spec.get("model", "common")
+    if model not in _MODELS:
+        raise CfaMitsubaError(f"{where}: model must be one of {', '.join(_MODELS)}, got {model!r}")
+    si, ir = (silicon_qe(), ir_cut()) if model == "common" else (_FLAT, _FLAT)
     by_letter = spec.get("curve_by_letter", {})
     curves = {}
     for letter, c in raw.items():
         kind = by_letter.get(letter, spec.get("curve", "camera"))
         if kind not in _CURVES:
             raise CfaMitsubaError(f"{where}: curve must be one of {', '.join(_CURVES)}, got {kind!r}")
+        if model == "flat":  # ISETCam: filter x 1 x 1, whatever the curve includes
+            curves[letter] = c
+            continue
         curves[letter] = {"dye": lambda: _product(c, ir, si), "pixel": lambda: _product(c, ir),
                           "camera": lambda: c}[kind]()
     if raw and spec.get("scale", "absolute") == "relative":
@@ -269,7 +283,7 @@ def _build(name: str, spec: dict) -> SpectraSet:
         r, g, b = curves["R"], curves["G"], curves["B"]
         curves.update(C=_sum(g, b), M=_sum(r, b), Y=_sum(r, g), W=_sum(r, g, b))
     if "clear" in derive:
-        curves["W"] = _product(ir, si)
+        curves["W"] = _product(ir, si) if model == "common" else _FLAT
     for letter, ref in spec.get("borrow", {}).items():
         other, _, src = ref.partition(":")
         curves[letter] = get_spectra_set(other).curve(src or letter)

@@ -41,7 +41,10 @@ class ChainSettings:
     exposure is chosen (None: at each capture's own luminance, ISETCam's
     plain auto exposure); ``isp`` the processing options (white balance,
     white preserving, pocs_iterations) as sorted (key, value) pairs;
-    ``mean_match`` scales each camera output to the ideal's mean (ISETCam).
+    ``mean_match`` scales each camera output to the ideal's mean (ISETCam);
+    ``spectra_sets`` maps a CFA's own spectra set to the set used instead
+    (``[sensor.spectra_sets]``); ``metric_options`` the keyword options of
+    each metric (``[metrics.<name>]``); both as sorted pairs.
     """
 
     optics: object = None
@@ -50,6 +53,8 @@ class ChainSettings:
     reference_luminance_cd_m2: float | None = 100.0
     isp: tuple = ()
     mean_match: bool = True
+    spectra_sets: tuple = ()
+    metric_options: tuple = ()
 
     def __post_init__(self):
         from ..optics import OpticsParams
@@ -61,6 +66,27 @@ class ChainSettings:
             object.__setattr__(self, "sensor", SensorParams())
         if isinstance(self.isp, dict):
             object.__setattr__(self, "isp", tuple(sorted(self.isp.items())))
+        if isinstance(self.spectra_sets, dict):
+            object.__setattr__(self, "spectra_sets", tuple(sorted(self.spectra_sets.items())))
+        if isinstance(self.metric_options, dict):
+            object.__setattr__(self, "metric_options", tuple(sorted(
+                (m, tuple(sorted(o.items()))) for m, o in self.metric_options.items())))
+
+    def options_of_metrics(self) -> dict:
+        """{metric: {keyword: value}}: the options every evaluation passes."""
+        return {m: dict(o) for m, o in self.metric_options}
+
+    def spectra_for(self, cfa, cond: Condition) -> str | None:
+        """The spectra set a capture of ``cfa`` uses under ``cond`` when it
+        is not the CFA's own: the condition's (a ``spectra`` sweep), else the
+        replacement ``spectra_sets`` gives for the CFA's own set; None: its own."""
+        if cond.spectra is not None:
+            return cond.spectra
+        if not self.spectra_sets:
+            return None
+        from ..sensor import get_cfa
+
+        return dict(self.spectra_sets).get(get_cfa(cfa).spectra)
 
     def base_condition(self, *, luminance: float = 100.0, exposure="auto", seed: int = 0) -> Condition:
         """The condition these settings describe (optics f-number, sensor
@@ -174,13 +200,14 @@ class CameraChain:
 
     def capture(self, oi, cfa, cond: Condition, seed: int, *, noise: str | None = None):
         """The raw mosaic of ``cfa`` (a name, TOML path or CFA) under ``cond``
-        (its spectra set, when the condition names one; ``noise`` overrides
+        (another spectra set, when the condition or the settings name one; ``noise`` overrides
         the settings' noise mode)."""
         from ..sensor import capture, get_cfa
 
         _, sensor = self.settings.for_condition(cond)
-        if cond.spectra is not None:
-            cfa = get_cfa(cfa, spectra=cond.spectra)
+        spectra = self.settings.spectra_for(cfa, cond)
+        if spectra is not None:
+            cfa = get_cfa(cfa, spectra=spectra)
         return self._timed("capture_s", capture, oi, cfa, luminance_cd_m2=cond.luminance, exposure_s=cond.exposure,
                            noise=noise or self.settings.noise, seed=seed, sensor=sensor,
                            reference_luminance_cd_m2=self.settings.reference_luminance_cd_m2)
@@ -211,7 +238,8 @@ class CameraChain:
         if self.settings.mean_match:
             cam, scale = m.mean_match(cam, ideal.xyz, return_scale=True)
         failures: list = []
-        results = self._timed("metrics_s", m.evaluate_many, metric_names, self.inputs(ideal, cam, cond), failures)
+        results = self._timed("metrics_s", m.evaluate_many, metric_names, self.inputs(ideal, cam, cond), failures,
+                              options=self.settings.options_of_metrics())
         return results, failures, float(scale)
 
     def evaluate(self, scene_image, cfa, demosaics, metric_names, cond: Condition, seed: int, scene_key=None):

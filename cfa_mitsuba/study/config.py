@@ -80,6 +80,7 @@ class StudyConfig:
     range_policy: str
     output: dict
     workers: int | None
+    metric_options: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -95,7 +96,8 @@ class StudyConfig:
             noise=self.capture.get("noise", "all"),
             reference_luminance_cd_m2=(None if self.capture.get("exposure_policy") == "each"
                                        else float(self.capture.get("reference_luminance_cd_m2", 100.0))),
-            isp=dict(self.isp), mean_match=self.mean_match)
+            isp=dict(self.isp), mean_match=self.mean_match,
+            spectra_sets=dict(self.capture.get("spectra_sets", {})), metric_options=dict(self.metric_options))
 
     def base_condition(self, luminance: float | None = None):
         """The study's own condition (no sweep) at ``luminance`` (default: the first)."""
@@ -211,6 +213,21 @@ def _sensor_values(ck: _Checker, preset, given: dict, cfas, base: Path) -> dict:
     return values
 
 
+def _spectra_map(ck: _Checker, value, key: str) -> dict:
+    """``[sensor.spectra_sets]``: {a CFA's own spectra set: the set to use
+    instead} for every CFA of the study (configs/paper-isetcam.toml maps the
+    paper's families to their ``*-raw`` sets, ISETCam's way of using them)."""
+    from ..sensor import list_spectra_sets
+
+    known = tuple(list_spectra_sets())
+    if not isinstance(value, dict):
+        ck.fail(key, f"must be a table {{set = \"replacement\"}}, got {_typename(value)}")
+    for own, new in value.items():
+        ck.string(own, f"{key} (key)", known)
+        ck.string(new, f"{key}.{own}", known)
+    return dict(value)
+
+
 def parse_config(data: dict, *, where: str = "config", base: Path | None = None) -> StudyConfig:
     """Validate a config already parsed from TOML; see :func:`load_config`."""
     from .. import isp, render, sensor
@@ -226,6 +243,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         "name": None, "description": None, "seed": None, "scenes": None, "custom_scenes": None, "cfas": None,
         "demosaics": None, "luminances": None, "sweep": None, "render": None, "optics": None, "sensor": None,
         "isp": None, "mean_match": None, "normalisation": None, "output": None, "workers": None, "seeds": None,
+        "metrics": None,
     }
     ck.table(data, "", top)
     for required in ("scenes", "cfas", "demosaics"):
@@ -332,6 +350,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         "exposure": lambda v, k: v if v == "auto" else ck.number(v, k, positive=True),
         "reference_luminance_cd_m2": lambda v, k: ck.number(v, k, positive=True),
         "exposure_policy": lambda v, k: ck.string(v, k, EXPOSURE_POLICIES),
+        "spectra_sets": lambda v, k: _spectra_map(ck, v, k),
     }
     sensor_cfg, preset = _sensor_preset(ck, data.get("sensor", {}))
     sensor_all = _dataclass_table(ck, sensor_cfg, "sensor", SensorParams, capture_extra)
@@ -350,16 +369,25 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         ck.fail("sensor.reference_luminance_cd_m2", "exposure_policy 'each' chooses the exposure at each "
                                                    "luminance: a reference luminance does not apply")
     isp_cfg = data.get("isp", {})
-    ck.table(isp_cfg, "isp", {"white_balance": None, "white_preserving": None, "pocs_iterations": None})
+    ck.table(isp_cfg, "isp", {"white_balance": None, "white_preserving": None, "pocs_iterations": None,
+                              "colour_fit": None, "regularise": None, "clip_highlights": None})
     isp_opts = {}
     if "white_balance" in isp_cfg:
         isp_opts["white_balance"] = ck.string(isp_cfg["white_balance"], "isp.white_balance",
                                               ("illuminant", "gray-world"))
     if "white_preserving" in isp_cfg:
         isp_opts["white_preserving"] = ck.boolean(isp_cfg["white_preserving"], "isp.white_preserving")
+    for flag in ("regularise", "clip_highlights"):  # isp.process's switches (docs/isp.md)
+        if flag in isp_cfg:
+            isp_opts[flag] = ck.boolean(isp_cfg[flag], f"isp.{flag}")
+    if "colour_fit" in isp_cfg:
+        isp_opts["colour_fit"] = ck.string(isp_cfg["colour_fit"], "isp.colour_fit", isp.COLOUR_FITS)
     if "pocs_iterations" in isp_cfg:
         isp_opts["pocs_iterations"] = ck.integer(isp_cfg["pocs_iterations"], "isp.pocs_iterations", 1)
     mean_match = ck.boolean(data.get("mean_match", True), "mean_match")
+    from .metric_options import metric_options
+
+    options = metric_options(ck, data.get("metrics", {}))
 
     # --- normalisation --------------------------------------------------
     norm = data.get("normalisation", {})
@@ -395,6 +423,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         demosaics=demosaics, luminances=luminances, sweeps=tuple(sweeps), render=render_common,
         optics=optics, sensor=sensor_all, capture=capture, isp=isp_opts, mean_match=mean_match,
         ranges=ranges, clip_scores=clip, output=output, workers=workers, seeds=seeds, range_policy=policy,
+        metric_options=options,
     )
 
 

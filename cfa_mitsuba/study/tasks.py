@@ -99,10 +99,12 @@ def condition_columns(cond, ideal_meta: dict) -> dict:
     return out
 
 
-def _spectra_in_effect(cfa, cond) -> str:
-    """The spectra set a capture used: the condition's, else the CFA's own."""
-    if cond.spectra is not None:
-        return cond.spectra
+def _spectra_in_effect(cfa, cond, settings) -> str:
+    """The spectra set a capture used: the condition's or the settings'
+    replacement (:meth:`.chain.ChainSettings.spectra_for`), else the CFA's own."""
+    chosen = settings.spectra_for(cfa, cond)
+    if chosen is not None:
+        return chosen
     from ..sensor import get_cfa
 
     return str(get_cfa(cfa).spectra or "")
@@ -186,7 +188,7 @@ def evaluate_task(task: dict) -> dict:
     def image():
         return load_scene_image(task["source"])
 
-    spectra_used = _spectra_in_effect(task["cfa"], cond)
+    spectra_used = _spectra_in_effect(task["cfa"], cond, chain.settings)
     applies = _readout_applies(task["cfa"], cond)
     if not applies and (task.get("ideal_rows") or details_dir is not None):
         ideal = chain.ideal(chain.optical(image, cond, scene_key), cond, scene_key)
@@ -224,7 +226,8 @@ def evaluate_task(task: dict) -> dict:
         # the ideal sensor against itself: the anchor of the 'ideal' range policy
         from .. import metrics as m
 
-        got = m.evaluate_many(task["metrics"], chain.inputs(ideal, ideal.xyz, cond), [])
+        got = m.evaluate_many(task["metrics"], chain.inputs(ideal, ideal.xyz, cond), [],
+                              options=chain.settings.options_of_metrics())
         base = {"scene": task["scene"], "cfa": "ideal", "demosaic": "none", **condition_columns(cond, ideal.meta),
                 "base": bool(task.get("base", True)), "realisation": 0}
         ideal_rows = [{**base, **r} for r in _result_rows(got)]
@@ -234,7 +237,8 @@ def evaluate_task(task: dict) -> dict:
             from .. import metrics as m
 
             mtf_only = [n for n in task["metrics"] if n in ("mtf",)]
-            ideal_results = m.evaluate_many(mtf_only, chain.inputs(ideal, ideal.xyz, cond))
+            ideal_results = m.evaluate_many(mtf_only, chain.inputs(ideal, ideal.xyz, cond),
+                                            options=chain.settings.options_of_metrics())
             _save_details(ideal_dir, tag, ideal_results, ideal, {"white_xyz": list(map(float, ideal.white_xyz))})
     return {"rows": rows, "timing": chain.timing, "failures": failures, "ideal_rows": ideal_rows}
 

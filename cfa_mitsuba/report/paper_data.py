@@ -1,0 +1,242 @@
+"""The paper's numbers, ISETCam's, the claims, and two study runs to test
+them on (docs/paper-comparison.md, :mod:`.paper_comparison`).
+
+Data (``cfa_mitsuba/data/paper/``): ``bae2020_values.csv`` (Tables 1-3 and
+the numbers in the text of Bae 2020, each with its table and status),
+``isetcam_paper_check.csv`` (ISETCam itself run on the paper's colour
+table, research/isetcam-paper-check.md) and ``claims.toml`` (the claims,
+with the reason to print for each verdict).
+
+Verdicts (``claims.toml`` says how each kind is read): a claim *holds*
+when every step it makes is reproduced beyond the 95 % intervals of the
+run, *differs* when a step is reversed beyond them, and is *unresolved*
+when no step is reversed but some cannot be told apart.
+"""
+
+from __future__ import annotations
+
+__all__ = ["PAPER_DIR", "Run", "load_run", "paper_values", "isetcam_values", "claims", "judge", "family",
+           "cfa_label"]
+
+import json
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import CfaMitsubaError
+from ..metrics import get_metric
+
+PAPER_DIR = Path(__file__).resolve().parents[1] / "data" / "paper"
+_FAMILIES = (("rgbw", "RGBW"), ("cmy", "CMY"), ("rgb", "RGB"), ("bayer", "RGB"))
+
+
+def family(cfa: str) -> str:
+    """RGB, CMY or RGBW for the paper's CFAs ('' for any other)."""
+    return next((f for p, f in _FAMILIES if cfa.startswith(p)), "")
+
+
+def cfa_label(cfa: str) -> str:
+    """The paper's spelling: Bayer, RGB1, CMY2, RGBW3."""
+    return "Bayer" if cfa == "bayer" else cfa.upper()
+
+
+def _csv(name: str):
+    import pandas as pd
+
+    return pd.read_csv(PAPER_DIR / name, comment="#", dtype=str, keep_default_na=False)
+
+
+def paper_values():
+    """bae2020_values.csv as a DataFrame of text, as printed (``cfas``: the
+    CFAs of each row; ``number``: the value as a float, NaN for a range)."""
+    df = _csv("bae2020_values.csv")
+    df["cfas"] = df["cfa"].str.split()
+    df["number"] = [float(v) if v else float("nan") for v in df["value"]]
+    return df
+
+
+def isetcam_values():
+    """isetcam_paper_check.csv as a DataFrame."""
+    return _csv("isetcam_paper_check.csv")
+
+
+def claims() -> list[dict]:
+    """The claims of claims.toml, in order."""
+    return tomllib.loads((PAPER_DIR / "claims.toml").read_text())["claim"]
+
+
+@dataclass
+class Run:
+    """One study's results: base rows at its first luminance, the scores,
+    its config and timing."""
+
+    key: str
+    label: str
+    path: Path
+    metrics: object
+    scores: object
+    config: dict
+    timing: dict
+
+    def value(self, metric: str, demosaic: str, cfa: str):
+        """(value, ci_low, ci_high, unit) of one CFA, or None."""
+        m = self.metrics
+        sel = m[(m["metric"] == metric) & (m["demosaic"] == demosaic) & (m["cfa"] == cfa)]
+        if sel.empty:
+            return None
+        r = sel.iloc[0]
+        lo = r["ci_low"] if "ci_low" in r and np.isfinite(r["ci_low"]) else r["value"]
+        hi = r["ci_high"] if "ci_high" in r and np.isfinite(r["ci_high"]) else r["value"]
+        return float(r["value"]), float(lo), float(hi), str(r["unit"]) if isinstance(r["unit"], str) else ""
+
+    def is_bound(self, metric: str, demosaic: str, cfa: str) -> bool:
+        """Whether a value is a bound, not a measurement (the MSP of a chirp
+        with no moire up to its top): metrics.csv's ``censored`` column where
+        the study wrote one, else the first realisation's ``passed`` flag."""
+        m = self.metrics
+        if "censored" in m.columns:
+            sel = m[(m["metric"] == metric) & (m["demosaic"] == demosaic) & (m["cfa"] == cfa)]
+            return bool(len(sel)) and str(sel["censored"].iloc[0]).lower() in ("true", "1")
+        if metric != "moire":
+            return False
+        f = self.path / "details" / "chirp" / cfa / demosaic / "L100.json"
+        try:
+            return json.loads(f.read_text())["moire"].get("passed") is False
+        except (OSError, ValueError, KeyError):
+            return False
+
+    def scores_of(self, demosaic: str):
+        """{cfa: (score, lo, hi, rank, rank_best, rank_worst)} for a demosaic or 'total'."""
+        s = self.scores
+        if s is None or s.empty:
+            return {}
+        if demosaic == "total":
+            cols = ["total_score", "total_score_ci_low", "total_score_ci_high", "total_rank", "total_rank_best",
+                    "total_rank_worst"]
+            rows = s.drop_duplicates("cfa")
+        else:
+            cols = ["mean_score", "mean_score_ci_low", "mean_score_ci_high", "demosaic_rank", "demosaic_rank_best",
+                    "demosaic_rank_worst"]
+            rows = s[s["demosaic"] == demosaic].drop_duplicates("cfa")
+        return {r["cfa"]: tuple(float(r[c]) if "score" in c else int(r[c]) for c in cols) for _, r in rows.iterrows()}
+
+
+def load_run(path, key: str, label: str) -> Run:
+    """A study's results folder (metrics.csv, scores.csv, config.json, timing.json)."""
+    import pandas as pd
+
+    p = Path(path)
+    if not (p / "metrics.csv").is_file():
+        raise CfaMitsubaError(f"{str(p)!r} holds no metrics.csv: not a study's results folder")
+    m = pd.read_csv(p / "metrics.csv")
+    base = m[m["base"].astype(str).str.lower().isin(("true", "1"))]
+    base = base[base["luminance"] == base["luminance"].min()]
+    scores = pd.read_csv(p / "scores.csv") if (p / "scores.csv").is_file() else None
+    if scores is not None and not scores.empty:
+        scores = scores[scores["luminance"] == scores["luminance"].min()]
+
+    def read(name):
+        f = p / name
+        return json.loads(f.read_text()) if f.is_file() else {}
+
+    return Run(key, label, p, base.reset_index(drop=True), scores, read("config.json"), read("timing.json"))
+
+
+def _group(run: Run, metric: str, demosaic: str, cfas) -> list[tuple]:
+    out = []
+    for c in cfas:
+        v = run.value(metric, demosaic, c)
+        if v is not None:
+            out.append((c, *v[:3]))
+    return out
+
+
+def _group_name(cfas) -> str:
+    fams = {family(c) for c in cfas}
+    if "" not in fams and ((len(fams) == 1 and len(cfas) >= 3) or (len(fams) == 2 and len(cfas) > 3)):
+        return "+".join(sorted(fams, key=["RGB", "CMY", "RGBW"].index))
+    return ", ".join(cfa_label(c) for c in cfas)
+
+
+def _fmt(v: float, decimals: int) -> str:
+    return f"{v:.{decimals}f}"
+
+
+def _order(run: Run, claim: dict) -> tuple[str, str]:
+    metric, demosaic = claim["metric"], claim["demosaic"]
+    hib = get_metric(metric).higher_is_better
+    dec = get_metric(metric).decimals + 1
+    groups = [_group(run, metric, demosaic, g) for g in claim["groups"]]
+    if any(not g for g in groups):
+        return "not measured", "a group has no value in this run"
+    better = (lambda a, b: a > b) if hib else (lambda a, b: a < b)
+    ends, parts = [], []
+    for names, g in zip(claim["groups"], groups):
+        if claim.get("strict"):  # every member counts: the group's best and worst member
+            ranked = sorted(g, key=lambda r: r[1], reverse=hib)
+            ends.append((ranked[0][1:], ranked[-1][1:]))
+            parts.append(f"{_group_name(names)} from {cfa_label(ranked[0][0])} {_fmt(ranked[0][1], dec)} "
+                         f"to {cfa_label(ranked[-1][0])} {_fmt(ranked[-1][1], dec)}")
+        else:  # the group's mean, with the mean of its members' interval ends
+            mean = tuple(float(np.mean([r[k] for r in g])) for k in (1, 2, 3))
+            ends.append((mean, mean))
+            parts.append(f"{_group_name(names)} {_fmt(mean[0], dec)} [{_fmt(mean[1], dec)}, {_fmt(mean[2], dec)}]")
+    steps = []
+    for (_, a), (b, _) in zip(ends, ends[1:]):  # the earlier group's worse end, the later one's better end
+        apart = a[2] < b[1] or b[2] < a[1]
+        steps.append("tie" if not apart else "ok" if better(a[0], b[0]) else "reversed")
+    detail = "; ".join(parts) + f" ({'higher' if hib else 'lower'} is better; steps: {', '.join(steps)})"
+    if "reversed" in steps:
+        return "differs", detail
+    return ("holds" if all(s == "ok" for s in steps) else "unresolved"), detail
+
+
+def _similar(run: Run, claim: dict) -> tuple[str, str]:
+    g = _group(run, claim["metric"], claim["demosaic"], claim["cfas"])
+    if not g:
+        return "not measured", "no value in this run"
+    vals = [r[1] for r in g]
+    dec = get_metric(claim["metric"]).decimals + 1
+    spread = max(vals) - min(vals)
+    lo_c, hi_c = min(g, key=lambda r: r[1])[0], max(g, key=lambda r: r[1])[0]
+    detail = (f"{_fmt(min(vals), dec)} ({cfa_label(lo_c)}) to {_fmt(max(vals), dec)} ({cfa_label(hi_c)}): "
+              f"spread {_fmt(spread, dec)} against at most {claim['max_range']:g}")
+    return ("holds" if spread <= claim["max_range"] else "differs"), detail
+
+
+def _at_most(run: Run, claim: dict) -> tuple[str, str]:
+    g = _group(run, claim["metric"], claim["demosaic"], claim["cfas"])
+    if not g:
+        return "not measured", "no value in this run"
+    dec = get_metric(claim["metric"]).decimals + 1
+    top = max(g, key=lambda r: r[3])
+    detail = (f"every CFA's interval below {_fmt(top[3], dec)} (the highest: {cfa_label(top[0])} "
+              f"{_fmt(top[1], dec)}) against at most {claim['max_value']:g}")
+    return ("holds" if top[3] <= claim["max_value"] else "differs"), detail
+
+
+def _best(run: Run, claim: dict) -> tuple[str, str]:
+    got = run.scores_of(claim["demosaic"])
+    if claim["cfa"] not in got:
+        return "not measured", "no score in this run"
+    s = got[claim["cfa"]]
+    first = sorted((r[3], c) for c, r in got.items())[0][1]
+    detail = (f"{cfa_label(claim['cfa'])} rank {s[3]} (interval {s[4]}-{s[5]}) of {len(got)}, score {s[0]:.4f}; "
+              f"first: {cfa_label(first)} {got[first][0]:.4f}")
+    return ("holds" if s[4] == 1 else "differs"), detail
+
+
+def judge(run: Run, claim: dict) -> tuple[str, str]:
+    """(verdict, what the run measured) of one claim on one run."""
+    kind = claim.get("kind")
+    if kind == "order":
+        return _order(run, claim)
+    if kind == "similar":
+        return _similar(run, claim)
+    if kind == "at_most":
+        return _at_most(run, claim)
+    if kind == "best":
+        return _best(run, claim)
+    raise CfaMitsubaError(f"claim {claim.get('id')!r}: unknown kind {kind!r}")
