@@ -102,7 +102,8 @@ def test_paper_isetcam_config_selects_isetcams_procedure():
     cfg = load_config(ISETCAM_TOML)
     ch = cfg.chain_settings()
     assert cfg.range_policy == "paper" and cfg.capture["exposure_policy"] == "each"
-    assert dict(ch.isp) == {"white_balance": "illuminant", "white_preserving": False, "colour_fit": "mcc"}
+    assert dict(ch.isp) == {"white_balance": "illuminant", "white_preserving": False, "colour_fit": "mcc",
+                            "regularise": False}  # ISETCam: the exact, unconstrained fit
     assert ch.options_of_metrics()["delta-e"] == {"version": "1976"}
     assert ch.options_of_metrics()["scielab"]["matrix"] == "xyz10"
     base = cfg.base_condition()
