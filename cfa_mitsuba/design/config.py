@@ -25,12 +25,10 @@ __all__ = ["DesignConfig", "Objective", "SpectraSpec", "load_design", "parse_des
            "MAX_EXHAUSTIVE", "ENGINES", "FAMILIES"]
 
 import dataclasses
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import CfaMitsubaError
-from ..study.checker import _Checker
+from ..study.checker import _Checker, read_toml
 
 #: The proxies (design/proxy.py) that predict each metric: where the
 #: full-chain value comes from (colour fit, noise, frequency structure).
@@ -336,13 +334,5 @@ def parse_design(data: dict, *, where: str = "design", base: Path | None = None)
 def load_design(path) -> DesignConfig:
     """Read and validate a design config (TOML); a problem raises
     :class:`~cfa_mitsuba.errors.CfaMitsubaError` naming the file and the key."""
-    p = Path(path)
-    if not p.is_file():
-        raise CfaMitsubaError(f"no such design config: {str(p)!r}")
-    try:
-        data = tomllib.loads(p.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise CfaMitsubaError(f"{p.name}: invalid TOML: {exc}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise CfaMitsubaError(f"cannot read design config {str(p)!r}: {exc}") from None
+    p, data = read_toml(path, "design config")
     return dataclasses.replace(parse_design(data, where=p.name, base=p.parent), path=str(p.resolve()))

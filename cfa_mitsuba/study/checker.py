@@ -4,9 +4,11 @@ number (got -1)``)."""
 
 from __future__ import annotations
 
-__all__ = ["_Checker", "_typename"]
+__all__ = ["_Checker", "_typename", "read_toml"]
 
 import math
+import tomllib
+from pathlib import Path
 
 from ..errors import CfaMitsubaError
 
@@ -85,3 +87,18 @@ class _Checker:
 def _typename(v) -> str:
     return {bool: "boolean", int: "integer", float: "number", str: "string", list: "list",
             dict: "table"}.get(type(v), type(v).__name__)
+
+
+def read_toml(path, what: str) -> tuple[Path, dict]:
+    """(path, the parsed TOML) of a config file; a missing, unreadable or
+    malformed file is one :class:`CfaMitsubaError` naming it (``what``: 'config
+    file', 'design config')."""
+    p = Path(path)
+    if not p.is_file():
+        raise CfaMitsubaError(f"no such {what}: {str(p)!r}")
+    try:
+        return p, tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise CfaMitsubaError(f"{p.name}: invalid TOML: {exc}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CfaMitsubaError(f"cannot read {what} {str(p)!r}: {exc}") from None

@@ -17,12 +17,11 @@ from __future__ import annotations
 __all__ = ["StudyConfig", "SceneSpec", "SweepSpec", "load_config", "parse_config"]
 
 import dataclasses
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import CfaMitsubaError
-from .checker import _Checker, _typename
+from .checker import _Checker, _typename, read_toml
 from .sweeps import SweepSpec, _sweeps
 from ..io.validate import safe_name
 
@@ -433,14 +432,6 @@ def load_config(path) -> StudyConfig:
     Raises :class:`~cfa_mitsuba.errors.CfaMitsubaError` naming the file and
     the offending key for any problem, before any work starts.
     """
-    p = Path(path)
-    if not p.is_file():
-        raise CfaMitsubaError(f"no such config file: {str(p)!r}")
-    try:
-        data = tomllib.loads(p.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise CfaMitsubaError(f"{p.name}: invalid TOML: {exc}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise CfaMitsubaError(f"cannot read config {str(p)!r}: {exc}") from None
+    p, data = read_toml(path, "config file")
     cfg = parse_config(data, where=p.name, base=p.parent)
     return dataclasses.replace(cfg, path=str(p.resolve()))
