@@ -97,6 +97,20 @@ def test_quick_study_means_and_intervals(quick):
     assert (scores["total_rank"] <= scores["total_rank_worst"]).all()
 
 
+def test_every_scored_metric_tells_the_cfas_apart(quick):
+    """Under the default range policy every scored metric's normalised score
+    varies across the CFAs for every demosaic (issue 12: no metric constant,
+    none silently scored as a tie), and the policies' clipping table is written."""
+    out, _, _ = quick
+    scores = pd.read_csv(out / "scores.csv")
+    distinct = scores.groupby(["demosaic", "metric"])["score"].agg(lambda v: v.round(9).nunique())
+    assert len(distinct) == 3 * 8
+    assert (distinct >= 2).all(), distinct[distinct < 2]
+    policies = pd.read_csv(out / "policies.csv")
+    clip = policies[policies["scope"] == "clipping"]
+    assert set(clip["policy"]) == {"paper", "study", "ideal"} and len(clip) == 3 * 8
+
+
 def test_moire_bounds_are_censored(quick):
     """No MSP at the chirp's top analysed frequency is stored as a
     measurement: every such value is marked censored (a lower bound), and
