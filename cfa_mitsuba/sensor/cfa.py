@@ -41,7 +41,6 @@ __all__ = [
 ]
 
 import functools
-import tomllib
 import warnings
 from dataclasses import dataclass, field
 
@@ -49,7 +48,7 @@ import numpy as np
 
 from .. import spectra as _spectra
 from ..errors import CfaMitsubaError
-from .spectra_sets import DATA_DIR, get_spectra_set
+from .spectra_sets import get_spectra_set, read_data_toml
 
 #: The spectra set of a user TOML's built-in letters unless it names one
 #: (``spectra_set = "..."``): the Nikon construction, as before sets existed.
@@ -217,11 +216,7 @@ def builtin_filter_curve(letter: str, spectra_set: str = DEFAULT_SPECTRA_SET) ->
 
 @functools.lru_cache(maxsize=1)
 def _layouts() -> dict:
-    path = DATA_DIR / "layouts.toml"
-    try:
-        return tomllib.loads(path.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:  # a broken installation, not a user error
-        raise CfaMitsubaError(f"cannot read the CFA layouts {str(path)!r}: {exc}") from None
+    return read_data_toml("layouts.toml", "CFA layouts")
 
 
 def list_layouts() -> list[str]:

@@ -14,12 +14,11 @@ from __future__ import annotations
 __all__ = ["SensorPreset", "get_sensor_preset", "list_sensor_presets"]
 
 import functools
-import tomllib
 from dataclasses import dataclass, field, fields
 
 from ..errors import CfaMitsubaError
 from .params import SensorParams
-from .spectra_sets import DATA_DIR
+from .spectra_sets import read_data_toml
 
 _ISETCAM_KEYS = {"conversion_gain_uv_per_e", "voltage_swing_v", "read_noise_mv", "dark_voltage_mv_s"}
 
@@ -54,11 +53,7 @@ class SensorPreset:
 
 @functools.lru_cache(maxsize=1)
 def _definitions() -> dict:
-    path = DATA_DIR / "sensors.toml"
-    try:
-        return tomllib.loads(path.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:  # a broken installation, not a user error
-        raise CfaMitsubaError(f"cannot read the sensor presets {str(path)!r}: {exc}") from None
+    return read_data_toml("sensors.toml", "sensor presets")
 
 
 def _from_isetcam(values: dict, where: str) -> dict:

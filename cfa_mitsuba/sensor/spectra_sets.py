@@ -194,12 +194,20 @@ def _ratio(num, den):
     return _combine([num, den], lambda n, d: np.divide(n, d, out=np.zeros_like(n), where=d > 1e-12))
 
 
+def read_data_toml(name: str, what: str) -> dict:
+    """A TOML file shipped in the package's data folder (``what`` names it in
+    the error: a missing or broken one is a broken installation, not a user
+    error)."""
+    path = DATA_DIR / name
+    try:
+        return tomllib.loads(path.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise CfaMitsubaError(f"cannot read the {what} {str(path)!r}: {exc}") from None
+
+
 @functools.lru_cache(maxsize=1)
 def _definitions() -> dict:
-    try:
-        return tomllib.loads(_SETS_FILE.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:  # a broken installation, not a user error
-        raise CfaMitsubaError(f"cannot read the spectra sets {str(_SETS_FILE)!r}: {exc}") from None
+    return read_data_toml(_SETS_FILE.name, "spectra sets")
 
 
 def _model_curve(key: str):
