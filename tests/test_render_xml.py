@@ -101,3 +101,38 @@ def test_white_reference_under_a_uniform_sky_is_the_sky(tmp_path):
     np.testing.assert_allclose(white, 1.0, rtol=0.01)
     # The sky seen directly is 1 as well (top-left pixel misses the ball).
     np.testing.assert_allclose(img.data[0, 0] / img.meta["scale_from_canonical"], 1.0, rtol=1e-5)
+
+
+def test_a_scene_that_fails_to_load_is_never_instantiated_in_this_process(tmp_path, monkeypatch):
+    """Mitsuba 3.9 leaves the emitters of a half-built scene registered when
+    instantiation fails part way; a later render in the same process then
+    called a freed area light and crashed (CI, Nov 2026).  A scene file is
+    therefore first loaded in a child process, and a failure there is
+    refused without instantiating anything here."""
+    from cfa_mitsuba.render import variant
+
+    mi = variant.load(cm.render.choose_variant())
+    calls = []
+    real = mi.parser.instantiate
+    monkeypatch.setattr(mi.parser, "instantiate", lambda *a, **k: calls.append(a) or real(*a, **k))
+    bad = _write(tmp_path, SCENE.format(sensor=SENSOR, body=LIGHT + '<shape type="nosuchshape"/>'), "bad.xml")
+    with pytest.raises(CfaMitsubaError, match="nosuchshape") as info:
+        cm.render.render(str(bad), spp=1)
+    assert "\n" not in str(info.value) and str(bad) in str(info.value)
+    assert calls == []
+    good = _write(tmp_path, SCENE.format(sensor=SENSOR, body=LIGHT + BALL.format(bsdf="diffuse")), "good.xml")
+    cm.render.render(str(good), spp=1)
+    assert len(calls) >= 1  # the scene that loads in the child is then loaded here
+
+
+def test_a_crash_while_loading_is_one_line(tmp_path, monkeypatch):
+    import subprocess
+
+    from cfa_mitsuba.render import userxml
+
+    p = _write(tmp_path, SCENE.format(sensor=SENSOR, body=LIGHT + BALL.format(bsdf="diffuse")), "crash.xml")
+    monkeypatch.setattr(userxml.subprocess, "run",
+                        lambda cmd, **kw: subprocess.CompletedProcess(cmd, -11, "", "Fatal Python error\n"))
+    with pytest.raises(CfaMitsubaError, match=r"signal 11") as info:
+        cm.render.render(str(p), spp=1)
+    assert "\n" not in str(info.value) and "crash.xml" in str(info.value)

@@ -27,6 +27,11 @@ Refused with one line naming the file and line of the element:
 - film sizes, path depths or apertures we cannot render (named by element
   and attribute).
 
+Before a scene file is loaded in this process it is loaded once in a child
+process (:mod:`.loadcheck`): a file Mitsuba cannot instantiate is refused
+from there, because a failed instantiation leaves Mitsuba's process state
+unsafe for later renders (:func:`_loads_elsewhere`).
+
 The integrator's ``max_depth`` is kept (-1, unlimited, becomes
 :data:`UNLIMITED_DEPTH`), else :data:`DEFAULT_MAX_DEPTH`.  A ``thinlens``
 camera's f-number is f / (2 R): R its ``aperture_radius`` (scene units
@@ -40,15 +45,18 @@ from __future__ import annotations
 __all__ = ["SUPPORTED_BSDFS", "DEFAULT_MAX_DEPTH", "UNLIMITED_DEPTH", "DEFAULT_SPP", "MAX_FOV_DEG", "user_scene",
            "files_unchanged"]
 
+import json
 import math
 import os
+import subprocess
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import CfaMitsubaError
 from . import variant as _variant
 from . import xmlscan
-from .loading import first_line
+from .loading import first_line, inspect_settings
 from .types import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene, focal_length_m
 
 #: BSDF plugins whose sampling is wavelength-independent (Mitsuba 3.9).
@@ -278,35 +286,87 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
         meta["f_number"] = lens["f_number"]
     if read.focus_m:
         meta["scene_distance_m"] = read.focus_m
-    return Built(meta=meta, loader=_loader(read, radius), band_constant=False)
+    return Built(meta=meta, loader=_loader(read, radius, scene.allow_outside_paths), band_constant=False)
 
 
-def _loader(read: _Read, radius: float | None):
+def _instantiate(mi, read: _Read, radius: float | None, film, sampler, integrator, *, sensor=None, extra=None):
+    """The scene of ``read`` with our plugins in place of its own (see
+    :func:`.loading.load_scene` for the arguments)."""
+    state = mi.parser.ParserState(read.state)
+    nodes = state.nodes
+    root = nodes[0].props
+    for key, j in _children(mi, nodes[0]):
+        if nodes[j].type == mi.ObjectType.Integrator or (
+                nodes[j].type == mi.ObjectType.Sensor and (j != read.sensor or sensor is not None)):
+            del root[key]
+    cam = nodes[read.sensor].props
+    for key, j in _children(mi, nodes[read.sensor]):
+        if nodes[j].type in (mi.ObjectType.Film, mi.ObjectType.Sampler):
+            del cam[key]
+    if radius is not None:
+        cam["aperture_radius"] = float(radius)
+    try:
+        if sensor is not None:
+            root["cfa_sensor"] = mi.load_dict({**sensor, "film": film, "sampler": sampler})
+        else:
+            cam["film"] = mi.load_dict(film)
+            cam["sampler"] = mi.load_dict(sampler)
+        root["cfa_integrator"] = mi.load_dict(integrator)
+        for name, shape in (extra or {}).items():
+            root[name] = mi.load_dict(shape)
+        return mi.parser.instantiate(mi.parser.ParserConfig(mi.variant()), state)
+    except Exception as exc:  # Mitsuba reports plugin errors as RuntimeError
+        raise CfaMitsubaError(f"Mitsuba cannot load the scene {str(read.scan.main)!r}: {first_line(exc)}") from None
+
+
+#: (scene identity, variant) of the scene files this process has seen load in a child process.
+_LOADS_ELSEWHERE: set[tuple[str, str]] = set()
+#: Exit status of :mod:`.loadcheck` for a scene Mitsuba refuses (its message is on stderr).
+LOADCHECK_REFUSED = 3
+
+
+def load_check(path, allow_outside_paths: bool, variant: str) -> None:
+    """Instantiate the scene file at ``path`` once, with stock film, sampler
+    and integrator (the child side of :func:`_loads_elsewhere`)."""
+    mi = _variant.load(variant)
+    read = _read(Path(path), allow_outside_paths)
+    film, sampler, integrator = inspect_settings(8, 8)
+    _instantiate(mi, read, None, film, sampler, integrator)
+
+
+def _loads_elsewhere(read: _Read, allow_outside_paths: bool, variant: str) -> None:
+    """Load the scene in a child process before it is loaded in this one.
+
+    Needed because when Mitsuba 3.9 fails part way through instantiating a
+    scene (an unknown plugin or a bad parameter after an area light was
+    built), the half-built emitters stay in Dr.Jit's registry after their
+    shapes are freed; the next scene rendered in the same process calls
+    them and crashes (seen as a segmentation fault in
+    ``Scene.pdf_emitter_direction``).  A file that fails, or crashes
+    Mitsuba, in the child is refused here without touching this process;
+    one that loads is loaded here.  About 1 s per scene file and variant,
+    once per process.
+    """
+    key = (json.dumps(_identity(read), sort_keys=True), variant)
+    if key in _LOADS_ELSEWHERE:
+        return
+    cmd = [sys.executable, "-m", "cfa_mitsuba.render.loadcheck", variant, str(read.scan.main)]
+    if allow_outside_paths:
+        cmd.append("--allow-outside-paths")
+    proc = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL)
+    if proc.returncode != 0:
+        lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
+        if proc.returncode == LOADCHECK_REFUSED and lines:
+            raise CfaMitsubaError(lines[-1])
+        how = (f"signal {-proc.returncode}" if proc.returncode < 0 else f"exit status {proc.returncode}")
+        last = f": {lines[-1][:300]}" if lines else ""
+        raise CfaMitsubaError(f"Mitsuba failed while loading the scene {str(read.scan.main)!r} ({how}){last}")
+    _LOADS_ELSEWHERE.add(key)
+
+
+def _loader(read: _Read, radius: float | None, allow_outside_paths: bool):
     def load(mi, film, sampler, integrator, *, sensor=None, extra=None):
-        state = mi.parser.ParserState(read.state)
-        nodes = state.nodes
-        root = nodes[0].props
-        for key, j in _children(mi, nodes[0]):
-            if nodes[j].type == mi.ObjectType.Integrator or (
-                    nodes[j].type == mi.ObjectType.Sensor and (j != read.sensor or sensor is not None)):
-                del root[key]
-        cam = nodes[read.sensor].props
-        for key, j in _children(mi, nodes[read.sensor]):
-            if nodes[j].type in (mi.ObjectType.Film, mi.ObjectType.Sampler):
-                del cam[key]
-        if radius is not None:
-            cam["aperture_radius"] = float(radius)
-        try:
-            if sensor is not None:
-                root["cfa_sensor"] = mi.load_dict({**sensor, "film": film, "sampler": sampler})
-            else:
-                cam["film"] = mi.load_dict(film)
-                cam["sampler"] = mi.load_dict(sampler)
-            root["cfa_integrator"] = mi.load_dict(integrator)
-            for name, shape in (extra or {}).items():
-                root[name] = mi.load_dict(shape)
-            return mi.parser.instantiate(mi.parser.ParserConfig(mi.variant()), state)
-        except Exception as exc:  # Mitsuba reports plugin errors as RuntimeError
-            raise CfaMitsubaError(f"Mitsuba cannot load the scene {str(read.scan.main)!r}: {first_line(exc)}") from None
+        _loads_elsewhere(read, allow_outside_paths, mi.variant())
+        return _instantiate(mi, read, radius, film, sampler, integrator, sensor=sensor, extra=extra)
 
     return load
