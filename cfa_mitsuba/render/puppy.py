@@ -1,6 +1,6 @@
 """``puppy``: a 3D scene in the spirit of the paper's PUPPY.
 
-A toy dog built from shapes (a red furry body, brown furry ears and snout,
+A toy dog built from shapes (an orange furry body, brown furry ears and snout,
 black nose and eye) stands on a table with a gingham cloth in front of a
 grey backdrop, with two printed cards on posts just behind it (a black and
 white test chart at the right, a colour print at the upper left), yellow
@@ -149,7 +149,7 @@ def objects() -> list[dict]:
 
 
 _OBJECTS = (
-    {"name": "dog body, head, legs, tail", "shape": "ellipsoids, sphere, cylinders", "reflectance": "red",
+    {"name": "dog body, head, legs, tail", "shape": "ellipsoids, sphere, cylinders", "reflectance": "orange",
      "texture": "fur", "depth_m": 1.2},
     {"name": "dog ears and snout", "shape": "ellipsoids", "reflectance": "dark skin", "texture": "fur_brown",
      "depth_m": 1.2},
@@ -157,10 +157,12 @@ _OBJECTS = (
     {"name": "blue letter block", "shape": "cube", "reflectance": "blue", "texture": "toy_block", "depth_m": 0.88},
     {"name": "yellow-green ball", "shape": "sphere", "reflectance": "yellow green", "depth_m": 1.55},
     {"name": "magenta post", "shape": "cylinder", "reflectance": "magenta", "depth_m": 1.8},
-    {"name": "yellow panel", "shape": "rectangle", "reflectance": "yellow", "depth_m": 2.2},
-    {"name": "orange-yellow panel", "shape": "rectangle", "reflectance": "orange yellow", "depth_m": 2.5},
+    {"name": "yellow panel", "shape": "rectangle", "reflectance": "yellow", "texture": "poster_yellow", "depth_m": 2.2},
+    {"name": "orange-yellow panel", "shape": "rectangle", "reflectance": "orange yellow",
+     "texture": "poster_orange_yellow", "depth_m": 2.5},
     {"name": "grey ball", "shape": "sphere", "reflectance": "neutral 8 (.23 D)", "depth_m": 2.4},
-    {"name": "blue-green panel", "shape": "rectangle", "reflectance": "bluish green", "depth_m": 2.7},
+    {"name": "blue-green panel", "shape": "rectangle", "reflectance": "bluish green", "texture": "poster_blue_green",
+     "depth_m": 2.7},
     {"name": "test chart card on a post", "shape": "rectangle", "reflectance": "white 9.5 (.05 D)",
      "texture": "chart", "depth_m": 1.24},
     {"name": "colour print card on a post", "shape": "rectangle", "reflectance": "white 9.5 (.05 D)",
@@ -206,6 +208,10 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
         return {"type": "rectangle", "bsdf": bsdf, "to_world": T().translate(list(c)).rotate([0, 1, 0], yaw)
                 .rotate([0, 0, 1], roll).scale([half[0], half[1], 1.0])}
 
+    def poster_bsdf(colour, half):
+        tile = tex.POSTER_TILE_M
+        return tex.poster(colour).bsdf(mi, config, uv_scale=(2 * half[0] / tile, 2 * half[1] / tile))
+
     def card(c, half, roll, texture):
         # A rectangle's uv runs from its lower left; the texture's row 0 is its top.
         flipped = type(texture)(texture.name, texture.palette, texture.weights[::-1], texture.texel_m)
@@ -240,9 +246,12 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
                   "to_world": T().translate([0.0, _TABLE_Y, -2.0]).rotate([1, 0, 0], -90).scale([1.0, 1.25, 1.0])},
         "backdrop": panel((0.0, 0.0, -3.0), (2.0, 0.75), 0.0,
                           tex.wallpaper().bsdf(mi, config, uv_scale=(4.0 / 0.048, 1.5 / 0.048))),
-        "panel_yellow": panel((-0.115, 0.115, -2.2), (0.075, 0.055), 20.0, _lambert(config, "yellow")),
-        "panel_orange_yellow": panel((-0.045, 0.165, -2.5), (0.06, 0.045), -10.0, _lambert(config, "orange yellow")),
-        "panel_blue_green": panel((0.035, 0.13, -2.7), (0.085, 0.055), 0.0, _lambert(config, "bluish green")),
+        "panel_yellow": panel((-0.115, 0.115, -2.2), (0.075, 0.055), 20.0,
+                              poster_bsdf("yellow", (0.075, 0.055))),
+        "panel_orange_yellow": panel((-0.045, 0.165, -2.5), (0.06, 0.045), -10.0,
+                                     poster_bsdf("orange yellow", (0.06, 0.045))),
+        "panel_blue_green": panel((0.035, 0.13, -2.7), (0.085, 0.055), 0.0,
+                                  poster_bsdf("bluish green", (0.085, 0.055))),
         # Two printed cards on thin posts just behind the dog (near focus).
         "card_chart": card(_CHART_CENTRE, _CHART_HALF, 4.0, tex.chart()),
         "card_chart_post": cyl((_CHART_CENTRE[0], _TABLE_Y, _CHART_CENTRE[2] - 0.003),

@@ -6,16 +6,23 @@ pixel is 0.29 mm on the dog (1.2 m) and the sensor's Nyquist period is two
 pixels, 0.58 mm; at the quick study's 240 x 212 a pixel is 0.88 mm.
 
 - ``fur`` (dog's body, head, legs, tail): a 1024-texel tile of 0.1 mm
-  texels, 'red' with hair strands two texels wide and 10-40 long running
-  down the body, dark ('black 2 (1.5 D)': in wavy tabby bands 6.4 mm apart,
-  patches a few mm across and locks of about 1 mm, from smooth noise) and
-  light ('light skin', between the bands).  Luminance contrast, not only
-  red-black chroma: a red surface alone leaves the green pixels dark and
-  noisy, where bilinear's smoothing wins every image metric.
+  texels, 'orange' with hair strands four texels (0.4 mm, about 1.4 px at
+  720 x 636) wide and 15-50 long running down the body, dark ('black 2
+  (1.5 D)': in wavy tabby bands 6.4 mm apart, patches a few mm across and
+  locks of about 1 mm, from smooth noise) and white ('white 9.5 (.05 D)',
+  between the bands).  Strong luminance contrast at the pixel scale: with
+  strands narrower than a pixel (0.2 mm) on a red base, the fur averaged to
+  a low-contrast mottle with dark, noisy green pixels, where bilinear's
+  smoothing won every image metric at the paper's size.
 - ``fur_brown`` (ears, snout): the same construction on 'dark skin' with
-  'black 2 (1.5 D)' and 'light skin' strands.
-- ``wallpaper`` (backdrop, 3 m): grey discs 16 mm across and dark lines on
-  'neutral 6.5 (.44 D)' (0.25 mm texels; defocused by the thin lens).
+  'black 2 (1.5 D)' and white strands.
+- ``wallpaper`` (backdrop, 3 m): light discs 16 mm across with dark rings,
+  dark lines 3 mm wide and pinstripes on 'neutral 6.5 (.44 D)' (0.25 mm
+  texels), coarse enough to survive the thin lens's defocus.
+- ``poster_*`` (the three coloured panels at 2.2-2.7 m): their colour with
+  black stripes 2 mm wide and dots.  Out-of-focus flat fields are where a
+  smoothing demosaic wins on noise alone; the backdrop and panels carry
+  detail that survives the blur, as a photograph's background does.
 - ``tablecloth``: a plain-weave gingham of 1-mm threads, 'light skin' and
   'purplish blue' in bands of 6 threads (a 12 mm tile), the grooves between
   threads mixed with 'neutral 5 (.70 D)'.  Seen at a grazing angle, its
@@ -32,14 +39,16 @@ pixels, 0.58 mm; at the quick study's 240 x 212 a pixel is 0.88 mm.
   green checks of 0.45 and 0.225 mm, coloured text.
 
 - ``toy_block``: the blue block is a letter block, a yellow 'A' in a
-  yellow frame on every face (0.4 mm texels; defocused, 0.88 m).
+  yellow frame on a blue face dotted with yellow (0.4 mm texels; defocused,
+  0.88 m).
 
 Textures are built once per process (they depend on nothing but the code).
 """
 
 from __future__ import annotations
 
-__all__ = ["FUR_TILE_M", "fur", "fur_brown", "tablecloth", "chart", "colour_print", "all_textures"]
+__all__ = ["FUR_TILE_M", "POSTER_TILE_M", "fur", "fur_brown", "tablecloth", "chart", "colour_print", "poster",
+           "all_textures"]
 
 import functools
 
@@ -52,7 +61,7 @@ _FUR_SIZE, _FUR_TEXEL = 1024, 1e-4
 #: Physical size (m) of one fur tile.
 FUR_TILE_M = _FUR_SIZE * _FUR_TEXEL
 _CARD_TEXEL = 7.5e-5
-_WHITE, _BLACK = "white 9.5 (.05 D)", "black 2 (1.5 D)"
+_WHITE, _BLACK, _LIGHT = "white 9.5 (.05 D)", "black 2 (1.5 D)", "neutral 8 (.23 D)"
 
 
 def _fur_weights(seed: int) -> np.ndarray:
@@ -64,25 +73,25 @@ def _fur_weights(seed: int) -> np.ndarray:
     warp = P.smooth_noise((n, n), 24.0, seed + 4)
     cols = np.arange(n)[None, :] / 64.0
     stripes = (0.5 + 0.5 * np.sin(2 * np.pi * (cols + 1.5 * warp))) ** 4
-    dark = P.fur_strands(n, 30000, (10.0, 40.0), 12.0, seed + 1,
-                         density=0.01 + (0.3 * patches ** 3 + stripes) * (0.2 + locks ** 2), width=2)
-    light = P.fur_strands(n, 12000, (10.0, 30.0), 12.0, seed + 2, density=0.05 + (1.0 - stripes) * locks ** 2,
-                          width=2)
-    w_dark = np.minimum(0.85, 0.6 * dark)
-    w_light = np.minimum(0.7, 0.5 * light) * (1.0 - w_dark)
+    dark = P.fur_strands(n, 12000, (15.0, 50.0), 12.0, seed + 1,
+                         density=0.01 + (0.3 * patches ** 3 + stripes) * (0.2 + locks ** 2), width=4)
+    light = P.fur_strands(n, 6000, (15.0, 40.0), 12.0, seed + 2, density=0.05 + (1.0 - stripes) * locks ** 2,
+                          width=4)
+    w_dark = np.minimum(0.95, 0.8 * dark)
+    w_light = np.minimum(0.9, 0.7 * light) * (1.0 - w_dark)
     return np.stack([1.0 - w_dark - w_light, w_dark, w_light], axis=-1).astype(np.float32)
 
 
 @functools.lru_cache(maxsize=1)
 def fur() -> SpectralTexture:
-    return SpectralTexture("fur: red with black and light hair strands, tabby bands", ("red", _BLACK, "light skin"),
+    return SpectralTexture("fur: orange with black and light hair strands, tabby bands", ("orange", _BLACK, _LIGHT),
                            _fur_weights(11), _FUR_TEXEL)
 
 
 @functools.lru_cache(maxsize=1)
 def fur_brown() -> SpectralTexture:
     return SpectralTexture("brown fur: dark skin with black and light hair strands",
-                           ("dark skin", _BLACK, "light skin"), _fur_weights(23), _FUR_TEXEL)
+                           ("dark skin", _BLACK, _LIGHT), _fur_weights(23), _FUR_TEXEL)
 
 
 @functools.lru_cache(maxsize=1)
@@ -173,8 +182,11 @@ def colour_print() -> SpectralTexture:
 @functools.lru_cache(maxsize=1)
 def wallpaper() -> SpectralTexture:
     """Grey wallpaper: light discs 16 mm across on a 24 mm grid, offset
-    every other row, and dark lines 1 mm wide between the rows (a 48 mm
-    tile of 0.25 mm texels)."""
+    every other row, each with a dark ring, and dark lines 3 mm wide between
+    the rows, over a fine dark pinstripe (a 48 mm tile of 0.25 mm texels).
+    The backdrop is 3 m away, out of focus (about 4.6 px of defocus at f/4):
+    its pattern is kept coarse and contrasted enough to survive the blur, so
+    it is detail, not a flat noisy field where smoothing wins."""
     n = 192
     y, x = np.mgrid[0:n, 0:n] + 0.5
     d = np.full((n, n), np.inf)
@@ -182,27 +194,58 @@ def wallpaper() -> SpectralTexture:
                    (216, 216)):
         d = np.minimum(d, np.hypot(y - cy, x - cx))
     c = P.Canvas(n, n, 3)
+    c.paint(((np.arange(n)[None, :] % 16) < 4).astype(np.float32) * np.ones((n, 1), np.float32), 2)
     c.paint((d < 32).astype(np.float32), 1)
+    c.paint(((d >= 20) & (d < 26)).astype(np.float32), 2)
     lines = np.zeros((n, n), np.float32)
-    lines[70:74] = lines[166:170] = 1.0
+    lines[66:78] = lines[162:174] = 1.0
     c.paint(lines, 2)
-    return SpectralTexture("wallpaper: light discs and dark lines on grey",
-                           ("neutral 6.5 (.44 D)", "neutral 8 (.23 D)", "neutral 3.5 (1.05 D)"), c.weights, 2.5e-4)
+    return SpectralTexture("wallpaper: light discs with dark rings, dark lines and pinstripes on grey",
+                           ("neutral 6.5 (.44 D)", "white 9.5 (.05 D)", "black 2 (1.5 D)"), c.weights, 2.5e-4)
+
+
+#: The puppy's printed panels, by panel name.
+_POSTERS = {"yellow": "yellow", "orange_yellow": "orange yellow", "blue_green": "bluish green"}
+#: Side of one poster tile (m): see :func:`poster`.
+POSTER_TILE_M = 0.024
+
+
+@functools.lru_cache(maxsize=8)
+def poster(colour: str) -> SpectralTexture:
+    """A coloured panel printed with black diagonal stripes 2 mm wide,
+    6 mm apart, and a black dot in every other gap (a 24 mm tile of
+    0.25 mm texels).  The panels stand 2.2-2.7 m away, out of focus; as for
+    the wallpaper, a coarse print keeps them detail rather than flat noisy
+    fields."""
+    n = 96
+    y, x = np.mgrid[0:n, 0:n] + 0.5
+    stripes = (((x + y) % 24) < 8).astype(np.float32)
+    dots = (np.hypot((x % 24) - 18, (y % 48) - 30) < 3.5).astype(np.float32)
+    c = P.Canvas(n, n, 2)
+    c.paint(np.maximum(stripes, dots), 1)
+    return SpectralTexture(f"{colour} poster: black stripes and dots", (colour, _BLACK), c.weights, 2.5e-4)
 
 
 @functools.lru_cache(maxsize=1)
 def toy_block() -> SpectralTexture:
-    """A letter block's face: a yellow letter in a yellow frame on blue
-    (Mitsuba's cube repeats a face's uv square on every face)."""
+    """A letter block's face: a yellow letter in a yellow frame on blue,
+    the blue printed with a yellow grid of dots 1.6 mm apart (Mitsuba's cube
+    repeats a face's uv square on every face)."""
     c = P.Canvas(128, 128, 2)
+    y, x = np.mgrid[0:128, 0:128]
+    c.paint((((y % 4) < 2) & ((x % 4) < 2)).astype(np.float32), 1)
     frame = np.ones((128, 128), np.float32)
     frame[10:-10, 10:-10] = 0.0
     c.paint(frame, 1)
+    c.paint(np.pad(np.ones((56, 60), np.float32), ((16, 56), (30, 38))), 0)
     c.paint(P.text_mask("A", 12), 1, 22, 34)
-    return SpectralTexture("toy block: a yellow letter and frame on blue", ("blue", "yellow"), c.weights, 4e-4)
+    return SpectralTexture("toy block: a yellow letter and frame on blue dotted with yellow", ("blue", "yellow"),
+                           c.weights, 4e-4)
 
 
+@functools.lru_cache(maxsize=1)
 def all_textures() -> dict[str, SpectralTexture]:
     """Every puppy texture by name."""
     return {"fur": fur(), "fur_brown": fur_brown(), "tablecloth": tablecloth(), "chart": chart(),
-            "colour_print": colour_print(), "toy_block": toy_block(), "wallpaper": wallpaper()}
+            "colour_print": colour_print(), "toy_block": toy_block(), "wallpaper": wallpaper(),
+            **{f"poster_{k}": poster(v) for k, v in _POSTERS.items()}}
