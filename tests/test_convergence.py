@@ -131,8 +131,9 @@ def test_default_levels_and_square_rounding():
     assert plan.spp_levels == (1, 9, 16) and plan.reference_spp == 256
     assert (plan.width, plan.height) == (720, 636)
     puppy = conv.make_plan("puppy")
-    assert (puppy.width, puppy.height) == (240, 212) and puppy.default_spp == 256 and puppy.reference_spp == 4096
-    assert puppy.spp_levels == (1, 4, 16, 64, 256, 1024)
+    # the puppy's 400 spp default (20 x 20 strata), its reference 16 x that, its levels the powers of 4 around it
+    assert (puppy.width, puppy.height) == (240, 212) and puppy.default_spp == 400 and puppy.reference_spp == 6400
+    assert puppy.spp_levels == (1, 4, 16, 64, 256, 400, 1024)
 
 
 @pytest.mark.parametrize("args, needle", [
