@@ -254,14 +254,7 @@ def parse_design(data: dict, *, where: str = "design", base: Path | None = None)
     for required in ("layout", "objective", "study"):
         if required not in data:
             ck.fail(required, "missing (required)")
-    name = ck.string(data.get("name", Path(where).stem), "name")
-    description = data.get("description", "")
-    if not isinstance(description, str):
-        ck.fail("description", "must be a string")
-    seed = ck.integer(data.get("seed", 0), "seed", 0)
-    workers = data.get("workers")
-    if workers is not None:
-        workers = ck.integer(workers, "workers", 1)
+    name, description, seed, workers = ck.header(data)
     tiles, alphabet, set_name, sset, density, mirrors = _layout(ck, ck.table(data["layout"], "layout", {
         "tiles": None, "alphabet": None, "spectra_set": None, "density": None, "mirrors": None}))
     spectra = _spectra(ck, data.get("spectra"), alphabet, sset)

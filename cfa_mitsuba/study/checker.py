@@ -32,6 +32,20 @@ class _Checker:
                 self.fail(path, f"unknown key (known here: {known})")
         return data
 
+    def header(self, data: dict) -> tuple[str, str, int, int | None]:
+        """The keys every run config shares: ``name`` (default: the file's
+        stem), ``description`` (default ''), ``seed`` (>= 0, default 0) and
+        ``workers`` (>= 1, or None when absent)."""
+        name = self.string(data.get("name", Path(self.where).stem), "name")
+        description = data.get("description", "")
+        if not isinstance(description, str):
+            self.fail("description", "must be a string")
+        seed = self.integer(data.get("seed", 0), "seed", 0)
+        workers = data.get("workers")
+        if workers is not None:
+            workers = self.integer(workers, "workers", 1)
+        return name, description, seed, workers
+
     def string(self, value, key: str, choices=None) -> str:
         if not isinstance(value, str) or not value:
             self.fail(key, f"must be a non-empty string, got {_typename(value)} {value!r}")

@@ -249,15 +249,8 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         if required not in data and not (required == "scenes" and "custom_scenes" in data):
             ck.fail(required, "missing (required)")
 
-    name = ck.string(data.get("name", Path(where).stem), "name")
-    description = data.get("description", "")
-    if not isinstance(description, str):
-        ck.fail("description", "must be a string")
-    seed = ck.integer(data.get("seed", 0), "seed", 0)
+    name, description, seed, workers = ck.header(data)
     seeds = ck.integer(data.get("seeds", DEFAULT_SEEDS), "seeds", 1)
-    workers = data.get("workers")
-    if workers is not None:
-        workers = ck.integer(workers, "workers", 1)
 
     # --- render ---------------------------------------------------------
     known_scenes = [n for n, _ in render.list_scenes()]
