@@ -286,7 +286,7 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
         meta["f_number"] = lens["f_number"]
     if read.focus_m:
         meta["scene_distance_m"] = read.focus_m
-    return Built(meta=meta, loader=_loader(read, radius, scene.allow_outside_paths), band_constant=False)
+    return Built(meta=meta, loader=_loader(read, radius, scene), band_constant=False)
 
 
 def _instantiate(mi, read: _Read, radius: float | None, film, sampler, integrator, *, sensor=None, extra=None):
@@ -334,7 +334,7 @@ def load_check(path, allow_outside_paths: bool, variant: str) -> None:
     _instantiate(mi, read, None, film, sampler, integrator)
 
 
-def _loads_elsewhere(read: _Read, allow_outside_paths: bool, variant: str) -> None:
+def _loads_elsewhere(read: _Read, scene: Scene, variant: str) -> None:
     """Load the scene in a child process before it is loaded in this one.
 
     Needed because when Mitsuba 3.9 fails part way through instantiating a
@@ -347,11 +347,11 @@ def _loads_elsewhere(read: _Read, allow_outside_paths: bool, variant: str) -> No
     one that loads is loaded here.  About 1 s per scene file and variant,
     once per process.
     """
-    key = (json.dumps(_identity(read), sort_keys=True), variant)
+    key = (json.dumps(scene.identity, sort_keys=True), variant)  # the files' content hashes, from user_scene
     if key in _LOADS_ELSEWHERE:
         return
     cmd = [sys.executable, "-m", "cfa_mitsuba.render.loadcheck", variant, str(read.scan.main)]
-    if allow_outside_paths:
+    if scene.allow_outside_paths:
         cmd.append("--allow-outside-paths")
     proc = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL)
     if proc.returncode != 0:
@@ -364,9 +364,9 @@ def _loads_elsewhere(read: _Read, allow_outside_paths: bool, variant: str) -> No
     _LOADS_ELSEWHERE.add(key)
 
 
-def _loader(read: _Read, radius: float | None, allow_outside_paths: bool):
+def _loader(read: _Read, radius: float | None, scene: Scene):
     def load(mi, film, sampler, integrator, *, sensor=None, extra=None):
-        _loads_elsewhere(read, allow_outside_paths, mi.variant())
+        _loads_elsewhere(read, scene, mi.variant())
         return _instantiate(mi, read, radius, film, sampler, integrator, sensor=sensor, extra=extra)
 
     return load
