@@ -1,7 +1,7 @@
 """Demosaicing benchmark: PSNR and time of every method on every CFA, and
 speed against colour-demosaicing on a 636 x 720 Bayer mosaic.
 
-    python benchmarks/bench_demosaic.py [--quick] [--repeat N] [--new-layouts-only]
+    python benchmarks/bench_demosaic.py [--quick] [--repeat N] [--new-layouts-only] [--scielab-only]
 
 Images: scikit-image's bundled photographs (astronaut, coffee, chelsea,
 rocket), 8-bit sRGB values / 255 taken as the scene, as the demosaicing
@@ -12,6 +12,15 @@ today's sensors (quad-bayer ... mono, issue 16) are scored the same way:
 the RGB ones on R, G, B, the others on their own channels.  Times are the
 minimum over ``--repeat`` runs (wall clock, one process): compare ratios
 within one run, since other processes share the machine.
+
+S-CIELAB section (Bayer): the photographs decoded from sRGB to linear
+light and taken to CIE XYZ (colour-science), mosaicked, demosaicked, and
+compared with the original by S-CIELAB (CIEDE2000, D65 white) at two viewing
+geometries: 23 samples per degree (a 720-pixel image seen over 31 degrees,
+or the quick study's 240 pixels over 10) and 72 (the paper's PUPPY, 720
+pixels over 10 degrees).  At 72 samples per degree S-CIELAB's filters
+remove detail finer than about 10 pixels, where demosaicking errors live:
+docs/scenes.md uses this table to explain the puppy's S-CIELAB ranking.
 """
 
 from __future__ import annotations
@@ -87,6 +96,32 @@ def quality_table(cfas, imgs, repeat, rgb: bool):
                 print(f"| {name} | *{label}* | " + " | ".join(f"{v:.2f}" for v in vals) + f" | {np.mean(vals):.2f} | |")
 
 
+def scielab_table(imgs):
+    import colour
+
+    from cfa_mitsuba.metrics.scielab import scielab
+
+    white = 100.0 * colour.xy_to_XYZ(colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"])
+    print(f"| method | spd | {' | '.join(imgs)} | mean dE00 | rank of bilinear |")
+    print("|---|---|" + "---|" * len(imgs) + "---|---|")
+    table = {}
+    for spd in (23, 72):
+        for method in METHODS:
+            vals = []
+            for im in imgs.values():
+                linear = colour.cctf_decoding(im[..., :3], "sRGB")
+                ref = 100.0 * colour.RGB_to_XYZ(linear, "sRGB")
+                out = np.clip(cm.isp.demosaic(cm.isp.mosaic_image(linear, "bayer"), "bayer", method), 0.0, None)
+                vals.append(float(scielab(ref, 100.0 * colour.RGB_to_XYZ(out, "sRGB"), white,
+                                          samples_per_degree=spd).value))
+            table[spd, method] = vals
+        for method in METHODS:
+            vals = table[spd, method]
+            ranks = [1 + sum(table[spd, m][k] < table[spd, "bilinear"][k] for m in METHODS) for k in range(len(vals))]
+            note = " ".join(f"{r}/{len(METHODS)}" for r in ranks) if method == "bilinear" else ""
+            print(f"| {method} | {spd} | " + " | ".join(f"{v:.3f}" for v in vals) + f" | {np.mean(vals):.3f} | {note} |")
+
+
 def speed_table(repeat):
     import colour_demosaicing as cdm
     import skimage.data
@@ -123,12 +158,17 @@ def main():
     ap.add_argument("--quick", action="store_true", help="192 x 192 crops, one repeat")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--new-layouts-only", action="store_true", help="only the layouts of today's sensors")
+    ap.add_argument("--scielab-only", action="store_true", help="only S-CIELAB of the four methods on Bayer")
     args = ap.parse_args()
     repeat = 1 if args.quick else args.repeat
     load = os.getloadavg() if hasattr(os, "getloadavg") else ("?",)
     print(f"# bench_demosaic: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load average {load[0]:.2f} at start; numpy {np.__version__}\n")
     imgs = photos(args.quick)
+    print("## S-CIELAB on the photographs (Bayer; rank 4/4 = worst)\n")
+    scielab_table(imgs)
+    if args.scielab_only:
+        return
     if not args.new_layouts_only:
         print("## Speed (Bayer)\n")
         speed_table(repeat)

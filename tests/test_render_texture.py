@@ -50,6 +50,35 @@ def test_patterns():
     assert np.allclose(c.weights.sum(-1), 1) and c.weights[1, 1, 2] == pytest.approx(0.25)
 
 
+def _zero_crossing_period(profile):
+    """Mean distance (texels) between rising half-coverage crossings."""
+    up = np.flatnonzero((profile[:-1] < 0.5) & (profile[1:] >= 0.5))
+    return float(np.mean(np.diff(up)))
+
+
+def test_chirp_grating_periods_and_orientation():
+    g = patterns.chirp_grating(40, 600, 12.0, 6.0, 0.0)  # vertical stripes, period 12 -> 6 texels left to right
+    assert g.mean() == pytest.approx(0.5, abs=0.02)
+    assert np.allclose(g[0], g[-1])  # constant down the columns
+    row = g[20]
+    # local frequency f0 + (f1 - f0) u: its mean over the first 80 texels is at u = 40 / 600
+    assert _zero_crossing_period(row[:80]) == pytest.approx(1 / (1 / 12 + (1 / 6 - 1 / 12) * 40 / 600), rel=0.03)
+    assert _zero_crossing_period(row[-60:]) == pytest.approx(6.0, rel=0.05)
+    h = patterns.chirp_grating(600, 40, 12.0, 6.0, 90.0)  # horizontal stripes: the transpose, swept top to bottom
+    assert np.allclose(h[:, 0], h[:, -1]) and _zero_crossing_period(h[::-1, 20][-60:]) == pytest.approx(6.0, rel=0.05)
+    d = patterns.chirp_grating(200, 200, 8.0, 8.0, 45.0)  # constant along one diagonal
+    assert np.abs(d[np.arange(20, 180), np.arange(20, 180)] - d[20, 20]).max() < 0.2
+    assert np.abs(np.diff(d[100, 20:180])).max() > 0.5  # and striped across it
+
+
+def test_fur_strands_in_lanes_start_on_lane_columns():
+    free = patterns.fur_strands(256, 400, (10.0, 11.0), 0.0, 5, width=1)
+    combed = patterns.fur_strands(256, 400, (10.0, 11.0), 0.0, 5, width=1, lane=8)
+    assert free.sum() == pytest.approx(combed.sum(), rel=0.05)
+    assert set(np.flatnonzero(combed.sum(axis=0)) % 8) == {0}  # straight strands stay on their lane
+    assert len(set(np.flatnonzero(free.sum(axis=0)) % 8)) == 8
+
+
 def _texel_uv(tex, rows, cols):
     h, w = tex.shape
     return (np.asarray(cols) + 0.5) / w, (np.asarray(rows) + 0.5) / h

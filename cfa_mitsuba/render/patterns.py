@@ -150,6 +150,22 @@ def chirp_stripes(height: int, width: int, start_period: float, end_period: floa
     return _area(np.cos(2 * np.pi * phase) > 0)
 
 
+def chirp_grating(height: int, width: int, start_period: float, end_period: float, angle_deg: float = 0.0):
+    """Coverage of straight stripes whose normal points ``angle_deg`` from
+    the columns' direction (0: vertical stripes, 90: horizontal, 45 and -45:
+    diagonal), the period (texels) running linearly in frequency from
+    ``start_period`` to ``end_period`` along that normal across the patch:
+    half of each period inked."""
+    y, x = _subgrid(height, width)
+    a = np.radians(angle_deg)
+    s = x * np.cos(a) - y * np.sin(a)
+    half = 0.5 * (abs(width * np.cos(a)) + abs(height * np.sin(a)))
+    u = (s + half) / (2 * half)  # 0 .. 1 along the normal
+    f0, f1 = 1.0 / start_period, 1.0 / end_period
+    phase = 2 * half * (f0 * u + 0.5 * (f1 - f0) * u * u)  # cycles
+    return _area(np.cos(2 * np.pi * phase) > 0)
+
+
 def smooth_noise(shape, scale: float, seed: int) -> np.ndarray:
     """Tileable Gaussian-filtered white noise, scaled to [0, 1]; ``scale``
     is the filter's standard deviation in texels (the blotch size)."""
@@ -163,7 +179,7 @@ def smooth_noise(shape, scale: float, seed: int) -> np.ndarray:
 
 
 def fur_strands(size: int, n_strands: int, length: tuple[float, float], angle_deg: float, seed: int,
-                density=None, width: int = 1) -> np.ndarray:
+                density=None, width: int = 1, lane: int = 0) -> np.ndarray:
     """Count of hair strands per texel on a tileable ``size`` x ``size``
     tile: straight strands ``width`` texels wide, lengths uniform in ``length``
     (texels), running along the rows' direction (down the tile) within
@@ -176,6 +192,8 @@ def fur_strands(size: int, n_strands: int, length: tuple[float, float], angle_de
         p = np.asarray(density, dtype=np.float64).ravel()
         idx = rng.choice(p.size, size=n_strands, p=p / p.sum())
         starts = np.stack(np.unravel_index(idx, (size, size)), axis=1)
+    if lane:
+        starts[:, 1] = (starts[:, 1] // lane) * lane
     lengths = rng.uniform(length[0], length[1], n_strands)
     angle = np.radians(rng.uniform(-angle_deg, angle_deg, n_strands))
     steps = int(np.ceil(length[1])) * 2

@@ -73,10 +73,10 @@ def _fur_weights(seed: int) -> np.ndarray:
     warp = P.smooth_noise((n, n), 24.0, seed + 4)
     cols = np.arange(n)[None, :] / 64.0
     stripes = (0.5 + 0.5 * np.sin(2 * np.pi * (cols + 1.5 * warp))) ** 4
-    dark = P.fur_strands(n, 12000, (15.0, 50.0), 12.0, seed + 1,
-                         density=0.01 + (0.3 * patches ** 3 + stripes) * (0.2 + locks ** 2), width=4)
-    light = P.fur_strands(n, 6000, (15.0, 40.0), 12.0, seed + 2, density=0.05 + (1.0 - stripes) * locks ** 2,
-                          width=4)
+    dark = P.fur_strands(n, 12000, (15.0, 50.0), 3.0, seed + 1,
+                         density=0.01 + (0.3 * patches ** 3 + stripes) * (0.2 + locks ** 2), width=4, lane=8)
+    light = np.roll(P.fur_strands(n, 6000, (15.0, 40.0), 3.0, seed + 2, density=0.05 + (1.0 - stripes) * locks ** 2,
+                          width=4, lane=8), 4, axis=1)
     w_dark = np.minimum(0.95, 0.8 * dark)
     w_light = np.minimum(0.9, 0.7 * light) * (1.0 - w_dark)
     return np.stack([1.0 - w_dark - w_light, w_dark, w_light], axis=-1).astype(np.float32)
@@ -115,7 +115,7 @@ def _text(c: P.Canvas, text: str, scale: int, top: int, left: int, ink: int) -> 
 
 @functools.lru_cache(maxsize=1)
 def chart() -> SpectralTexture:
-    """Black on white: title, text lines, bar groups, Siemens star."""
+    """Black on white: title, text lines, bar groups, chirped gratings, Siemens star."""
     c = P.Canvas(1008, 1136, 2)
     row = _text(c, "CFA TEST 1951", 10, 24, 24, 1) + 20
     for scale, line in ((6, "THE QUICK BROWN FOX"), (4, "JUMPS OVER THE LAZY DOG"), (3, "SPHINX OF BLACK QUARTZ 0123456789"),
@@ -133,18 +133,17 @@ def chart() -> SpectralTexture:
         left += width + 20
         tallest = max(tallest, v.shape[0])
     c.paint(P.siemens_star(440, 36), 1, 540, 660)
-    words = ("PRINTED TEXT BELOW THE SENSOR NYQUIST: EACH LETTER IS SEVEN FONT PIXELS TALL, "
-             "FROM 1.05 MM DOWN TO 0.075 MM. ").split()
     row = max(row, top + tallest + 24)
-    for k in range(14):  # a paragraph: lines of 48 characters, two sizes
-        scale = 2 if k < 8 else 1
-        line, n = "", 48 if scale == 2 else 96
-        while len(line) < n - 12:
-            line += words[(k * 7 + len(line)) % len(words)] + " "
-        row = _text(c, line.strip(), scale, row, 24, 1) + 3 * scale + 2
+    for line in ("GRATINGS BELOW: PERIODS 0.9 TO 0.45 MM,", "3 TO 1.5 SENSOR PIXELS AT 1.2 M, THE",
+                 "NYQUIST PERIOD, 2 PX, HALF WAY ACROSS:", "VERTICAL, HORIZONTAL AND DIAGONAL."):
+        row = _text(c, line, 2, row, 24, 1) + 8
+    # Gratings through the sensor's Nyquist: periods 12 to 6 texels (0.9 to
+    # 0.45 mm, 3 to 1.5 px at 720 x 636), vertical, horizontal, diagonal.
+    for k, angle in enumerate((0.0, 90.0, 45.0, -45.0)):
+        c.paint(P.chirp_grating(130, 296, 12.0, 6.0, angle), 1, 610 + 146 * (k // 2), 24 + 312 * (k % 2))
     for k, scale in enumerate((2, 1)):
         _text(c, "0123456789 ABCDEFGHIJKLMNOPQRSTUVWXYZ", scale, 900 + 24 * k, 24, 1)
-    return SpectralTexture("test chart: text, bar groups, Siemens star", (_WHITE, _BLACK), c.weights, _CARD_TEXEL)
+    return SpectralTexture("test chart: text, bar groups, gratings, Siemens star", (_WHITE, _BLACK), c.weights, _CARD_TEXEL)
 
 
 @functools.lru_cache(maxsize=1)
