@@ -184,7 +184,9 @@ def fur_strands(size: int, n_strands: int, length: tuple[float, float], angle_de
     tile: straight strands ``width`` texels wide, lengths uniform in ``length``
     (texels), running along the rows' direction (down the tile) within
     +-``angle_deg``, start points drawn with probability ``density`` (a
-    (size, size) map; uniform if None)."""
+    (size, size) map; uniform if None).  ``lane`` > 0 combs the strands:
+    each start column is moved down to a multiple of ``lane``, so that
+    strands lie in parallel lanes ``lane`` texels apart."""
     rng = np.random.default_rng(seed)
     if density is None:
         starts = rng.integers(0, size, size=(n_strands, 2))

@@ -7,13 +7,17 @@ pixels, 0.58 mm; at the quick study's 240 x 212 a pixel is 0.88 mm.
 
 - ``fur`` (dog's body, head, legs, tail): a 1024-texel tile of 0.1 mm
   texels, 'orange' with hair strands four texels (0.4 mm, about 1.4 px at
-  720 x 636) wide and 15-50 long running down the body, dark ('black 2
-  (1.5 D)': in wavy tabby bands 6.4 mm apart, patches a few mm across and
-  locks of about 1 mm, from smooth noise) and white ('white 9.5 (.05 D)',
-  between the bands).  Strong luminance contrast at the pixel scale: with
-  strands narrower than a pixel (0.2 mm) on a red base, the fur averaged to
-  a low-contrast mottle with dark, noisy green pixels, where bilinear's
-  smoothing won every image metric at the paper's size.
+  720 x 636) wide and 15-50 long running down the body, combed into lanes
+  eight texels apart (dark strands on one half of a lane, light ones on the
+  other: a fine stripe of period 0.8 mm, 2.8 px face-on and finer where the
+  body turns away), dark ('black 2 (1.5 D)': in wavy tabby bands 6.4 mm
+  apart, patches a few mm across and locks of about 1 mm, from smooth
+  noise) and light ('neutral 8 (.23 D)', between the bands).  Strong
+  luminance contrast at the pixel scale: with strands narrower than a pixel
+  (0.2 mm) on a red base, the fur averaged to a low-contrast mottle with
+  dark, noisy green pixels, where bilinear's smoothing won every image
+  metric at the paper's size; with uncombed 0.4-mm strands it still won
+  HaarPSI against laplacian (docs/scenes.md).
 - ``fur_brown`` (ears, snout): the same construction on 'dark skin' with
   'black 2 (1.5 D)' and white strands.
 - ``wallpaper`` (backdrop, 3 m): light discs 16 mm across with dark rings,
@@ -30,7 +34,9 @@ pixels, 0.58 mm; at the quick study's 240 x 212 a pixel is 0.88 mm.
 - ``chart`` (a card standing behind the dog, right): black ink on white,
   0.075 mm texels: a title, text lines 7 x 5 font pixels of 0.6 to 0.075 mm
   (the smallest far below a pixel), USAF-1951-like bar groups of bar widths
-  1.8 to 0.075 mm (periods 3.6 to 0.15 mm, in both orientations), and a
+  1.8 to 0.075 mm (periods 3.6 to 0.15 mm, in both orientations), four
+  chirped gratings (vertical, horizontal, both diagonals) whose period runs
+  from 0.9 to 0.45 mm (3 to 1.5 px) through the Nyquist period, and a
   36-spoke Siemens star 27 mm across.
 - ``colour_print`` (a card behind the dog's head, left): six inks on white
   ('red', 'green', 'blue', 'yellow', 'magenta', 'cyan'): fine lines of each
@@ -73,10 +79,12 @@ def _fur_weights(seed: int) -> np.ndarray:
     warp = P.smooth_noise((n, n), 24.0, seed + 4)
     cols = np.arange(n)[None, :] / 64.0
     stripes = (0.5 + 0.5 * np.sin(2 * np.pi * (cols + 1.5 * warp))) ** 4
+    # Combed: strands start on lanes 8 texels apart and stray by at most 3
+    # degrees; the light strands fill the other half of each lane.
     dark = P.fur_strands(n, 12000, (15.0, 50.0), 3.0, seed + 1,
                          density=0.01 + (0.3 * patches ** 3 + stripes) * (0.2 + locks ** 2), width=4, lane=8)
     light = np.roll(P.fur_strands(n, 6000, (15.0, 40.0), 3.0, seed + 2, density=0.05 + (1.0 - stripes) * locks ** 2,
-                          width=4, lane=8), 4, axis=1)
+                                  width=4, lane=8), 4, axis=1)
     w_dark = np.minimum(0.95, 0.8 * dark)
     w_light = np.minimum(0.9, 0.7 * light) * (1.0 - w_dark)
     return np.stack([1.0 - w_dark - w_light, w_dark, w_light], axis=-1).astype(np.float32)
