@@ -77,13 +77,13 @@ def test_noise_and_band_ratios_between_seeds(window_two_seeds):
     # neighbourhood within 2 % in luminance) its band ratios (band / band
     # sum) vary between seeds less than its luminance does; with Mitsuba's
     # own 4-wavelength sampling they would vary by tens of %.  (Measured:
-    # 0.31 % against 0.40 %.  Before the textures it was under half: now the
+    # 0.21 % against 0.28 % on 164 pixels.  Before the textures it was under half: now the
     # indirect light comes off multi-coloured textures, so its colour varies
     # with the paths; and inside textures, which inks a pixel's samples hit
     # varies between seeds, colour included.)
     mean = 0.5 * (ya + yb)
     smooth = (maximum_filter(mean, 3) - minimum_filter(mean, 3)) < 0.02 * mean
-    assert smooth.sum() > 200
+    assert smooth.sum() > 100  # 164 of 18,432 in this window since the fur is combed into fine stripes
     ra, rb = a / a.sum(-1, keepdims=True), b / b.sum(-1, keepdims=True)
     ratio_diff = np.sqrt(np.mean(((ra - rb) / (0.5 * (ra + rb))) ** 2, axis=-1))
     assert np.median(ratio_diff[smooth]) <= np.median(lum_diff[smooth])
