@@ -4,6 +4,7 @@ full-reference image metrics."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import pandas as pd
@@ -43,6 +44,8 @@ def test_study_with_a_measured_image_reports_the_image_metrics(tmp_path):
     assert set(scores.metric) == {"scielab", "ssim", "mdsi", "haarpsi"}
     assert sorted(set(scores.cfa)) == ["bayer", "rgbw1"]
     assert "chart" in (out / "report.html").read_text()
+    # The scene's name is not the study's (a measured scene once renamed the study after itself).
+    assert json.loads((out / "config.json").read_text())["name"] == "measured"
 
 
 def test_image_entry_is_checked_before_any_work(tmp_path):

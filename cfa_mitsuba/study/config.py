@@ -286,8 +286,8 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
     for i, c in enumerate(custom):
         key = f"custom_scenes[{i}]"
         if isinstance(c, dict) and "image" in c:  # a measured spectral image (study/measured_scenes.py)
-            name, image, opts = image_scene_spec(ck, c, key, base, [*known_scenes, *(s.name for s in scenes)])
-            scenes.append(SceneSpec(name, image, opts, IMAGE_METRICS))
+            iname, image, opts = image_scene_spec(ck, c, key, base, [*known_scenes, *(s.name for s in scenes)])
+            scenes.append(SceneSpec(iname, image, opts, IMAGE_METRICS))
             continue
         ck.table(c, key, {"name": None, "file": None, "allow_outside_paths": None, **_RENDER_KEYS})
         cname = ck.string(c.get("name"), f"{key}.name")
