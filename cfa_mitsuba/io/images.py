@@ -20,6 +20,7 @@ import numpy as np
 
 from ..errors import CfaMitsubaError
 from .atomic import atomic_output
+from .sidecar import json_default
 
 IMAGE_SUFFIXES = (".png", ".exr", ".npy", ".npz")
 
@@ -204,7 +205,7 @@ def write_image(path, data, *, channels=None, meta: dict | None = None, bit_dept
             raise CfaMitsubaError(f"{len(channels)} channel names for {len(planes)} channels")
         header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
         if meta:
-            header["cfaMitsuba"] = json.dumps(meta, default=_json_default)
+            header["cfaMitsuba"] = json.dumps(meta, default=json_default)
         chans = {c: np.ascontiguousarray(pl, dtype=np.float32) for c, pl in zip(channels, planes)}
         with atomic_output(p) as tmp:
             with OpenEXR.File(header, chans) as f:
@@ -215,20 +216,10 @@ def write_image(path, data, *, channels=None, meta: dict | None = None, bit_dept
                 np.save(fh, arr)
     elif suffix == ".npz":
         payload = {"image": arr, **{k: np.asarray(v) for k, v in (arrays or {}).items()}}
-        payload["meta"] = np.array(json.dumps(meta or {}, default=_json_default))
+        payload["meta"] = np.array(json.dumps(meta or {}, default=json_default))
         with atomic_output(p) as tmp:
             with open(tmp, "wb") as fh:
                 np.savez_compressed(fh, **payload)
     else:
         raise CfaMitsubaError(f"{str(p)!r}: unsupported output type (expected .png, .exr, .npy or .npz)")
     return p
-
-
-def _json_default(obj):
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, (np.floating, np.integer, np.bool_)):
-        return obj.item()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON-serialisable: {type(obj).__name__}")

@@ -31,6 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.sidecar import json_default
+
+
 def task_seed(study_seed: int, *parts) -> int:
     """A noise seed from the study seed and a task's identity (32 bits)."""
     text = json.dumps([int(study_seed), *[str(p) for p in parts]])
@@ -147,17 +150,9 @@ def _save_details(folder: Path, stem: str, results: dict, rendered, extra: dict)
                 with open(tmp, "wb") as fh:
                     np.save(fh, small.astype(np.float32))
     with atomic_output(folder / f"{stem}.json") as tmp:
-        tmp.write_text(json.dumps(payload, allow_nan=False, default=_json_default))
+        tmp.write_text(json.dumps(payload, allow_nan=False, default=json_default))
     if rendered is not None:
         _thumbnail(rendered.srgb, folder / f"{stem}.png")
-
-
-def _json_default(obj):
-    if isinstance(obj, (np.floating, np.integer, np.bool_)):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    raise TypeError(type(obj).__name__)
 
 
 def evaluate_task(task: dict) -> dict:
