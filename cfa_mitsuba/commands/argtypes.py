@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import argparse
 
-__all__ = ["positive_int", "non_negative_int", "check_out_dir", "write_scene_files"]
+__all__ = ["positive_int", "non_negative_int", "positive_float", "non_negative_float", "check_out_dir",
+           "write_scene_files"]
 
 
 def _int_at_least(text: str, minimum: int) -> int:
@@ -27,6 +28,28 @@ def positive_int(text: str) -> int:
 def non_negative_int(text: str) -> int:
     """A whole number >= 0 (seeds, optional counts)."""
     return _int_at_least(text, 0)
+
+
+def _finite_float(text: str, ok, what: str) -> float:
+    import math
+
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (math.isfinite(v) and ok(v)):
+        raise argparse.ArgumentTypeError(f"must be a {what} number, got {text!r}")
+    return v
+
+
+def positive_float(text: str) -> float:
+    """A finite number > 0 (luminances, lengths, f-numbers, gains)."""
+    return _finite_float(text, lambda v: v > 0, "positive")
+
+
+def non_negative_float(text: str) -> float:
+    """A finite number >= 0 (noise levels, offsets)."""
+    return _finite_float(text, lambda v: v >= 0, "non-negative")
 
 
 def check_out_dir(out) -> None:

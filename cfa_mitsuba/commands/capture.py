@@ -7,7 +7,7 @@ import argparse
 import math
 import sys
 
-from .argtypes import non_negative_int, positive_int
+from .argtypes import non_negative_float, non_negative_int, positive_float, positive_int
 
 HELP = "capture a spectral EXR with a CFA sensor (or the ideal XYZ sensor) into a raw .npz"
 
@@ -35,26 +35,6 @@ width and height (a remainder is refused, not cropped).
 """
 
 
-def _positive_float(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive number, got {text!r}")
-    return v
-
-
-def _non_negative_float(text: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (math.isfinite(v) and v >= 0):
-        raise argparse.ArgumentTypeError(f"must be a non-negative number, got {text!r}")
-    return v
-
-
 def _exposure(text: str):
     if text.strip().lower() == "auto":
         return "auto"
@@ -70,7 +50,7 @@ def _exposure(text: str):
 def _distance(text: str) -> float:
     if text.strip().lower() in ("inf", "infinity"):
         return math.inf
-    return _positive_float(text)
+    return positive_float(text)
 
 
 def add_arguments(parser) -> None:
@@ -84,11 +64,11 @@ def add_arguments(parser) -> None:
     parser.add_argument("--sensor", metavar="NAME",
                         help="a measured sensor preset (cfa-mitsuba list sensors): pixel, CFA and spectra")
     parser.add_argument("--out", required=True, metavar="RAW.npz", help="output raw file (.npz), written atomically")
-    parser.add_argument("--luminance", type=_positive_float, metavar="CD_M2",
+    parser.add_argument("--luminance", type=positive_float, metavar="CD_M2",
                         help="scale the scene to this mean luminance (default: keep the EXR's radiance)")
     parser.add_argument("--exposure", type=_exposure, default="auto", metavar="S|auto",
                         help="exposure in seconds, or auto (default)")
-    parser.add_argument("--reference-luminance", type=_positive_float, default=100.0, metavar="CD_M2",
+    parser.add_argument("--reference-luminance", type=positive_float, default=100.0, metavar="CD_M2",
                         help="mean luminance at which auto exposure is chosen (default 100)")
     parser.add_argument("--noise", choices=("off", "shot", "all"), default="all",
                         help="off: none; shot: photon noise only, no ADC; all (default): the full sensor")
@@ -102,31 +82,31 @@ def add_arguments(parser) -> None:
     parser.add_argument("--sensor-seed", type=non_negative_int, default=None,
                         help="fixed-pattern (DSNU/PRNU) seed: one seed is one sensor (default 0)")
     g = parser.add_argument_group("lens (defaults: f/4, T = 1, relative illumination and diffraction on)")
-    g.add_argument("--f-number", type=_positive_float, metavar="N",
+    g.add_argument("--f-number", type=positive_float, metavar="N",
                    help="f-number (overrides the sidecar's f_number; default 4)")
-    g.add_argument("--lens-transmittance", type=_positive_float, default=1.0, metavar="T", help="in (0, 1]")
+    g.add_argument("--lens-transmittance", type=positive_float, default=1.0, metavar="T", help="in (0, 1]")
     g.add_argument("--no-relative-illumination", action="store_true", help="no off-axis falloff")
     g.add_argument("--no-diffraction", action="store_true", help="no diffraction OTF")
-    g.add_argument("--fov-deg", type=_positive_float, metavar="DEG",
+    g.add_argument("--fov-deg", type=positive_float, metavar="DEG",
                    help="horizontal field of view (overrides the sidecar; default 10)")
     g.add_argument("--scene-distance-m", type=_distance, metavar="M",
                    help="scene distance, or inf (overrides the sidecar; default 1.2)")
     s = parser.add_argument_group("sensor (defaults in docs/sensor.md)")
-    s.add_argument("--pixel-pitch-um", type=_positive_float, metavar="UM", help="default 2.2")
-    s.add_argument("--fill-factor", type=_positive_float, metavar="F", help="in (0, 1], default 1")
-    s.add_argument("--well-capacity-e", type=_positive_float, metavar="E", help="default 6200")
-    s.add_argument("--read-noise-e", type=_non_negative_float, metavar="E", help="rms, default 6.2")
-    s.add_argument("--dark-current-e-s", type=_non_negative_float, metavar="E_S", help="default 6.2")
-    s.add_argument("--dsnu-e", type=_non_negative_float, metavar="E", help="rms, default 0")
-    s.add_argument("--prnu-percent", type=_non_negative_float, metavar="PCT", help="rms, default 0")
-    s.add_argument("--analog-gain", type=_positive_float, metavar="G", help="default 1")
+    s.add_argument("--pixel-pitch-um", type=positive_float, metavar="UM", help="default 2.2")
+    s.add_argument("--fill-factor", type=positive_float, metavar="F", help="in (0, 1], default 1")
+    s.add_argument("--well-capacity-e", type=positive_float, metavar="E", help="default 6200")
+    s.add_argument("--read-noise-e", type=non_negative_float, metavar="E", help="rms, default 6.2")
+    s.add_argument("--dark-current-e-s", type=non_negative_float, metavar="E_S", help="default 6.2")
+    s.add_argument("--dsnu-e", type=non_negative_float, metavar="E", help="rms, default 0")
+    s.add_argument("--prnu-percent", type=non_negative_float, metavar="PCT", help="rms, default 0")
+    s.add_argument("--analog-gain", type=positive_float, metavar="G", help="default 1")
     s.add_argument("--adc-bits", type=positive_int, metavar="BITS", help="default 12")
-    s.add_argument("--black-level-dn", type=_non_negative_float, metavar="DN", help="default 64")
+    s.add_argument("--black-level-dn", type=non_negative_float, metavar="DN", help="default 64")
     s.add_argument("--readout", choices=("full", "remosaic", "bin"),
                    help="full (default), remosaic (the ISP rearranges to Bayer), bin (one pixel per same-colour "
                         "block); remosaic and bin need a block layout (quad-bayer, nona, tetra2)")
     s.add_argument("--binning", choices=("charge", "digital"), help="for --readout bin: charge (default) or digital")
-    s.add_argument("--crosstalk", type=_non_negative_float, metavar="FRACTION",
+    s.add_argument("--crosstalk", type=non_negative_float, metavar="FRACTION",
                    help="fraction of each pixel's electrons that lands in its 4 neighbours (default 0)")
     s.add_argument("--ir-cut", metavar="none|FILE.csv",
                    help="IR-cut filter in place of the spectra set's common one (default: the set's own)")
