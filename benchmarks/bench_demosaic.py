@@ -104,20 +104,20 @@ def scielab_table(imgs):
     white = 100.0 * colour.xy_to_XYZ(colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"])
     print(f"| method | spd | {' | '.join(imgs)} | mean dE00 | rank of bilinear |")
     print("|---|---|" + "---|" * len(imgs) + "---|---|")
-    table = {}
+    refs, outs = [], {m: [] for m in METHODS}  # XYZ of each photograph and of each method's output
+    for im in imgs.values():
+        linear = colour.cctf_decoding(im[..., :3], "sRGB")
+        refs.append(100.0 * colour.RGB_to_XYZ(linear, "sRGB"))
+        raw = cm.isp.mosaic_image(linear, "bayer")
+        for method in METHODS:
+            out = np.clip(cm.isp.demosaic(raw, "bayer", method), 0.0, None)
+            outs[method].append(100.0 * colour.RGB_to_XYZ(out, "sRGB"))
     for spd in (23, 72):
+        table = {m: [float(scielab(r, o, white, samples_per_degree=spd).value) for r, o in zip(refs, outs[m])]
+                 for m in METHODS}
+        ranks = [1 + sum(table[m][k] < table["bilinear"][k] for m in METHODS) for k in range(len(refs))]
         for method in METHODS:
-            vals = []
-            for im in imgs.values():
-                linear = colour.cctf_decoding(im[..., :3], "sRGB")
-                ref = 100.0 * colour.RGB_to_XYZ(linear, "sRGB")
-                out = np.clip(cm.isp.demosaic(cm.isp.mosaic_image(linear, "bayer"), "bayer", method), 0.0, None)
-                vals.append(float(scielab(ref, 100.0 * colour.RGB_to_XYZ(out, "sRGB"), white,
-                                          samples_per_degree=spd).value))
-            table[spd, method] = vals
-        for method in METHODS:
-            vals = table[spd, method]
-            ranks = [1 + sum(table[spd, m][k] < table[spd, "bilinear"][k] for m in METHODS) for k in range(len(vals))]
+            vals = table[method]
             note = " ".join(f"{r}/{len(METHODS)}" for r in ranks) if method == "bilinear" else ""
             print(f"| {method} | {spd} | " + " | ".join(f"{v:.3f}" for v in vals) + f" | {np.mean(vals):.3f} | {note} |")
 

@@ -64,6 +64,7 @@ from . import patterns as P
 from .texture import SpectralTexture
 
 _FUR_SIZE, _FUR_TEXEL = 1024, 1e-4
+_FUR_LANE = 8  # texels between combed lanes: 0.8 mm
 #: Physical size (m) of one fur tile.
 FUR_TILE_M = _FUR_SIZE * _FUR_TEXEL
 _CARD_TEXEL = 7.5e-5
@@ -79,12 +80,13 @@ def _fur_weights(seed: int) -> np.ndarray:
     warp = P.smooth_noise((n, n), 24.0, seed + 4)
     cols = np.arange(n)[None, :] / 64.0
     stripes = (0.5 + 0.5 * np.sin(2 * np.pi * (cols + 1.5 * warp))) ** 4
-    # Combed: strands start on lanes 8 texels apart and stray by at most 3
-    # degrees; the light strands fill the other half of each lane.
+    # Combed: strands half a lane wide start on lanes _FUR_LANE texels apart
+    # and stray by at most 3 degrees; the light strands fill the other half.
+    half = _FUR_LANE // 2
     dark = P.fur_strands(n, 12000, (15.0, 50.0), 3.0, seed + 1,
-                         density=0.01 + (0.3 * patches ** 3 + stripes) * (0.2 + locks ** 2), width=4, lane=8)
+                         density=0.01 + (0.3 * patches ** 3 + stripes) * (0.2 + locks ** 2), width=half, lane=_FUR_LANE)
     light = np.roll(P.fur_strands(n, 6000, (15.0, 40.0), 3.0, seed + 2, density=0.05 + (1.0 - stripes) * locks ** 2,
-                                  width=4, lane=8), 4, axis=1)
+                                  width=half, lane=_FUR_LANE), half, axis=1)
     w_dark = np.minimum(0.95, 0.8 * dark)
     w_light = np.minimum(0.9, 0.7 * light) * (1.0 - w_dark)
     return np.stack([1.0 - w_dark - w_light, w_dark, w_light], axis=-1).astype(np.float32)
@@ -151,7 +153,8 @@ def chart() -> SpectralTexture:
         c.paint(P.chirp_grating(130, 296, 12.0, 6.0, angle), 1, 610 + 146 * (k // 2), 24 + 312 * (k % 2))
     for k, scale in enumerate((2, 1)):
         _text(c, "0123456789 ABCDEFGHIJKLMNOPQRSTUVWXYZ", scale, 900 + 24 * k, 24, 1)
-    return SpectralTexture("test chart: text, bar groups, gratings, Siemens star", (_WHITE, _BLACK), c.weights, _CARD_TEXEL)
+    return SpectralTexture("test chart: text, bar groups, gratings, Siemens star", (_WHITE, _BLACK), c.weights,
+                           _CARD_TEXEL)
 
 
 @functools.lru_cache(maxsize=1)
