@@ -23,7 +23,9 @@ through a diffraction-limited lens and a sensor with the given CFA.
 
 --sensor NAME starts from a measured preset (cfa-mitsuba list sensors): its
 pixel, its CFA unless --cfa is given, and its spectra set unless --spectra
-is given; the sensor options below override single values.
+is given; the sensor options below override single values.  --sensor
+FILE.toml reads a sensor file (QE curves in CSV plus datasheet or EMVA 1288
+numbers; docs/sensor.md, "Bring your own sensor") the same way.
 
 Without --luminance the EXR's radiance is kept.  --exposure auto fills the
 brightest pixel's well to 95 % for the scene at the reference luminance
@@ -61,8 +63,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--spectra", metavar="SET",
                         help="spectra set of the CFA's filters (cfa-mitsuba list spectra; default: the CFA's own, "
                              "or the --sensor preset's)")
-    parser.add_argument("--sensor", metavar="NAME",
-                        help="a measured sensor preset (cfa-mitsuba list sensors): pixel, CFA and spectra")
+    parser.add_argument("--sensor", metavar="NAME|FILE.toml",
+                        help="a measured sensor preset (cfa-mitsuba list sensors) or a sensor file "
+                             "(docs/sensor.md, 'Bring your own sensor'): pixel, CFA and spectra")
     parser.add_argument("--out", required=True, metavar="RAW.npz", help="output raw file (.npz), written atomically")
     parser.add_argument("--luminance", type=positive_float, metavar="CD_M2",
                         help="scale the scene to this mean luminance (default: keep the EXR's radiance)")
@@ -160,11 +163,13 @@ def run(args) -> int:
         cfa_name = args.cfa or (preset.cfa_name if preset else None)
         if cfa_name is None:
             raise CfaMitsubaError("--cfa is required (or --sensor NAME, whose CFA is used)")
-        spectra = args.spectra or (preset.spectra if preset else None)
+        spectra = args.spectra or (preset.spectra if preset else None) or None
         ideal = cfa_name == "ideal"
         if ideal and args.spectra:
             raise CfaMitsubaError("--spectra does not apply to the ideal sensor (CIE 1931 XYZ)")
-        cfa = None if ideal else get_cfa(cfa_name, spectra=spectra)  # a bad CFA fails before the EXR is read
+        own = preset is not None and preset.own_cfa is not None and not args.spectra \
+            and not str(args.cfa or "").lower().endswith(".toml")  # a sensor file's own QE curves
+        cfa = None if ideal else preset.cfa(args.cfa) if own else get_cfa(cfa_name, spectra=spectra)
         optics = OpticsParams(f_number=args.f_number, lens_transmittance=args.lens_transmittance,
                               relative_illumination=not args.no_relative_illumination,
                               diffraction=not args.no_diffraction, fov_deg=args.fov_deg,

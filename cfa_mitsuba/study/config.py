@@ -160,11 +160,12 @@ def _dataclass_table(ck: _Checker, data, key: str, cls, extra: dict) -> dict:
     return {**params, **rest}
 
 
-def _sensor_preset(ck: _Checker, data):
+def _sensor_preset(ck: _Checker, data, base: Path = Path(".")):
     """(the [sensor] table without ``preset``, the preset or None):
     ``sensor = "imx363"`` or ``[sensor] preset = "imx363"`` starts from a
-    measured preset's pixel parameters (``cfa-mitsuba list sensors``); the
-    CFAs keep their own spectra sets."""
+    measured preset's pixel parameters (``cfa-mitsuba list sensors``), or a
+    sensor file's (``sensor = "my_sensor.toml"``, relative to the config's
+    folder); the CFAs keep their own spectra sets."""
     from ..sensor import get_sensor_preset
 
     name = None
@@ -175,6 +176,8 @@ def _sensor_preset(ck: _Checker, data):
         name = ck.string(data.pop("preset"), "sensor.preset")
     if name is None:
         return data, None
+    if name.lower().endswith(".toml") and not Path(name).is_absolute():
+        name = str((base / name).resolve())
     try:
         return data, get_sensor_preset(name)
     except CfaMitsubaError as exc:
@@ -344,7 +347,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         "exposure_policy": lambda v, k: ck.string(v, k, EXPOSURE_POLICIES),
         "spectra_sets": lambda v, k: _spectra_map(ck, v, k),
     }
-    sensor_cfg, preset = _sensor_preset(ck, data.get("sensor", {}))
+    sensor_cfg, preset = _sensor_preset(ck, data.get("sensor", {}), base)
     sensor_all = _dataclass_table(ck, sensor_cfg, "sensor", SensorParams, capture_extra)
     capture = {k: sensor_all.pop(k) for k in list(sensor_all) if k in capture_extra}
     sensor_all = _sensor_values(ck, preset, sensor_all, cfas, base)
