@@ -47,7 +47,10 @@ capacity = the signal at the maximum of the photon transfer curve, where
 the standard locates it, which the model's noise puts about 1.5 noise
 sigmas below the clip (the well, or the ADC's top code in electrons when
 the gain brings that first; :func:`photon_transfer_peak`); DSNU (e-) and
-PRNU (%) as set; dark current (e-/s) as set.
+PRNU (%) as the sensor's fixed-pattern maps realise them on the measured
+pixels (the set rms times the maps' sample deviation: the physical
+sensor's values; the nominal ones are kept beside them); dark current
+(e-/s) as set.
 """
 
 from __future__ import annotations
@@ -206,6 +209,20 @@ def expected_parameters(sensor: SensorParams, qe_band: float, channel: str) -> d
     }
 
 
+def _realised_non_uniformity(sensor: SensorParams, cam) -> dict:
+    """DSNU (e-) and PRNU (%) of the measured pixels as the sensor's fixed
+    pattern maps realise them (:func:`~.noise.fixed_pattern`): the set rms
+    times the maps' sample standard deviation over those pixels, the
+    physical sensor's values that the standard measures (the nominal values
+    stay in ``dsnu_nominal_e`` and ``prnu_nominal_percent``)."""
+    from .noise import fixed_pattern
+
+    prnu_z, dsnu_z = fixed_pattern(cam.shape, sensor.sensor_seed)
+    return {"DSNU1288": sensor.dsnu_e * float(np.std(dsnu_z[cam.pick], ddof=1)),
+            "PRNU1288": sensor.prnu_percent * float(np.std(prnu_z[cam.pick], ddof=1)),
+            "dsnu_nominal_e": sensor.dsnu_e, "prnu_nominal_percent": sensor.prnu_percent}
+
+
 def _uniform_field(wl: np.ndarray, band: int, radiance: float, shape, sensor: SensorParams):
     """The sensor-plane image of a uniform field of ``radiance`` W/(m^2 sr nm)
     in one band (the lens without falloff or diffraction)."""
@@ -313,6 +330,7 @@ def simulate_emva(sensor: SensorParams, cfa, out_dir, settings: EmvaSettings | N
         peak = photon_transfer_peak(mean_e, expected["clip_e"], op.prnu_percent, op.dark_current_e_s * exposures,
                                     op.read_noise_e)
         expected["u_e_sat"] = float(mean_e[peak])
+        expected.update(_realised_non_uniformity(op, cam))
         cam.lines += ["v 4.0", f"n {op.adc_bits} {settings.size} {settings.size}"]  # bits, width, height
         for i, (t, up) in enumerate(zip(exposures, photons)):
             cam.series(bright, t, 2, f"b {t * 1e9:.6f} {up:.6f}")

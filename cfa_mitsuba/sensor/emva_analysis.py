@@ -122,7 +122,11 @@ def parameter_rows(series, results) -> list[dict]:
                          "set_value": "" if expected is None else expected, "relative_error": err,
                          "section": section})
     for name, desc, unit in (("clip_e", "signal clip: full well, or the ADC's top code (model)", "e-"),
-                             ("analog_gain", "analog gain of the operating point (model)", "")):
+                             ("analog_gain", "analog gain of the operating point (model)", ""),
+                             ("dsnu_nominal_e", "DSNU set rms (model; DSNU1288's set value is its realisation)",
+                              "e-"),
+                             ("prnu_nominal_percent", "PRNU set rms (model; PRNU1288's set value is its "
+                                                      "realisation)", "%")):
         rows.append({"channel": series.channel, "wavelength_nm": series.wavelength_nm, "parameter": name,
                      "description": desc, "unit": unit, "measured": "", "set_value": series.expected[name],
                      "relative_error": "", "section": "model"})
