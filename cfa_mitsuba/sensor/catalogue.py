@@ -46,10 +46,10 @@ def load_cfa_toml(path, spectra: str | None = None) -> CFA:
     """Read a user CFA (:func:`cfa_mitsuba.sensor.cfa_toml.load_cfa_toml`),
     or the CFA of a sensor file (:mod:`.sensor_file`: its layout with its own
     QE curves; a spectra set does not apply to it)."""
-    from .sensor_file import is_sensor_file, load_sensor_file
+    from .sensor_file import is_sensor_file, read_sensor_file
 
     if is_sensor_file(path):
         if spectra is not None:
             raise CfaMitsubaError(f"{path}: a sensor file carries its own QE curves; a spectra set does not apply")
-        return load_sensor_file(path).cfa()
+        return read_sensor_file(path)["cfa"]
     return _load_toml(path, spectra=spectra)

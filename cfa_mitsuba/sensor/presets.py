@@ -25,12 +25,12 @@ from dataclasses import dataclass, field, fields
 
 from ..errors import CfaMitsubaError
 from .params import SensorParams
+from .sensor_file import volts_to_electrons as _from_isetcam
 from .spectra_sets import read_data_toml
 
 #: Folders (os.pathsep-separated) whose ``*.toml`` sensor files ``cfa-mitsuba
 #: list sensors`` shows beside the presets.
 SENSORS_ENV = "CFA_MITSUBA_SENSORS"
-_ISETCAM_KEYS = {"conversion_gain_uv_per_e", "voltage_swing_v", "read_noise_mv", "dark_voltage_mv_s"}
 
 
 @dataclass(frozen=True)
@@ -78,19 +78,6 @@ def _definitions() -> dict:
     return read_data_toml("sensors.toml", "sensor presets")
 
 
-def _from_isetcam(values: dict, where: str) -> dict:
-    unknown = set(values) - _ISETCAM_KEYS
-    if unknown:
-        raise CfaMitsubaError(f"{where}: unknown ISETCam key {sorted(unknown)[0]!r}")
-    cg_v = values["conversion_gain_uv_per_e"] * 1e-6
-    out = {"voltage_swing_v": values["voltage_swing_v"], "well_capacity_e": values["voltage_swing_v"] / cg_v}
-    if "read_noise_mv" in values:
-        out["read_noise_e"] = values["read_noise_mv"] * 1e-3 / cg_v
-    if "dark_voltage_mv_s" in values:
-        out["dark_current_e_s"] = values["dark_voltage_mv_s"] * 1e-3 / cg_v
-    return out
-
-
 def list_sensor_presets() -> list[str]:
     """Names of the shipped presets (``cfa-mitsuba list sensors`` adds
     :func:`user_sensor_files`)."""
@@ -111,9 +98,11 @@ def get_sensor_preset(name) -> SensorPreset:
     """A preset by name, or a sensor file by path (``*.toml``,
     :mod:`.sensor_file`), or a one-line error listing the known ones."""
     if str(name).lower().endswith(".toml"):
-        from .sensor_file import load_sensor_file
+        from .sensor_file import read_sensor_file
 
-        return load_sensor_file(name)
+        f = read_sensor_file(name)
+        return SensorPreset(name=f["name"], description=f["description"], source=f["source"], params=f["params"],
+                            cfa_name=f["cfa"].name, spectra="", notes=f["notes"], path=f["path"], own_cfa=f["cfa"])
     return _named_preset(str(name))
 
 

@@ -51,7 +51,8 @@ channel of the tile without a curve, or a quantity given twice.
 
 from __future__ import annotations
 
-__all__ = ["load_sensor_file", "is_sensor_file", "sensor_file_curves", "EMVA_KEYS", "DATASHEET_KEYS"]
+__all__ = ["read_sensor_file", "is_sensor_file", "sensor_file_curves", "volts_to_electrons", "EMVA_KEYS",
+           "DATASHEET_KEYS"]
 
 import math
 import numbers
@@ -75,6 +76,25 @@ DATASHEET_KEYS = ("well_capacity_e", "read_noise_e", "dark_current_e_s", "dsnu_e
 _TOP = {"name", "description", "source", "cfa", "tile", "qe", "pixel", "datasheet", "emva", "notes"}
 _STRINGS = ("readout", "binning", "ir_cut")
 _GAINS = ("system_gain_dn_per_e", "conversion_gain_uv_per_e", "analog_gain")
+
+
+_VOLT_KEYS = {"conversion_gain_uv_per_e", "voltage_swing_v", "read_noise_mv", "dark_voltage_mv_s"}
+
+
+def volts_to_electrons(values: dict, where: str) -> dict:
+    """ISETCam's volt-domain pixel values in electrons: well = swing /
+    conversion gain, read noise = volts / gain, dark current = volts per
+    second / gain (the presets' ``isetcam`` table and ``[datasheet]``)."""
+    unknown = set(values) - _VOLT_KEYS
+    if unknown:
+        raise CfaMitsubaError(f"{where}: unknown ISETCam key {sorted(unknown)[0]!r}")
+    cg_v = values["conversion_gain_uv_per_e"] * 1e-6
+    out = {"voltage_swing_v": values["voltage_swing_v"], "well_capacity_e": values["voltage_swing_v"] / cg_v}
+    if "read_noise_mv" in values:
+        out["read_noise_e"] = values["read_noise_mv"] * 1e-3 / cg_v
+    if "dark_voltage_mv_s" in values:
+        out["dark_current_e_s"] = values["dark_voltage_mv_s"] * 1e-3 / cg_v
+    return out
 
 
 def is_sensor_file(path) -> bool:
@@ -106,8 +126,6 @@ def _table(data: dict, key: str, where: str) -> dict:
 
 def _pixel_values(data: dict, where: str) -> dict:
     """SensorParams values from [pixel], [datasheet] and [emva]."""
-    from .presets import _from_isetcam
-
     known = {f.name for f in fields(SensorParams)}
     values: dict = {}
     given_by: dict = {}
@@ -140,7 +158,7 @@ def _pixel_values(data: dict, where: str) -> dict:
         if not {"conversion_gain_uv_per_e", "voltage_swing_v"} <= set(volts):
             missing = sorted({"conversion_gain_uv_per_e", "voltage_swing_v"} - set(volts))[0]
             raise CfaMitsubaError(f"{where}: datasheet.{missing} is needed with the volt-domain keys")
-        for k, v in _from_isetcam(volts, where).items():
+        for k, v in volts_to_electrons(volts, where).items():
             put(k, v, "datasheet (volts)")
     emva = _table(data, "emva", where)
     for k, v in emva.items():
@@ -214,11 +232,13 @@ def _read(path: Path) -> dict:
         raise CfaMitsubaError(f"{path}: invalid TOML: {exc}") from None
 
 
-def load_sensor_file(path):
-    """Read a sensor file into a :class:`~.presets.SensorPreset` whose
-    ``cfa()`` carries the file's own curves (module doc for the format)."""
+def read_sensor_file(path) -> dict:
+    """Read and check a sensor file (module doc for the format): a dict of
+    ``name``, ``description``, ``source``, ``notes`` (tuple), ``params``
+    (:class:`SensorParams`), ``cfa`` (the layout with the file's own QE
+    curves) and ``path`` (absolute).  ``get_sensor_preset(path)`` wraps it
+    in a :class:`~.presets.SensorPreset`."""
     from .cfa import _order_channels, _parse_tile, layout_info, make_cfa
-    from .presets import SensorPreset
 
     p = Path(path)
     where = str(p)
@@ -249,6 +269,5 @@ def load_sensor_file(path):
     notes = data.get("notes", [])
     if not isinstance(notes, list) or not all(isinstance(n, str) for n in notes):
         raise CfaMitsubaError(f"{where}: notes must be a list of strings")
-    return SensorPreset(name=name, description=str(data.get("description", "")), source=str(data.get("source", "")),
-                        params=params, cfa_name=cfa.name, spectra="", notes=tuple(notes), path=str(p.resolve()),
-                        own_cfa=cfa)
+    return {"name": name, "description": str(data.get("description", "")), "source": str(data.get("source", "")),
+            "notes": tuple(notes), "params": params, "cfa": cfa, "path": str(p.resolve())}
