@@ -41,7 +41,8 @@ class SensorPreset:
     ----------
     name, description, source : registry name and two lines of provenance.
     params : the pixel and read-out chain.
-    cfa_name : the default layout (``cfa-mitsuba list cfas``).
+    cfa_name : the default layout (``cfa-mitsuba list cfas``; a sensor
+        file's tile text when it gives a tile, not a named layout).
     spectra : the default spectra set (``cfa-mitsuba list spectra``).
     notes : where and why a value departs from its source.
     path : the sensor file's absolute path ("" for a shipped preset).
@@ -65,7 +66,7 @@ class SensorPreset:
 
         if self.own_cfa is None:
             return get_cfa(name or self.cfa_name, spectra=self.spectra)
-        if name is None or name == self.own_cfa.name:
+        if name is None or name in (self.own_cfa.name, self.own_cfa.tile_text()):
             return self.own_cfa
         from .cfa import layout_info, make_cfa
 
@@ -102,7 +103,7 @@ def get_sensor_preset(name) -> SensorPreset:
 
         f = read_sensor_file(name)
         return SensorPreset(name=f["name"], description=f["description"], source=f["source"], params=f["params"],
-                            cfa_name=f["cfa"].name, spectra="", notes=f["notes"], path=f["path"], own_cfa=f["cfa"])
+                            cfa_name=f["layout"], spectra="", notes=f["notes"], path=f["path"], own_cfa=f["cfa"])
     return _named_preset(str(name))
 
 

@@ -236,7 +236,8 @@ def read_sensor_file(path) -> dict:
     """Read and check a sensor file (module doc for the format): a dict of
     ``name``, ``description``, ``source``, ``notes`` (tuple), ``params``
     (:class:`SensorParams`), ``cfa`` (the layout with the file's own QE
-    curves) and ``path`` (absolute).  ``get_sensor_preset(path)`` wraps it
+    curves, named as the sensor), ``layout`` (the named layout, or the
+    tile) and ``path`` (absolute).  ``get_sensor_preset(path)`` wraps it
     in a :class:`~.presets.SensorPreset`."""
     from .cfa import _order_channels, _parse_tile, layout_info, make_cfa
 
@@ -261,7 +262,7 @@ def read_sensor_file(path) -> dict:
         if np.any(np.asarray(qe) < 0):
             raise CfaMitsubaError(f"{where}: qe.{c} has a negative quantum efficiency")
     name = data.get("name", p.stem)
-    cfa = make_cfa(layout or name, tile, curves, str(data.get("description", "")), where)
+    cfa = make_cfa(name, tile, curves, str(data.get("description", "")), where)
     try:
         params = SensorParams(**_pixel_values(data, where))
     except CfaMitsubaError as exc:
@@ -270,4 +271,5 @@ def read_sensor_file(path) -> dict:
     if not isinstance(notes, list) or not all(isinstance(n, str) for n in notes):
         raise CfaMitsubaError(f"{where}: notes must be a list of strings")
     return {"name": name, "description": str(data.get("description", "")), "source": str(data.get("source", "")),
-            "notes": tuple(notes), "params": params, "cfa": cfa, "path": str(p.resolve())}
+            "notes": tuple(notes), "params": params, "cfa": cfa, "layout": layout or cfa.tile_text(),
+            "path": str(p.resolve())}
