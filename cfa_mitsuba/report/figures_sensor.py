@@ -71,6 +71,7 @@ def sensor_curves(res):
             ax.set_xlabel("wavelength (nm)")
     for k in range(n, rows * cols):
         axes[k // cols][k % cols].set_visible(False)
+    fig.tight_layout()
     sensor = ", ".join(dict.fromkeys(t["sensor"].astype(str))) if "sensor" in t.columns else "default"
     caption = (f"Quantum efficiency of each channel as captured (band means on the render grid, IR-cut filter "
                f"included), pixel: {sensor}. Title: the CFA and its spectra set ('own': curves the CFA or sensor "
