@@ -11,7 +11,7 @@ from .demosaic import demosaic, get_demosaic, list_demosaics, register_demosaic 
 from .bilinear import bilinear as _bilinear
 from .laplacian import adaptive_laplacian as _adaptive_laplacian, laplacian as _laplacian
 from .pocs import pocs as _pocs
-from .colour import (  # noqa: F401
+from .colour_matrix import (  # noqa: F401
     COLOUR_FITS,
     ColourFit,
     delta_e00,

@@ -8,7 +8,7 @@ s. 3.2, 3.3):
 1. **Reference.**  The reference is the densest channel (G of Bayer, Y of
    cmy1, W of the Kodak RGBW tiles).  Where densities tie (stripes, CYGM,
    rgbw1, cmy2) it is a luminance estimate L = sum_c w_c x_c (weights of
-   :func:`cfa_mitsuba.isp.colour.luminance_weights`).  'laplacian' estimates
+   :func:`cfa_mitsuba.isp.colour_matrix.luminance_weights`).  'laplacian' estimates
    the reference at every pixel p that does not carry it (centre channel k)
    as the bilinear estimate plus a gradient correction from the centre's
    own samples::
@@ -109,7 +109,7 @@ def reference_for(cfa, mosaic: Mosaic, reference=None, luminance_weights=None) -
     or None for automatic (the unique densest channel, else luminance).
 
     ``luminance_weights``: (C,) or {channel: weight}; by default from the
-    CFA's spectral sensitivities (:func:`cfa_mitsuba.isp.colour.luminance_weights`).
+    CFA's spectral sensitivities (:func:`cfa_mitsuba.isp.colour_matrix.luminance_weights`).
     """
     n = len(mosaic.channels)
     if reference is None:
@@ -129,7 +129,7 @@ def reference_for(cfa, mosaic: Mosaic, reference=None, luminance_weights=None) -
         w[c] = 1.0
         return Reference(c, tuple(w.tolist()))
     if luminance_weights is None:
-        from .colour import cfa_luminance_weights
+        from .colour_matrix import cfa_luminance_weights
 
         w = cfa_luminance_weights(cfa)
     elif isinstance(luminance_weights, dict):

@@ -3,14 +3,15 @@
 
 from __future__ import annotations
 
-__all__ = ["delta_e"]
+__all__ = ["RECORDS", "delta_e"]
 
 import numpy as np
 
 from ..errors import require
 from ._common import as_pair, as_white
 from ._result import MetricResult, summarise_array
-from .colour import delta_e_1976, delta_e_2000, xyz_to_lab, xyz_to_xy
+from .colourspace import delta_e_1976, delta_e_2000, xyz_to_lab, xyz_to_xy
+from .record import MetricRecord
 
 _VERSIONS = ("2000", "1976")
 #: Grey patches of the 24-patch ColorChecker in reading order (last row).
@@ -41,7 +42,7 @@ def delta_e(reference_xyz, test_xyz, white_xyz, *, patches=None, grey_patches=No
     version : ``'2000'`` (CIEDE2000, ISETCam's default and our headline) or
         ``'1976'`` (the paper's Euclidean dE*ab).  Both are always reported.
     lab_constants : ``'cie'`` (exact CIE constants, default) or ``'isetcam'``
-        (ISETCam's rounded ones), see :func:`~cfa_mitsuba.metrics.colour.xyz_to_lab`.
+        (ISETCam's rounded ones), see :func:`~cfa_mitsuba.metrics.colourspace.xyz_to_lab`.
 
     Returns
     -------
@@ -110,3 +111,21 @@ def delta_e(reference_xyz, test_xyz, white_xyz, *, patches=None, grey_patches=No
         "xyz_reference": xyz_r, "xyz_test": xyz_t,
     }
     return MetricResult(details[f"mean_{key}"], name="delta-e", unit=unit, details=details)
+
+
+#: This module's metric records (collected by :mod:`.registry`).
+RECORDS = (
+    MetricRecord(name="delta-e", function=delta_e, scenes=("macbeth",), inputs="xyz", unit="dE00",
+                 higher_is_better=False, scored=True, label="ΔE00", order=1, decimals=2,
+                 description="colour error, mean CIEDE2000 over the 24 ColorChecker patches",
+                 paper="ΔE (s. 2.2.1, Fig 8)", score_range=(6.0, 2.2), range_units=("dE00", "dE76")),
+    # values read from delta-e's details: reported, not scored
+    MetricRecord(name="delta-e76", function=None, scenes=("macbeth",), inputs="xyz", unit="dEab",
+                 higher_is_better=False, scored=False, label="ΔE*ab", order=101, decimals=2,
+                 description="colour error, mean CIE 1976 ΔE*ab over the 24 patches",
+                 parent="delta-e", detail_key="mean_de1976"),
+    MetricRecord(name="delta-l", function=None, scenes=("macbeth",), inputs="xyz", unit="L*",
+                 higher_is_better=False, scored=False, label="ΔL grey", order=102, decimals=2,
+                 description="mean |ΔL*| over the six grey patches (the paper's Table 1 'Mean ΔL')",
+                 paper="Table 1", parent="delta-e", detail_key="mean_dl_grey"),
+)

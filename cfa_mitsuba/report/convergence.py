@@ -11,7 +11,7 @@ import numpy as np
 
 from ..study.convergence import ConvergenceResult, radiance_series, rate_text, rows_frame, write_outputs
 from .figure import RC
-from .style import metric_info
+from .style import metric_display
 
 
 def write_convergence(result: ConvergenceResult, out_dir, *, formats=("png", "svg")) -> dict:
@@ -84,7 +84,7 @@ def plot_convergence(result: ConvergenceResult, paths) -> None:
         lows = []
         for i, m in enumerate(headline):
             sub = df[(df["stage"] == "render") & (df["quantity"] == m)].sort_values("quality")
-            info = metric_info(m)
+            info = metric_display(m)
             unit = s["checks"][m]["unit"] or "-"
             st = dict(color=_METRIC_COLOURS[i % 7], marker=_METRIC_MARKERS[i % 7], linestyle="-")
             lows += _draw_series(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
@@ -131,7 +131,7 @@ def plot_convergence(result: ConvergenceResult, paths) -> None:
         pdflt = s["pocs_default"]
         for i, m in enumerate(headline):
             sub = df[(df["stage"] == "pocs") & (df["quantity"] == m)].sort_values("quality")
-            info = metric_info(m)
+            info = metric_display(m)
             unit = s["checks"][m]["unit"] or "-"
             st = dict(color=_METRIC_COLOURS[i % 7], marker=_METRIC_MARKERS[i % 7], linestyle="-")
             lows += _draw_series(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),

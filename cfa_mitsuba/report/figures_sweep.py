@@ -16,7 +16,7 @@ import numpy as np
 from ..study.conditions import AXES, AXIS_UNITS
 from .figure import Absent, ReportFigure, cfa_legend, label_sweep_panel, legend_rows, panel_grid
 from .results import SCORED_METRICS, Results
-from .style import cfa_styles, metric_info
+from .style import cfa_styles, metric_display
 
 _LABELS = {"f_number": "f-number", "pixel_pitch_um": "pixel pitch", "exposure": "exposure time",
            "read_noise_e": "read noise", "seed": "noise seed (realisation)", "spectra": "spectra set",
@@ -62,7 +62,7 @@ def axis_sweep(res: Results, axis: str):
     drawn = []
     unit = AXIS_UNITS.get(axis, "")
     for r, (scene, metric) in enumerate(pairs):
-        info = metric_info(metric)
+        info = metric_display(metric)
         g = m[(m["scene"] == scene) & (m["metric"] == metric)]
         levels = sorted(g[axis].astype(float).unique()) if numeric else list(dict.fromkeys(g[axis].astype(str)))
         share = None

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from .._version import __version__
 from .results import Results
-from .style import cfa_styles, metric_info
+from .style import cfa_styles, metric_display
 
 #: Report sections in page order: (id, heading, paper figures, intro).
 SECTIONS = (
@@ -191,7 +191,7 @@ def _summary(res: Results, facts: dict, not_run: list) -> str:
         if isinstance(s, dict):
             r = s.get("render") or {}
             size = f" {r['width']}×{r['height']}" if r.get("width") and r.get("height") else ""
-            mets = ", ".join(metric_info(m).short for m in s.get("metrics") or [])
+            mets = ", ".join(metric_display(m).short for m in s.get("metrics") or [])
             src = f", {Path(str(s['file'])).name}" if s.get("file") else ""
             scenes.append(f"{s.get('name')}{size}{src} ({mets})" if mets else f"{s.get('name')}{size}{src}")
     if not scenes:
@@ -204,7 +204,7 @@ def _summary(res: Results, facts: dict, not_run: list) -> str:
     sweeps = []
     for sw in cfg.get("sweeps") or []:
         if isinstance(sw, dict):
-            sweeps.append(f"{', '.join(metric_info(m).short for m in sw.get('metrics') or [])} on "
+            sweeps.append(f"{', '.join(metric_display(m).short for m in sw.get('metrics') or [])} on "
                           f"{sw.get('scene')} at {', '.join(f'{float(v):g}' for v in sw.get('luminances') or [])}"
                           " cd/m²")
     if sweeps:

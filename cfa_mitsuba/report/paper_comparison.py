@@ -144,7 +144,7 @@ def _fit_only(iset) -> list[str]:
     a check of the *-raw filter sets and the MCC fit that needs no render."""
     from .. import spectra
     from ..colorimetry import xyz_to_lab
-    from ..isp.colour import colour_fit_reflectances, electrons_per_radiance_of, fit_colour_matrix
+    from ..isp.colour_matrix import colour_fit_reflectances, electrons_per_radiance_of, fit_colour_matrix
     from ..sensor import get_cfa
 
     wl = spectra.DEFAULT_WAVELENGTHS

@@ -27,15 +27,21 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CfaMitsubaError
-from ..metrics import METRICS, NATURAL, scored_metrics
+from ..metrics import scored_metrics
 from ..study.conditions import AXES
 from ..study.tasks import safe_label
 
 #: The paper's eight metrics in the order of its tables and radar plots (the metric records).
 SCORED_METRICS = scored_metrics()
-#: The built-in scene that feeds each metric (a user scene may feed the image metrics).
-METRIC_SCENES = {r.name: ("puppy" if NATURAL in r.scenes else r.scenes[0]) for r in METRICS.values()}
 _COLUMNS = ("scene", "cfa", "demosaic", "luminance", "metric", "value", "unit")
+
+
+def preferred_scene(scenes: list, config: dict | None) -> str:
+    """Of the scenes that measured a metric, the one scored (as the runner
+    picks it): the first built-in scene of the study's config (a scene
+    without a ``file``), else the first."""
+    builtin = [s.get("name") for s in (config or {}).get("scenes") or [] if isinstance(s, dict) and not s.get("file")]
+    return next((s for s in scenes if s in builtin), scenes[0])
 
 
 def lum_tag(luminance: float) -> str:
@@ -105,9 +111,7 @@ class Results:
         rows = self.metrics[self.metrics["metric"] == metric]
         if not len(rows):
             return None
-        scenes = list(dict.fromkeys(rows["scene"]))
-        want = METRIC_SCENES.get(metric)
-        return want if want in scenes else scenes[0]
+        return preferred_scene(list(dict.fromkeys(rows["scene"])), self.config)
 
     def value(self, scene, cfa, demosaic, luminance, metric) -> float | None:
         m = self._index()
@@ -251,7 +255,7 @@ def _base_luminances(metrics, config: dict, scores) -> list[float]:
     return lums
 
 
-def _score_here(metrics, base, ranges):
+def _score_here(metrics, base, ranges, config):
     """Scores for a results directory without scores.csv (e.g. the output of
     ``cfa-mitsuba evaluate``): the eight metrics at the base luminances, one
     scene per metric, with the given or the default ranges."""
@@ -262,9 +266,7 @@ def _score_here(metrics, base, ranges):
     df = metrics[metrics["metric"].isin(SCORED_METRICS) & metrics["luminance"].isin(base)]
     keep = []
     for name, group in df.groupby("metric", sort=False):
-        scenes = list(dict.fromkeys(group["scene"]))
-        want = METRIC_SCENES.get(name)
-        keep.append(group[group["scene"] == (want if want in scenes else scenes[0])])
+        keep.append(group[group["scene"] == preferred_scene(list(dict.fromkeys(group["scene"])), config)])
     if not keep:
         return None
     return score(pd.concat(keep).reset_index(drop=True), ranges or None)
@@ -317,7 +319,7 @@ def load_results(out_dir) -> Results:
     base = _base_luminances(metrics, config, scores)
     if scores is None and len(metrics):
         try:
-            scores = _score_here(metrics, base, ranges)
+            scores = _score_here(metrics, base, ranges, config)
         except CfaMitsubaError as exc:
             notes.append(f"no scores: {exc}")
             scores = None

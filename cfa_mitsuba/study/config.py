@@ -25,10 +25,10 @@ from .checker import _Checker, _typename, read_toml
 from .sweeps import SweepSpec, _sweeps
 from ..io.validate import safe_name
 
-from ..metrics import metrics_for_scene
+from ..metrics import NATURAL, metrics_for_scene
 
 #: Metrics a user scene feeds (the image metrics of DESIGN.md), from the metric records.
-IMAGE_METRICS = metrics_for_scene("", natural=True)
+IMAGE_METRICS = metrics_for_scene(NATURAL)
 #: How a study chooses the exposure: 'reference' (ISETCam's auto exposure,
 #: chosen once at the reference luminance and kept at every luminance: the
 #: camera of a fixed scene brightness, the default), 'each' (auto exposure at
@@ -279,7 +279,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
             ck.fail(f"scenes[{i}]", f"unknown scene {s!r} (known: {', '.join(known_scenes)}; "
                                     "user XML scenes go under [[custom_scenes]])")
         over = _render_overrides(ck, render_cfg.get(s, {}), f"render.{s}")
-        scenes.append(SceneSpec(s, None, over, metrics_for_scene(s)))
+        scenes.append(SceneSpec(s, None, over, metrics_for_scene(render.get_scene(s).kind)))
     custom = data.get("custom_scenes", [])
     if not isinstance(custom, list):
         ck.fail("custom_scenes", "must be an array of tables ([[custom_scenes]])")

@@ -355,6 +355,7 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
     """
     from .. import io
     from .chain import ChainSettings
+    from ..metrics import metrics_for_scene
     from .config import IMAGE_METRICS
     from .executors import make_executor
 
@@ -372,7 +373,8 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
         img = io.read_spectral_exr(exr)
         meta = img.meta
         scene = str(meta.get("scene") or exr.stem)
-        metrics = list(meta.get("metrics") or IMAGE_METRICS)
+        # the metrics its kind feeds (an EXR written before sidecars named the kind lists them)
+        metrics = list(metrics_for_scene(meta["kind"]) if meta.get("kind") else meta.get("metrics") or IMAGE_METRICS)
         for lum in luminances:
             level = float(lum) if lum is not None else float(meta.get("luminance_cd_m2") or 100.0)
             for cfa in cfas:
