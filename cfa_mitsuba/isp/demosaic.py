@@ -76,6 +76,19 @@ def get_demosaic(name: str) -> Callable:
     return _REGISTRY[name].function
 
 
+#: Keywords the processing fills for a method (its luminance reference, the
+#: channels' luminance weights, an info dict): not options a user sets.
+SUPPLIED_KEYWORDS = frozenset({"reference", "luminance_weights", "info"})
+
+
+def demosaic_parameters(name: str) -> dict:
+    """{option: inspect.Parameter}: the keyword options of a method that a
+    study (``[demosaics.<name>]``) or the command line may set."""
+    fn = get_demosaic(name)
+    return {k: p for k, p in inspect.signature(fn).parameters.items()
+            if p.kind is inspect.Parameter.KEYWORD_ONLY and k not in SUPPLIED_KEYWORDS}
+
+
 def resolve_cfa(cfa):
     """A CFA object from a CFA or a registered name."""
     if isinstance(cfa, str):

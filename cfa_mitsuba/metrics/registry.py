@@ -39,6 +39,10 @@ GEOMETRY_KEYWORDS = {
     "pixel_pitch_um": "the sensor's pixel pitch", "reference": "the ideal sensor's image",
 }
 
+#: Of those, the ones a study may still set (ISETCam's S-CIELAB settings name
+#: the samples per degree): the option wins over the geometry.
+SETTABLE_GEOMETRY = frozenset({"samples_per_degree"})
+
 #: The registry, filled by :func:`_collect` (in the records' ``order``).
 METRICS: dict[str, MetricRecord] = {}
 
@@ -126,7 +130,7 @@ def metric_parameters(name: str) -> dict[str, inspect.Parameter]:
     """The options a study or the command line may set for a metric: its
     function's keyword-only parameters that the adapter does not fill."""
     return {k: p for k, p in _parameters(get_metric(name).function).items()
-            if p.kind is inspect.Parameter.KEYWORD_ONLY and k not in GEOMETRY_KEYWORDS
+            if p.kind is inspect.Parameter.KEYWORD_ONLY and (k not in GEOMETRY_KEYWORDS or k in SETTABLE_GEOMETRY)
             and k != _reference_keyword(get_metric(name))}
 
 

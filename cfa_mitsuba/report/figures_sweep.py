@@ -29,7 +29,7 @@ def axis_rows(res: Results, axis: str):
     m = res.all_metrics if res.all_metrics is not None else res.metrics
     if axis not in m.columns:
         return m.iloc[0:0]
-    others = [a for a in AXES[1:] if a != axis and a in m.columns]
+    others = [a for a in list(AXES)[1:] if a != axis and a in m.columns]
     base = res.metrics
     keep = np.zeros(len(m), dtype=bool)
     for (scene, cfa), g in base.groupby(["scene", "cfa"], sort=False):

@@ -216,7 +216,7 @@ def split_sweeps(metrics):
     first part when its scene has a base row (``base`` column) with the same
     values of those axes (for its CFA: the spectra set is a CFA's own); tables
     without axis columns are all base."""
-    others = [a for a in AXES[1:] if a in metrics.columns]
+    others = [a for a in list(AXES)[1:] if a in metrics.columns]
     if not others or "base" not in metrics.columns:
         return metrics, {}
     base_flag = metrics["base"].astype(str).str.lower().isin(("true", "1"))

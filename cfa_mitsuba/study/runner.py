@@ -39,7 +39,7 @@ from ..io import atomic_output, check_writable_dir
 from ..metrics import scored_metrics
 from .config import StudyConfig
 from .tables import mean_table, order_rows, write_tables
-from .tasks import evaluate_task, render_task
+from .tasks import EvaluationTask, evaluate_task, render_task
 
 #: Metrics that enter the scores (the paper's eight); other rows in
 #: metrics.csv (delta-l, delta-e76, scielab-interior) are reported only.
@@ -129,17 +129,15 @@ def plan_study(config: StudyConfig, details_dir: str | None) -> tuple[list[dict]
                 sources.append(src)
             tag = cond.label(config.base_condition(cond.luminance))
             for i, (cfa, label) in enumerate(zip(config.cfas, labels)):
-                tasks.append({
-                    "source": src, "scene": scene.name, "condition": cond, "base": base, "cfa": cfa,
-                    "cfa_label": label, "demosaics": list(config.demosaics), "metrics": metrics, "chain": chain,
-                    "details_dir": details_dir, "details_tag": tag, "realisations": config.seeds,
-                    "ideal_rows": i == 0,
-                })
+                tasks.append(EvaluationTask(
+                    source=src, scene=scene.name, condition=cond, base=base, cfa=cfa, cfa_label=label,
+                    demosaics=tuple(config.demosaics), metrics=tuple(metrics), chain=chain, details_dir=details_dir,
+                    details_tag=tag, realisations=config.seeds, ideal_rows=i == 0))
     return sources, tasks
 
 
-def _task_id(task: dict) -> str:
-    ident = {k: v for k, v in task.items() if k != "details_dir"}
+def _task_id(task) -> str:
+    ident = EvaluationTask.of(task).identity()
     ident["code"] = __version__
     text = json.dumps(ident, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
@@ -378,12 +376,10 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
         for lum in luminances:
             level = float(lum) if lum is not None else float(meta.get("luminance_cd_m2") or 100.0)
             for cfa in cfas:
-                tasks.append({
-                    "source": {"kind": "exr", "path": str(exr.resolve())}, "scene": scene,
-                    "condition": chain.base_condition(luminance=level, seed=seed), "cfa": cfa,
-                    "cfa_label": _cfa_label(cfa), "demosaics": list(demosaics), "metrics": metrics, "chain": chain,
-                    "details_dir": None,
-                })
+                tasks.append(EvaluationTask(
+                    source={"kind": "exr", "path": str(exr.resolve())}, scene=scene,
+                    condition=chain.base_condition(luminance=level, seed=seed), cfa=cfa, cfa_label=_cfa_label(cfa),
+                    demosaics=tuple(demosaics), metrics=tuple(metrics), chain=chain))
     rows, failures = [], []
 
     def got(task, result):
