@@ -9,6 +9,7 @@ missing; :class:`Results` says what is absent rather than failing.
     metrics.csv   tidy rows: scene, cfa, demosaic, luminance, metric, value, unit
     scores.csv    the scored rows with normalised scores and ranks (optional)
     ranges.json   {metric: [worst, best]} (optional)
+    cfas.json     each CFA's tile, channels, spectra set (optional; study/cfa_facts.py)
     timing.json   where the time went (optional; may predate metrics.csv)
     config.json   the validated config (optional)
     details/<scene>/<cfa>/<demosaic>/L<lum>.json|.png|.scielab.npy
@@ -81,6 +82,9 @@ class Results:
     primary_luminance: float | None
     scored_here: bool = False
     notes: list = field(default_factory=list)
+    #: {CFA label: its tile, channels, spectra set, ...} from cfas.json
+    #: (study/cfa_facts.py); empty for results written before it existed
+    cfa_facts: dict = field(default_factory=dict)
     #: every row of metrics.csv, sweeps of any axis included (``metrics``
     #: keeps the rows at the study's own values of every axis but luminance)
     all_metrics: object = None
@@ -358,4 +362,14 @@ def load_results(out_dir) -> Results:
                    cfas=cfas, demosaics=demosaics, scenes=scenes, base_luminances=base,
                    primary_luminance=primary, scored_here=scored_here, notes=notes, all_metrics=all_metrics,
                    swept_axes=swept, range_policy=policy if isinstance(policy, str) else None,
-                   constant_metrics=constant, policies=_read_policies(root / "policies.csv"))
+                   constant_metrics=constant, policies=_read_policies(root / "policies.csv"),
+                   cfa_facts=_cfa_facts(root / "cfas.json"))
+
+
+def _cfa_facts(path: Path) -> dict:
+    """cfas.json as {label: record}, keeping only well-formed records (a tile of names)."""
+    raw = _read_json(path)
+    if not isinstance(raw, dict):
+        return {}
+    return {str(k): v for k, v in raw.items() if isinstance(v, dict) and isinstance(v.get("pattern"), list)
+            and v["pattern"] and all(isinstance(r, list) for r in v["pattern"])}

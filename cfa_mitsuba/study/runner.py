@@ -38,6 +38,7 @@ from ..errors import CfaMitsubaError
 from ..io import atomic_output, check_writable_dir
 from ..metrics import scored_metrics
 from .config import StudyConfig
+from .cfa_facts import write_cfa_facts
 from .tables import mean_table, order_rows, write_tables
 from .tasks import EvaluationTask, evaluate_task, render_task
 
@@ -272,6 +273,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     metrics, scores, ranges, constant = write_tables(
         out, realisations, ideal, paper_ranges=_paper_ranges(config, render_info), overrides=dict(config.ranges),
         policy=config.range_policy, clip=config.clip_scores, builtin_scenes=builtin)
+    write_cfa_facts(out, config.cfas, order["cfa"], config.chain_settings(), config.base_condition())
     with atomic_output(out / "ranges.json") as tmp:
         tmp.write_text(json.dumps({**{k: _range_pair(v) for k, v in ranges.items()},
                                    "_policy": config.range_policy, "_constant": constant}, indent=1))
@@ -394,6 +396,7 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
              "metric": list(SCORED_METRICS)}
     realisations = order_rows(rows, order)
     metrics = mean_table(realisations)
+    write_cfa_facts(out, cfas, order["cfa"], chain, chain.base_condition())
     with atomic_output(out / "metrics.csv") as tmp:
         metrics.to_csv(tmp, index=False, float_format="%.10g")
     _write_failures(out, failures, log)
