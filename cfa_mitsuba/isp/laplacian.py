@@ -74,6 +74,7 @@ import numpy as np
 
 from ..errors import CfaMitsubaError
 from .bilinear import interpolate_channel
+from .demosaic import DemosaicMethod
 from .mosaic import (
     Mosaic,
     Stencil,
@@ -436,3 +437,12 @@ def adaptive_laplacian(raw, cfa, *, alpha: float = MHC_ALPHA, chroma_gain: float
     ref = reference_for(cfa, mosaic, reference, luminance_weights)
     refimg = reference_adaptive(raw, mosaic, ref, alpha, weighting)
     return colour_differences(raw, refimg, mosaic, ref, chroma_gain, weighting)
+
+
+#: This module's methods (registered by :func:`.demosaic.collect_demosaics`).
+DEMOSAICS = (
+    DemosaicMethod(name="laplacian", function=laplacian, order=2,
+                   description="gradient-corrected linear (Malvar-He-Cutler on Bayer), then colour differences"),
+    DemosaicMethod(name="adaptive-laplacian", function=adaptive_laplacian, order=3,
+                   description="edge-directed (Hamilton-Adams classifiers on Bayer), directional colour differences"),
+)

@@ -42,7 +42,8 @@ from .preprocess import mean_match
 from .inputs import MetricInputs
 from .record import NATURAL, MetricRecord
 from .registry import (METRICS, evaluate, evaluate_many, get_metric, list_metrics, metric_names, metric_parameters,
-                       metrics_for_scene, record_json, register_metric, result_rows, scored_metrics)
+                       metrics_for_scene, record_json, register_metric, result_rows, scored_metrics,
+                       unregister_metric)
 from .scielab import scielab, scielab_filters
 from .ssim import ssim
 

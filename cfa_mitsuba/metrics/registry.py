@@ -14,7 +14,7 @@ geometry holds (``patches``, ``roi``, ``row``, ``steps``,
 
 from __future__ import annotations
 
-__all__ = ["METRICS", "register_metric", "get_metric", "metric_names", "scored_metrics", "metrics_for_scene",
+__all__ = ["METRICS", "register_metric", "unregister_metric", "get_metric", "metric_names", "scored_metrics", "metrics_for_scene",
            "list_metrics", "record_json", "evaluate", "evaluate_many", "result_rows", "metric_parameters",
            "GEOMETRY_KEYWORDS"]
 
@@ -60,6 +60,12 @@ def register_metric(record: MetricRecord, *, replace: bool = False) -> MetricRec
     METRICS.clear()
     METRICS.update((r.name, r) for r in ordered)
     return record
+
+
+def unregister_metric(name: str) -> None:
+    """Remove a registered metric and the values read from its details (a test's toy one)."""
+    for n in [n for n, r in METRICS.items() if n == name or r.parent == name]:
+        del METRICS[n]
 
 
 def _collect() -> None:
