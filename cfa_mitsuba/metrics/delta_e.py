@@ -114,18 +114,16 @@ def delta_e(reference_xyz, test_xyz, white_xyz, *, patches=None, grey_patches=No
 
 
 #: This module's metric records (collected by :mod:`.registry`).
+_DELTA_E = MetricRecord(
+    name="delta-e", function=delta_e, scenes=("macbeth",), inputs="xyz", unit="dE00", higher_is_better=False,
+    scored=True, label="ΔE00", order=1, decimals=2, paper="ΔE (s. 2.2.1, Fig 8)", score_range=(6.0, 2.2),
+    range_units=("dE00", "dE76"), description="colour error, mean CIEDE2000 over the 24 ColorChecker patches")
 RECORDS = (
-    MetricRecord(name="delta-e", function=delta_e, scenes=("macbeth",), inputs="xyz", unit="dE00",
-                 higher_is_better=False, scored=True, label="ΔE00", order=1, decimals=2,
-                 description="colour error, mean CIEDE2000 over the 24 ColorChecker patches",
-                 paper="ΔE (s. 2.2.1, Fig 8)", score_range=(6.0, 2.2), range_units=("dE00", "dE76")),
+    _DELTA_E,
     # values read from delta-e's details: reported, not scored
-    MetricRecord(name="delta-e76", function=None, scenes=("macbeth",), inputs="xyz", unit="dEab",
-                 higher_is_better=False, scored=False, label="ΔE*ab", order=101, decimals=2,
-                 description="colour error, mean CIE 1976 ΔE*ab over the 24 patches",
-                 parent="delta-e", detail_key="mean_de1976"),
-    MetricRecord(name="delta-l", function=None, scenes=("macbeth",), inputs="xyz", unit="L*",
-                 higher_is_better=False, scored=False, label="ΔL grey", order=102, decimals=2,
-                 description="mean |ΔL*| over the six grey patches (the paper's Table 1 'Mean ΔL')",
-                 paper="Table 1", parent="delta-e", detail_key="mean_dl_grey"),
+    _DELTA_E.detail("mean_de1976", name="delta-e76", unit="dEab", label="ΔE*ab", order=101, decimals=2,
+                    description="colour error, mean CIE 1976 ΔE*ab over the 24 patches"),
+    _DELTA_E.detail("mean_dl_grey", name="delta-l", unit="L*", label="ΔL grey", order=102, decimals=2,
+                    paper="Table 1",
+                    description="mean |ΔL*| over the six grey patches (the paper's Table 1 'Mean ΔL')"),
 )

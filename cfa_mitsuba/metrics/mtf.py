@@ -422,18 +422,16 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
 
 
 #: This module's metric records (collected by :mod:`.registry`).
+_MTF = MetricRecord(
+    name="mtf", function=mtf, scenes=("slanted-edge",), inputs="linear", unit="cy/mm", higher_is_better=True,
+    scored=True, label="MTF50", order=4, decimals=1, paper="MTF50 (s. 2.2.4, Figs 6, 11)",
+    score_range=(30.0, 110.0), range_scaling="pixel_pitch", ideal_details=True,
+    description="luminance MTF50 of the slanted edge (ISO 12233 e-SFR)")
 RECORDS = (
-    MetricRecord(name="mtf", function=mtf, scenes=("slanted-edge",), inputs="linear", unit="cy/mm",
-                 higher_is_better=True, scored=True, label="MTF50", order=4, decimals=1,
-                 description="luminance MTF50 of the slanted edge (ISO 12233 e-SFR)",
-                 paper="MTF50 (s. 2.2.4, Figs 6, 11)", score_range=(30.0, 110.0), range_scaling="pixel_pitch",
-                 ideal_details=True),
-    MetricRecord(name="mtf50p", function=None, scenes=("slanted-edge",), inputs="linear", unit="cy/mm",
-                 higher_is_better=True, scored=False, label="MTF50P", order=103, decimals=1,
-                 description="luminance MTF50P: where the MTF falls to half its peak (Imatest; not raised by overshoot)",
-                 parent="mtf", detail_key="mtf50p_cy_mm"),
-    MetricRecord(name="mtf-peak", function=None, scenes=("slanted-edge",), inputs="linear", unit="",
-                 higher_is_better=False, scored=False, label="MTF peak", order=104, decimals=3,
-                 description="peak of the luminance MTF up to Nyquist (1 without overshoot; above 1: sharpening)",
-                 parent="mtf", detail_key="mtf_peak"),
+    _MTF,
+    _MTF.detail("mtf50p_cy_mm", name="mtf50p", unit="cy/mm", label="MTF50P", order=103, decimals=1,
+                higher_is_better=True,
+                description="luminance MTF50P: where the MTF falls to half its peak (Imatest; not raised by overshoot)"),
+    _MTF.detail("mtf_peak", name="mtf-peak", unit="", label="MTF peak", order=104, decimals=3,
+                description="peak of the luminance MTF up to Nyquist (1 without overshoot; above 1: sharpening)"),
 )

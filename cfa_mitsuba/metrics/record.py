@@ -95,3 +95,11 @@ class MetricRecord:
     @property
     def secondary(self) -> bool:
         return self.parent is not None
+
+    def detail(self, detail_key: str, **fields) -> "MetricRecord":
+        """A value read from this metric's details (``detail_key``), reported
+        but not scored: a record with this one's scenes and inputs, the
+        ``fields`` given (name, unit, label, description, ...)."""
+        base = {"function": None, "scenes": self.scenes, "inputs": self.inputs, "scored": False,
+                "higher_is_better": False, "parent": self.name, "detail_key": detail_key}
+        return MetricRecord(**{**base, **fields})

@@ -218,14 +218,13 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
 
 
 #: This module's metric records (collected by :mod:`.registry`).
+_SCIELAB = MetricRecord(
+    name="scielab", function=scielab, scenes=(NATURAL,), inputs="xyz", unit="dE00", higher_is_better=False,
+    scored=True, label="S-CIELAB", order=2, decimals=2, paper="ΔEs (s. 2.2.2, Fig 10)", score_range=(9.5, 2.5),
+    range_units=("dE00", "dE76"), reference_cache=("reference_lab", scielab_reference_lab),
+    description="colour reproduction error, mean S-CIELAB ΔE00 over the image (Zhang-Wandell)")
 RECORDS = (
-    MetricRecord(name="scielab", function=scielab, scenes=(NATURAL,), inputs="xyz", unit="dE00",
-                 higher_is_better=False, scored=True, label="S-CIELAB", order=2, decimals=2,
-                 description="colour reproduction error, mean S-CIELAB ΔE00 over the image (Zhang-Wandell)",
-                 paper="ΔEs (s. 2.2.2, Fig 10)", score_range=(9.5, 2.5), range_units=("dE00", "dE76"),
-                 reference_cache=("reference_lab", scielab_reference_lab)),
-    MetricRecord(name="scielab-interior", function=None, scenes=(NATURAL,), inputs="xyz", unit="dE00",
-                 higher_is_better=False, scored=False, label="S-CIELAB interior", order=105, decimals=2,
-                 description="S-CIELAB mean ΔE00 away from the image border",
-                 parent="scielab", detail_key="mean_interior"),
+    _SCIELAB,
+    _SCIELAB.detail("mean_interior", name="scielab-interior", unit="dE00", label="S-CIELAB interior", order=105,
+                    decimals=2, description="S-CIELAB mean ΔE00 away from the image border"),
 )

@@ -64,6 +64,12 @@ def plot_convergence(result: ConvergenceResult, paths) -> None:
             fig.savefig(path, metadata={"Date": None} if str(path).endswith(".svg") else None)
 
 
+def _metric_style(i: int, m: str, s: dict) -> tuple:
+    """(display info, unit text, line style) of the i-th headline metric."""
+    st = dict(color=_METRIC_COLOURS[i % 7], marker=_METRIC_MARKERS[i % 7], linestyle="-")
+    return metric_display(m), s["checks"][m]["unit"] or "-", st
+
+
 def _panel_radiance(ax, p, s, df) -> None:
     """(a) radiance error per band against render wall time."""
     lows = []
@@ -93,9 +99,7 @@ def _panel_metrics(ax, p, s, df, headline) -> None:
     lows = []
     for i, m in enumerate(headline):
         sub = df[(df["stage"] == "render") & (df["quantity"] == m)].sort_values("quality")
-        info = metric_display(m)
-        unit = s["checks"][m]["unit"] or "-"
-        st = dict(color=_METRIC_COLOURS[i % 7], marker=_METRIC_MARKERS[i % 7], linestyle="-")
+        info, unit, st = _metric_style(i, m, s)
         lows += _draw_series(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
                              sub["quality"].to_numpy(float), p.default_spp, st,
                              f"{info.short} [{unit}]: {_rates_label(s['rates']['render'][m], 'spp')}")
@@ -141,9 +145,7 @@ def _panel_pocs(ax, p, s, df, headline) -> None:
     pdflt = s["pocs_default"]
     for i, m in enumerate(headline):
         sub = df[(df["stage"] == "pocs") & (df["quantity"] == m)].sort_values("quality")
-        info = metric_display(m)
-        unit = s["checks"][m]["unit"] or "-"
-        st = dict(color=_METRIC_COLOURS[i % 7], marker=_METRIC_MARKERS[i % 7], linestyle="-")
+        info, unit, st = _metric_style(i, m, s)
         lows += _draw_series(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
                              sub["quality"].to_numpy(float), None, st,
                              f"{info.short} [{unit}]: {_rates_label(s['rates']['pocs'][m], 'iteration')}")

@@ -60,12 +60,12 @@ class EvaluationTask:
     base : the condition is one of the study's own (scored), not a sweep's.
     """
 
-    source: dict
+    source: dict[str, object]
     scene: str
     condition: object
     cfa: str
-    demosaics: tuple
-    metrics: tuple
+    demosaics: tuple[str, ...]
+    metrics: tuple[str, ...]
     chain: object = None
     cfa_label: str | None = None
     details_dir: str | None = None
