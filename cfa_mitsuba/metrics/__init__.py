@@ -48,7 +48,7 @@ from .scielab import scielab, scielab_filters
 from .ssim import ssim
 
 __all__ = [
-    "MetricResult", "MetricRecord", "MetricInputs", "register_metric", "metric_parameters", "METRICS", "NATURAL", "get_metric",
+    "MetricResult", "MetricRecord", "MetricInputs", "register_metric", "unregister_metric", "metric_parameters", "METRICS", "NATURAL", "get_metric",
     "list_metrics", "metric_names", "scored_metrics", "metrics_for_scene", "record_json", "evaluate",
     "evaluate_many", "result_rows",
     "delta_e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi",

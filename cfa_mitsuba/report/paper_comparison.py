@@ -24,7 +24,6 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
 
 from ..errors import CfaMitsubaError
 from ..metrics import get_metric
