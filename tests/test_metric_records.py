@@ -69,4 +69,4 @@ def test_every_metric_evaluates_by_name_on_one_input():
     with pytest.raises(cm.CfaMitsubaError, match="needs the chirp"):
         cm.metrics.evaluate("moire", cm.metrics.MetricInputs(xyz, xyz, white))
     with pytest.raises(cm.CfaMitsubaError, match="unknown metric"):
-        cm.metrics.get_metric("psnr")
+        cm.metrics.get_metric("no-such-metric")

@@ -54,3 +54,11 @@ __all__ = [
     "delta_e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi",
     "mean_match", "find_edge_roi", "scielab_filters", "scene_geometry", "colourspace",
 ]
+
+# Every registered metric's function is reachable as cm.metrics.<function>,
+# a module added later too (importing a submodule binds the package attribute
+# to the module; the function is what users call).
+for _record in METRICS.values():
+    if _record.function is not None:
+        globals()[_record.function.__name__] = _record.function
+del _record
