@@ -37,8 +37,8 @@ def test_paper_config_is_the_papers_study():
     assert len(cfg.cfas) == 12 and set(cfg.demosaics) == {"bilinear", "laplacian", "adaptive-laplacian", "pocs"}
     assert {s.name for s in cfg.scenes} == {"macbeth", "slanted-edge", "chirp", "gray-bar", "puppy"}
     (sweep,) = cfg.sweeps
-    assert sweep.scene == "puppy" and set(sweep.metrics) == {"scielab", "ssim"}
-    assert sweep.luminances == (3, 6, 12, 50, 100, 200, 400)
+    assert sweep.scenes == ("puppy",) and set(sweep.metrics) == {"scielab", "ssim"}
+    assert sweep.values["luminance"] == (3, 6, 12, 50, 100, 200, 400)
 
 
 def test_exposure_policies_set_where_auto_exposure_is_chosen(tmp_path):
