@@ -8,9 +8,7 @@ import csv
 
 import numpy as np
 import pytest
-from scipy import stats
 
-import cfa_mitsuba as cm
 from cfa_mitsuba.sensor import get_sensor_preset, list_sensor_presets
 from cfa_mitsuba.sensor.emva import EmvaSettings, photon_transfer_peak, simulate_emva
 from cfa_mitsuba.sensor.emva_analysis import analyse_channel, parameter_rows

@@ -15,20 +15,10 @@ from cfa_mitsuba.errors import CfaMitsubaError
 from cfa_mitsuba.sensor import get_sensor_preset
 
 from conftest import REPO, assert_one_line_error, run_cli
+from test_sensor_presets import chart_exr  # noqa: F401  (the small chart EXR fixture)
 
 EXAMPLE = REPO / "configs" / "sensors" / "mt9v024-rgb.toml"
 CSV = EXAMPLE.with_name("mt9v024-rgb-qe.csv")
-
-
-@pytest.fixture(scope="module")
-def chart_exr(tmp_path_factory):
-    wl = cm.spectra.DEFAULT_WAVELENGTHS
-    refl = cm.spectra.colorchecker(wl)[1]
-    idx = np.arange(24).reshape(4, 6).repeat(8, 0).repeat(8, 1)
-    path = tmp_path_factory.mktemp("sensorfile") / "chart.exr"
-    cm.io.write_spectral_exr(path, cm.values.SpectralImage(refl[idx] * cm.spectra.illuminant("D65", wl) * 1e-3, wl,
-                                                           {"fov_deg": 10.0}))
-    return path
 
 
 def _file(tmp_path, body: str, csv_text: str | None = None, name="s.toml") -> Path:

@@ -65,7 +65,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import spectra as _spectra
-from ..errors import CfaMitsubaError, require
+from ..errors import require
 from .capture import capture
 from .catalogue import get_cfa
 from .cfa import make_cfa
