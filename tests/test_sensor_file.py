@@ -139,3 +139,16 @@ def test_a_study_config_takes_a_sensor_file_relative_to_it(tmp_path):
     assert cfg.capture["sensor_preset"] == "mine"
     with pytest.raises(CfaMitsubaError, match="sensor"):
         parse_config({**base, "sensor": "sensors/absent.toml"}, base=tmp_path)
+
+
+def test_a_design_config_takes_a_sensor_file_in_its_study():
+    import tomllib
+
+    from cfa_mitsuba.design.config import parse_design
+
+    path = REPO / "configs" / "design-quick.toml"
+    data = tomllib.loads(path.read_text())
+    data["study"]["sensor"] = "sensors/mt9v024-rgb.toml"  # relative to the config's folder
+    cfg = parse_design(data, where=path.name, base=path.parent)
+    assert cfg.study.chain_settings().sensor == get_sensor_preset("mt9v024-rgb").params
+    assert cfg.study.capture["sensor_preset"] == "mt9v024-rgb-file"
