@@ -31,10 +31,12 @@ def read_sensor_curves(res):
 
 
 def spectra_note(res) -> str | None:
-    """One sentence when the compared CFAs use different spectra sets."""
+    """One sentence when the compared CFAs (those of metrics.csv) use
+    different spectra sets."""
     t = read_sensor_curves(res)
-    if t is None:
+    if t is None or not len(res.metrics):
         return None
+    t = t[t["cfa"].isin(set(res.metrics["cfa"].astype(str)))]
     sets = t.drop_duplicates("cfa").set_index("cfa")["spectra"]
     if sets.nunique() < 2:
         return None
@@ -49,7 +51,12 @@ def sensor_curves(res):
     if t is None:
         return Absent("sensor", "Sensor spectra", "sensor_curves.csv is absent (results written before the "
                                                   "study recorded its sensors' curves)")
-    order = [c for c in res.cfas if c in set(t["cfa"])] + [c for c in dict.fromkeys(t["cfa"]) if c not in res.cfas]
+    measured = set(res.metrics["cfa"].astype(str)) if len(res.metrics) else set()
+    order = [c for c in res.cfas if c in measured] + sorted(measured - set(res.cfas))
+    order = [c for c in order if c in set(t["cfa"])]  # the CFAs of metrics.csv whose curves were recorded
+    if not order:
+        return Absent("sensor", "Sensor spectra", "no CFA of metrics.csv has curves in sensor_curves.csv")
+    t = t[t["cfa"].isin(order)]
     n = len(order)
     cols = min(4, n)
     rows = (n + cols - 1) // cols
