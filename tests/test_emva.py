@@ -111,3 +111,27 @@ def test_the_command_refuses_bad_input_in_one_line(tmp_path):
     assert_one_line_error(run_cli("sensor", "emva", "--sensor", "imx999", "--out", tmp_path / "e"), "imx999")
     assert_one_line_error(run_cli("sensor", "emva", "--cfa", "bayer", "--steps", "0", "--out", tmp_path / "e"),
                           "--steps")
+
+
+def test_without_the_optional_package_the_command_says_how_to_install_it(monkeypatch):
+    import sys
+
+    from cfa_mitsuba.errors import CfaMitsubaError
+    from cfa_mitsuba.sensor.emva_analysis import require_emva1288
+
+    monkeypatch.setitem(sys.modules, "emva1288", None)  # import emva1288 now fails
+    monkeypatch.setitem(sys.modules, "emva1288.process", None)
+    with pytest.raises(CfaMitsubaError, match=r"pip install 'cfa-mitsuba\[emva\]'"):
+        require_emva1288()
+
+
+def test_the_numpy_proxy_gives_emva1288_what_numpy_2_removed():
+    from emva1288.process import routines
+
+    from cfa_mitsuba.sensor.emva_analysis import require_emva1288
+
+    require_emva1288()
+    x, y = np.arange(5), 2.0 * np.arange(5) + 1.0
+    fit, _ = routines.LinearB(x, y)  # calls np.asfarray inside the package
+    assert fit == pytest.approx([2.0, 1.0])
+    assert routines.np.int is int and routines.np.float64 is np.float64
