@@ -102,7 +102,7 @@ def test_the_command_writes_emva1288s_report(tmp_path):
     assert len(list((out / "report" / "OP1").glob("*.pdf"))) >= 5  # the package's plots
 
 
-def test_the_command_refuses_bad_input_in_one_line(tmp_path):
+def test_the_command_refuses_bad_input_in_one_line(tmp_path, monkeypatch):
     assert_one_line_error(run_cli("sensor", "emva", "--out", tmp_path / "e"), "--cfa is required")
     assert_one_line_error(run_cli("sensor", "emva", "--cfa", "bayer", "--readout", "bin", "--out", tmp_path / "e"),
                           "readout")
@@ -111,6 +111,10 @@ def test_the_command_refuses_bad_input_in_one_line(tmp_path):
     assert_one_line_error(run_cli("sensor", "emva", "--sensor", "imx999", "--out", tmp_path / "e"), "imx999")
     assert_one_line_error(run_cli("sensor", "emva", "--cfa", "bayer", "--steps", "0", "--out", tmp_path / "e"),
                           "--steps")
+    monkeypatch.setenv("CFA_MITSUBA_MEMORY_LIMIT", "50MB")
+    assert_one_line_error(run_cli("sensor", "emva", "--cfa", "bayer", "--size", "512", "--out", tmp_path / "m"),
+                          "memory", "--size")
+    assert not (tmp_path / "m" / "R").exists()
 
 
 def test_without_the_optional_package_the_command_says_how_to_install_it(monkeypatch):

@@ -66,6 +66,8 @@ import numpy as np
 
 from .. import spectra as _spectra
 from ..errors import require
+from ..io import atomic_output
+from ..io.limits import estimate_capture_bytes, require_memory
 from .capture import capture
 from .catalogue import get_cfa
 from .cfa import make_cfa
@@ -314,11 +316,15 @@ def simulate_emva(sensor: SensorParams, cfa, out_dir, settings: EmvaSettings | N
         require(qe[ci, band] > 0, f"channel {channel!r} has no QE at {wl[band]:g} nm: choose another wavelength")
         expected = expected_parameters(op, float(qe[ci, band]), channel)
         folder = out / channel
-        (folder / "images").mkdir(parents=True, exist_ok=True)
         cam = _Camera(op, cfa, channel, settings, folder, settings.seed + 1_000_000 * ci)
+        h, w = cam.shape  # two uniform fields (irradiance and pixel irradiance each) and the captures
+        require_memory(2 * 2 * h * w * wl.size * 8 + estimate_capture_bytes(h, w, wl.size),
+                       f"sensor emva on {w} x {h} pixels x {wl.size} bands", "give a smaller --size")
+        (folder / "images").mkdir(parents=True, exist_ok=True)
         probe = _uniform_field(wl, band, 1.0, cam.shape, op)
         rate = float(capture(probe, cam.cfa, exposure_s=1.0, noise="off", sensor=op)
                      .electrons_per_radiance[0 if cam.cfa.channels == (channel,) else ci, band])
+        del probe  # (memory: the fields are (H, W, B) float64)
         radiance = expected["clip_e"] / (rate * settings.saturation_exposure_s)
         bright = _uniform_field(wl, band, radiance, cam.shape, op)
         dark = _uniform_field(wl, band, 0.0, cam.shape, op)
@@ -340,6 +346,7 @@ def simulate_emva(sensor: SensorParams, cfa, out_dir, settings: EmvaSettings | N
         mid = int(np.argmin(np.abs(exposures - 0.5 * t_sat)))
         cam.series(bright, exposures[mid], settings.spatial_frames, f"b {exposures[mid] * 1e9:.6f} {photons[mid]:.6f}")
         cam.series(dark, exposures[mid], settings.spatial_frames, f"d {exposures[mid] * 1e9:.6f}")
-        (folder / DESCRIPTOR).write_text("\n".join(cam.lines) + "\n")
+        with atomic_output(folder / DESCRIPTOR) as tmp:  # written last: a descriptor lists finished images
+            tmp.write_text("\n".join(cam.lines) + "\n")
         results.append(ChannelSeries(channel, folder, float(wl[band]), band, exposures, photons, expected))
     return results
