@@ -342,7 +342,7 @@ def simulate_emva(sensor: SensorParams, cfa, out_dir, settings: EmvaSettings | N
             cam.series(bright, t, 2, f"b {t * 1e9:.6f} {up:.6f}")
             cam.series(dark, t, 2, f"d {t * 1e9:.6f}")
             if progress:
-                progress(channel, i + 1, settings.steps)
+                progress(channel, i + 1, len(exposures))
         mid = int(np.argmin(np.abs(exposures - 0.5 * t_sat)))
         cam.series(bright, exposures[mid], settings.spatial_frames, f"b {exposures[mid] * 1e9:.6f} {photons[mid]:.6f}")
         cam.series(dark, exposures[mid], settings.spatial_frames, f"d {exposures[mid] * 1e9:.6f}")
