@@ -42,18 +42,18 @@ def toys():
     record = cm.metrics.MetricRecord(
         name="toy-dy", function=mean_abs_y, scenes=("macbeth",), inputs="xyz", unit="", higher_is_better=False,
         scored=False, label="toy ΔY", description="toy metric of the registry test")
-    cm.metrics.register_metric(record)
-    cm.isp.register_demosaic("toy-nearest", nearest, description="toy demosaic of the registry test")
-    axis = register_axis(Axis(name="well_capacity_e", applies_to="sensor", label="well capacity", unit="e⁻",
-                              short="wc", check=positive))
     try:
+        cm.metrics.register_metric(record)
+        cm.isp.register_demosaic("toy-nearest", nearest, description="toy demosaic of the registry test")
+        axis = register_axis(Axis(name="toy_well_e", applies_to="sensor", field="well_capacity_e",
+                                  label="well capacity", unit="e⁻", short="wc", check=positive))
         yield record, axis
     finally:
         cm.metrics.unregister_metric("toy-dy")
         from cfa_mitsuba.isp.demosaic import unregister_demosaic
 
         unregister_demosaic("toy-nearest")
-        unregister_axis("well_capacity_e")
+        unregister_axis("toy_well_e")
 
 
 def test_a_toy_metric_demosaic_and_axis_run_through_a_tiny_study(toys, tmp_path):
@@ -66,21 +66,21 @@ def test_a_toy_metric_demosaic_and_axis_run_through_a_tiny_study(toys, tmp_path)
         "cfas": ["bayer"],
         "demosaics": {"bilinear": {}, "toy-nearest": {"shift": 0}},
         "metrics": {"toy-dy": {"scale": 100.0}},
-        "sweep": [{"scene": "macbeth", "well_capacity_e": [3000, 12000]}],
+        "sweep": [{"scene": "macbeth", "toy_well_e": [3000, 12000]}],
         "output": {"report": False, "figures": [], "thumbnails": False},
     }, where="toys.toml")
     assert config.scenes[0].metrics == ("delta-e", "toy-dy")
     res = run_study(config, tmp_path / "out", workers=1, progress=False, log=lambda m: None)
     m = pd.read_csv(tmp_path / "out" / "metrics.csv")
-    assert "well_capacity_e" in m.columns
+    assert "toy_well_e" in m.columns
     toy = m[m["metric"] == "toy-dy"]
     assert set(toy["demosaic"]) == {"bilinear", "toy-nearest"}
     default_well = cm.sensor.SensorParams().well_capacity_e
-    assert set(toy["well_capacity_e"]) == {default_well, 3000.0, 12000.0}
+    assert set(toy["toy_well_e"]) == {default_well, 3000.0, 12000.0}
     assert toy["value"].gt(0).all() and toy["n"].eq(2).all()
     # the axis reached the sensor: a smaller well clips the bright patches, so the
     # toy error at 3000 e- is not the one at the default well
-    by_well = toy[toy["demosaic"] == "bilinear"].set_index("well_capacity_e")["value"]
+    by_well = toy[toy["demosaic"] == "bilinear"].set_index("toy_well_e")["value"]
     assert by_well[3000.0] != pytest.approx(by_well[default_well], rel=1e-6)
     # the option from [metrics.toy-dy] reached the function (x100 of a fraction)
     assert toy["value"].max() > 0.1
@@ -97,8 +97,8 @@ def test_options_of_a_toy_are_checked_against_its_signature(toys):
         parse_config({**base, "demosaics": {"toy-nearest": {"shift": "one"}}})
     with pytest.raises(cm.CfaMitsubaError, match=r"metrics.toy-dy.patches: unknown key"):
         parse_config({**base, "demosaics": ["bilinear"], "metrics": {"toy-dy": {"patches": 1}}})
-    with pytest.raises(cm.CfaMitsubaError, match=r"sweep\[0\].well_capacity_e\[0\]: must be a positive number"):
-        parse_config({**base, "demosaics": ["bilinear"], "sweep": [{"scene": "macbeth", "well_capacity_e": [-1]}]})
+    with pytest.raises(cm.CfaMitsubaError, match=r"sweep\[0\].toy_well_e\[0\]: must be a positive number"):
+        parse_config({**base, "demosaics": ["bilinear"], "sweep": [{"scene": "macbeth", "toy_well_e": [-1]}]})
 
 
 def test_pocs_iterations_is_the_pocs_option():

@@ -59,10 +59,6 @@ def select(df, proxies, n_best: int, n_sample: int, seed: int) -> tuple[list[int
     return best, sample
 
 
-def _better(goal: str, a, b) -> bool:
-    return a < b if goal == "min" else a > b
-
-
 def dominates(a: dict, b: dict, objectives) -> bool:
     """Whether CFA ``a`` dominates ``b`` within intervals (module doc); each
     is {label: (mean, low, high)}."""

@@ -104,10 +104,14 @@ class ChainSettings:
         return {a.field: getattr(cond, name) for name, a in AXES.items() if a.applies_to == where}
 
     def for_condition(self, cond: Condition):
-        """(OpticsParams, SensorParams) with the condition's values applied."""
-        optics = replace(self.optics, **self._targets(cond, "optics"))
-        sensor = self.sensor.with_(**self._targets(cond, "sensor"))
-        return optics, sensor
+        """(OpticsParams, SensorParams) with the condition's values applied
+        (built once per condition: the optical image, the ideal and the
+        capture of one evaluation all ask)."""
+        memo = self.__dict__.setdefault("_per_condition", {})
+        if cond not in memo:
+            memo[cond] = (replace(self.optics, **self._targets(cond, "optics")),
+                          self.sensor.with_(**self._targets(cond, "sensor")))
+        return memo[cond]
 
     def isp_options(self, method: str, cond: Condition | None = None) -> dict:
         """The keywords of :func:`cfa_mitsuba.isp.process` for ``method``: the
@@ -220,7 +224,9 @@ class CameraChain:
     def capture(self, oi, cfa, cond: Condition, seed: int, *, noise: str | None = None):
         """The raw mosaic of ``cfa`` (a name, TOML path or CFA) under ``cond``
         (another spectra set, when the condition or the settings name one; ``noise`` overrides
-        the settings' noise mode)."""
+        the settings' noise mode).  ``seed`` is the capture's noise seed, derived from the
+        condition's study seed by :func:`~.tasks.realisation_seeds` (the one seed path:
+        ``cond.seed`` is its input and is not used here)."""
         from ..sensor import capture, get_cfa
 
         _, sensor = self.settings.for_condition(cond)
