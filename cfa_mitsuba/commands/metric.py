@@ -99,8 +99,10 @@ def _load(path, forced, metric_inputs):
     from ..errors import CfaMitsubaError
     from ..io import read_image
 
+    from ..metrics._common import check_values
+
     f = read_image(path)
-    data = f.data
+    data = check_values(f.data, str(path))  # before any conversion: sRGB encoding would clip an infinity to white
     if f.format == "png":
         data = data / float((1 << f.bit_depth) - 1)  # 0..1 as stored
         if forced == "xyz":
