@@ -204,21 +204,17 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     timing: dict = {"phases": {}, "tasks": {"optics_s": 0.0, "capture_s": 0.0, "process_s": 0.0, "metrics_s": 0.0}}
     t_start = time.perf_counter()
 
-    done: dict[str, dict] = {}
-    for task in tasks:
-        tid = _task_id(task)
-        f = work / f"{tid}.json"
-        if f.exists():
-            try:
-                done[tid] = json.loads(f.read_text())
-            except ValueError:  # pragma: no cover - atomic writes make this unlikely
-                f.unlink()
+    from .resume import load_finished  # issue 27: untrusted resume files are recomputed, one notice
+
+    done: dict[str, dict] = load_finished(work, [_task_id(t) for t in tasks], log) if work.is_dir() else {}
     todo = [t for t in tasks if _task_id(t) not in done]
     reused = len(tasks) - len(todo)
 
+    from .shutdown import terminate_cleanly
+
     executor = make_executor(workers=workers or config.workers, scheduler=scheduler)
     render_info: dict = {}
-    with executor:
+    with terminate_cleanly(log), executor:  # issue 27: SIGTERM stops the workers too
         # Written once the executor is up (a Dask scheduler that cannot be
         # reached leaves nothing behind).
         work.mkdir(exist_ok=True)
