@@ -151,3 +151,105 @@ def test_untrusted_resume_files_are_recomputed_with_one_notice(small, tmp_path):
     # and the rewritten files are trusted by the next run
     third = subprocess.run(_cmd(config, out, "--workers", 1), cwd=REPO, capture_output=True, text=True)
     assert third.returncode == 0 and "0 task(s) run, 6 reused" in third.stderr, third.stderr
+
+
+# ------------------------------------------------------------------ item 4: sized before it starts
+
+def _sweep_of_a_million() -> str:
+    values = ", ".join(f"{1 + i / 100:g}" for i in range(100))
+    seeds = ", ".join(str(i) for i in range(100))
+    return SMALL + f'\n[[sweep]]\nscene = "macbeth"\nread_noise_e = [{values}]\npixel_pitch_um = [{values}]\nseed = [{seeds}]\n'
+
+
+@pytest.mark.parametrize("case", ["seeds", "sweep"])
+def test_runaway_studies_are_refused_fast_with_the_estimate(tmp_path, case):
+    text = SMALL.replace("seeds = 2", "seeds = 1000000") if case == "seeds" else _sweep_of_a_million()
+    config = tmp_path / f"{case}.toml"
+    config.write_text(text)
+    out = tmp_path / "out"
+    t0 = time.perf_counter()
+    proc = subprocess.run(_cmd(config, out), cwd=REPO, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert f"{case}.toml" in lines[0] and "--force" in lines[0]
+    if case == "seeds":
+        assert "6,000,000 capture(s)" in lines[0] and "24 h limit" in lines[0]
+    else:  # counted, not built: 100 x 100 x 100 crossed plus the base condition
+        assert "1,000,001 condition(s)" in lines[0] and "100,000-task limit" in lines[0]
+    assert re.search(r"about [\d.,]+ (h|days)", lines[0])
+    assert not out.exists()
+    assert wall < 5.0, wall  # the whole command, interpreter start included (1.3 s unloaded)
+    # the refusal itself, from reading the config to the message: under 2 s
+    from cfa_mitsuba.errors import CfaMitsubaError
+    from cfa_mitsuba.study.config import load_config
+    from cfa_mitsuba.study.sizing import check_study_size
+
+    t0 = time.perf_counter()
+    with pytest.raises(CfaMitsubaError, match="--force"):
+        check_study_size(load_config(config), None)
+    assert time.perf_counter() - t0 < 2.0
+
+
+def test_the_count_never_builds_the_conditions():
+    from cfa_mitsuba.study.config import parse_config
+    from cfa_mitsuba.study.sizing import study_size
+
+    import tomllib
+
+    config = parse_config(tomllib.loads(_sweep_of_a_million()), where="sweep.toml")
+    t0 = time.perf_counter()
+    size = study_size(config, 2)
+    assert time.perf_counter() - t0 < 0.5
+    assert (size.conditions, size.tasks, size.captures, size.outputs) == (1_000_001, 6_000_006, 12_000_012,
+                                                                          24_000_024)
+
+
+def test_config_workers_are_capped_at_the_cores_unless_the_command_insists():
+    from cfa_mitsuba.study.executors import _cpu_count
+    from cfa_mitsuba.study.sizing import resolve_workers
+
+    said = []
+    assert resolve_workers(None, 1000, said.append) == _cpu_count()
+    assert len(said) == 1 and "capped" in said[0] and "--workers 1000" in said[0]
+    said.clear()
+    assert resolve_workers(1000, 1, said.append) == 1000 and not said
+    assert resolve_workers(None, None, said.append) is None and not said
+
+
+def test_the_memory_check_covers_every_worker(tmp_path):
+    config = tmp_path / "small.toml"
+    config.write_text(SMALL)
+    proc = subprocess.run(_cmd(config, tmp_path / "out", "--workers", 1000), cwd=REPO, capture_output=True,
+                          text=True)
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 2 and len(lines) == 1, proc.stderr
+    assert "1000 worker(s) need more than" in lines[0] and "fewer --workers" in lines[0]
+    assert not (tmp_path / "out").exists()
+
+
+DESIGN_CASES = {
+    "population": ('engine = "exhaustive"', 'engine = "nsga2"\npopulation = 100000000', "lower search.population"),
+    "max_exhaustive": ('engine = "exhaustive"', "max_exhaustive = 1000000000000", "8.47e+11 raw layouts"),
+    "generations": ('engine = "exhaustive"', 'engine = "nsga2"\ngenerations = 1000000000', "24 h limit"),
+}
+
+
+@pytest.mark.parametrize("case", list(DESIGN_CASES))
+def test_runaway_designs_are_refused_with_the_estimate(tmp_path, case):
+    old, new, needle = DESIGN_CASES[case]
+    text = (REPO / "configs" / "design-quick.toml").read_text().replace(old, new)
+    if case == "max_exhaustive":
+        text = text.replace('tiles = ["2x2", "2x3", "3x2", "3x3", "2x4", "4x2"]', 'tiles = ["5x5"]')
+    config = tmp_path / f"{case}.toml"
+    config.write_text(text)
+    out = tmp_path / "out"
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "cfa_mitsuba", "design", str(config), "--out", str(out), "--quiet"],
+                          cwd=REPO, capture_output=True, text=True)
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert f"{case}.toml" in lines[0] and "candidate evaluation(s)" in lines[0] and needle in lines[0]
+    assert "peak memory about" in lines[0] and re.search(r"about [\d.,]+ (h|days)", lines[0])
+    assert time.perf_counter() - t0 < 10
+    assert not out.exists()

@@ -185,17 +185,22 @@ def _run_tasks(executor, fn, items, desc, progress, on_result):
 
 
 def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, scheduler: str | None = None,
-              progress: bool = True, log=None) -> StudyResult:
+              progress: bool = True, log=None, force: bool = False) -> StudyResult:
     """Run a study's renders and evaluations and write its tables (see the
     module docstring for the outputs); ``timing_summary(result)`` is the
     line to print at the end.
 
-    ``workers``: local processes (default: the config's, else 2);
-    ``scheduler``: a Dask scheduler address instead.
+    ``workers``: local processes (default: the config's, capped at the
+    cores, else 2); ``scheduler``: a Dask scheduler address instead;
+    ``force``: start a study above the size limits (study.sizing).
     """
     from .executors import make_executor, thread_budget
+    from .sizing import check_study_size, resolve_workers
 
     log = log or (lambda msg: print(msg, file=sys.stderr))
+    # issue 27: the study's size stated and checked before anything is written
+    workers = None if scheduler else resolve_workers(workers, config.workers, log)
+    check_study_size(config, workers, scheduler=scheduler, force=force, log=log)
     out = check_writable_dir(out_dir)
     work = out / ".work"
     details = out / "details"
@@ -212,7 +217,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
 
     from .shutdown import terminate_cleanly
 
-    executor = make_executor(workers=workers or config.workers, scheduler=scheduler)
+    executor = make_executor(workers=workers, scheduler=scheduler)
     render_info: dict = {}
     with terminate_cleanly(log), executor:  # issue 27: SIGTERM stops the workers too
         # Written once the executor is up (a Dask scheduler that cannot be
