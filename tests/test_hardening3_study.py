@@ -253,3 +253,68 @@ def test_runaway_designs_are_refused_with_the_estimate(tmp_path, case):
     assert "peak memory about" in lines[0] and re.search(r"about [\d.,]+ (h|days)", lines[0])
     assert time.perf_counter() - t0 < 10
     assert not out.exists()
+
+
+# ------------------------------------------------------------------ item 10: checked before any work
+
+LATE = {
+    "version": ('\n[metrics.delta-e]\nversion = "1999"\n', "metrics.delta-e", "unknown dE version '1999'"),
+    "matrix": ('\n[metrics.scielab]\nmatrix = "xyz3"\n', "metrics.scielab", "unknown value 'xyz3'"),
+    "luminance": (None, "luminances[0]", "at most 1e+10 cd/m^2"),
+    "sweep_luminance": ('\n[[sweep]]\nscene = "macbeth"\nluminance = [10, 1e300]\n', "sweep[0].luminance[1]",
+                        "got 1e+300"),
+    "seeds": (None, "seeds", "at least 2 noise realisations"),
+}
+
+
+@pytest.mark.parametrize("case", list(LATE))
+def test_values_are_checked_with_the_config_and_nothing_is_written(tmp_path, case):
+    extra, key, needle = LATE[case]
+    text = SMALL + (extra or "")
+    if case == "luminance":
+        text = text.replace("luminances = [100]", "luminances = [1e308]")
+    if case == "seeds":
+        text = text.replace("seeds = 2", "seeds = 1")
+    config = tmp_path / f"{case}.toml"
+    config.write_text(text)
+    out = tmp_path / "out"
+    proc = subprocess.run(_cmd(config, out), cwd=REPO, capture_output=True, text=True, timeout=120)
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert f"{case}.toml: {key}:" in lines[0] and needle in lines[0], lines[0]
+    assert not out.exists()  # no config.json, no .work
+
+
+def test_good_metric_options_and_noiseless_single_realisations_pass():
+    import tomllib
+
+    from cfa_mitsuba.study.config import parse_config
+
+    text = SMALL.replace("seeds = 2", "seeds = 1") + '[sensor]\nnoise = "off"\n[metrics.delta-e]\nversion = "1976"\n' \
+        '[metrics.scielab]\nmatrix = "xyz10"\n[[sweep]]\nscene = "macbeth"\nluminance = [1e9]\n'
+    config = parse_config(tomllib.loads(text), where="ok.toml")
+    assert config.seeds == 1 and config.metric_options["delta-e"] == {"version": "1976"}
+
+
+def test_an_unparseable_exr_illuminant_is_called_unparseable(tmp_path):
+    import OpenEXR
+    import numpy as np
+
+    from cfa_mitsuba import spectra
+    from cfa_mitsuba.io import read_spectral_exr
+    from cfa_mitsuba.io.exr import spectral_channel_name
+
+    channels = {spectral_channel_name(w): np.full((4, 5), 0.01, np.float32) for w in spectra.DEFAULT_WAVELENGTHS}
+    notes = {}
+    for name, attribute in (("garbled", "300nm:0.1;garbage"), ("plain", None)):
+        header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
+                  "spectralLayoutVersion": "1.0", "emissiveUnits": "W.m^-2.sr^-1.nm^-1"}
+        if attribute:
+            header["illuminant"] = attribute
+        with OpenEXR.File(header, channels) as f:
+            f.write(str(tmp_path / f"{name}.exr"))
+        with pytest.warns(UserWarning):
+            notes[name] = " ".join(read_spectral_exr(tmp_path / f"{name}.exr").meta["read_notices"])
+    assert "'illuminant' attribute" in notes["garbled"] and "unparseable" in notes["garbled"]
+    assert "names none" not in notes["garbled"]
+    assert "the file names none" in notes["plain"]

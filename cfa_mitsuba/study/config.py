@@ -360,6 +360,10 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
     if policy == "each" and "reference_luminance_cd_m2" in capture:
         ck.fail("sensor.reference_luminance_cd_m2", "exposure_policy 'each' chooses the exposure at each "
                                                    "luminance: a reference luminance does not apply")
+    from .physical import check_physical, check_realisations  # issue 27: luminances no camera meets, refused by key
+
+    check_physical(ck.fail, luminances, sweeps, capture)
+    check_realisations(ck.fail, seeds, capture.get("noise", "all"))
     isp_cfg = data.get("isp", {})
     ck.table(isp_cfg, "isp", {"white_balance": None, "white_preserving": None, "pocs_iterations": None,
                               "colour_fit": None, "regularise": None, "clip_highlights": None})

@@ -10,6 +10,7 @@ __all__ = ["metric_options", "GEOMETRY_KEYWORDS"]
 
 import inspect
 
+from ..errors import CfaMitsubaError
 from .checker import _Checker, _typename
 
 #: Keywords the chain fills from the scene (patches, edge ROI, chirp row and
@@ -47,4 +48,10 @@ def metric_options(ck: _Checker, data) -> dict:
                   if p.kind is inspect.Parameter.KEYWORD_ONLY and p.name not in GEOMETRY_KEYWORDS}
         ck.table(opts, f"metrics.{name}", params)
         out[name] = {k: _option(ck, params[k], v, f"metrics.{name}.{k}") for k, v in opts.items()}
+        try:  # issue 27: the values too, by the metric itself, before any work (metrics.dry)
+            from ..metrics.dry import check_options
+
+            check_options(name, out[name])
+        except CfaMitsubaError as exc:
+            ck.fail(f"metrics.{name}", str(exc))
     return out
