@@ -318,3 +318,18 @@ def test_an_unparseable_exr_illuminant_is_called_unparseable(tmp_path):
     assert "'illuminant' attribute" in notes["garbled"] and "unparseable" in notes["garbled"]
     assert "names none" not in notes["garbled"]
     assert "the file names none" in notes["plain"]
+
+
+def test_force_starts_what_the_limits_refuse():
+    import tomllib
+
+    from cfa_mitsuba.errors import CfaMitsubaError
+    from cfa_mitsuba.study.config import parse_config
+    from cfa_mitsuba.study.sizing import check_study_size
+
+    config = parse_config(tomllib.loads(SMALL.replace("seeds = 2", "seeds = 1000000")), where="big.toml")
+    with pytest.raises(CfaMitsubaError, match="24 h limit"):
+        check_study_size(config, 2)
+    said = []
+    size = check_study_size(config, 2, force=True, log=said.append)
+    assert size.captures == 6_000_000 and len(said) == 1 and said[0].endswith("(--force)")
