@@ -42,15 +42,17 @@ def _cmd(config: Path, out: Path, *extra) -> list[str]:
     return [sys.executable, "-m", "cfa_mitsuba", "study", str(config), "--out", str(out), "--quiet", *map(str, extra)]
 
 
+def _study(config: Path, out: Path, *extra, **kw) -> subprocess.CompletedProcess:
+    return subprocess.run(_cmd(config, out, *extra), cwd=REPO, capture_output=True, text=True, **kw)
+
+
 @pytest.fixture(scope="module")
 def small(tmp_path_factory):
-    d = tmp_path_factory.mktemp("small")
-    config = d / "small.toml"
+    config = tmp_path_factory.mktemp("small") / "small.toml"
     config.write_text(SMALL)
-    out = d / "reference"
-    proc = subprocess.run(_cmd(config, out, "--workers", 2), cwd=REPO, capture_output=True, text=True)
+    proc = _study(config, config.parent / "reference", "--workers", 2)
     assert proc.returncode == 0, proc.stderr
-    return config, out
+    return config, config.parent / "reference"
 
 
 def _parents() -> dict[int, int]:
@@ -115,7 +117,7 @@ def test_a_stopped_study_leaves_no_process_and_resumes(small, tmp_path, sig):
     assert proc.returncode == -sig
     assert not (out / "metrics.csv").exists()
     finished = len(list((out / ".work").glob("*.json")))
-    again = subprocess.run(_cmd(config, out, "--workers", 2), cwd=REPO, capture_output=True, text=True)
+    again = _study(config, out, "--workers", 2)
     assert again.returncode == 0, again.stderr
     m = re.search(r"(\d+) task\(s\) run, (\d+) reused", again.stderr)
     assert m and int(m.group(2)) == finished and int(m.group(1)) == 6 - finished, again.stderr
@@ -135,13 +137,13 @@ DAMAGE = {
 def test_untrusted_resume_files_are_recomputed_with_one_notice(small, tmp_path):
     config, reference = small
     out = tmp_path / "damaged"
-    first = subprocess.run(_cmd(config, out, "--workers", 1), cwd=REPO, capture_output=True, text=True)
+    first = _study(config, out, "--workers", 1)
     assert first.returncode == 0, first.stderr
     files = sorted((out / ".work").glob("*.json"))
     assert len(files) == 6
     for f, text in zip(files, DAMAGE.values()):
         f.write_text(text)
-    again = subprocess.run(_cmd(config, out, "--workers", 1), cwd=REPO, capture_output=True, text=True)
+    again = _study(config, out, "--workers", 1)
     assert again.returncode == 0, again.stderr
     assert "Traceback" not in again.stderr
     notices = [line for line in again.stderr.splitlines() if "could not be trusted" in line]
@@ -149,7 +151,7 @@ def test_untrusted_resume_files_are_recomputed_with_one_notice(small, tmp_path):
     assert "6 task(s) run, 0 reused" in again.stderr
     assert _tables(out) == _tables(reference)
     # and the rewritten files are trusted by the next run
-    third = subprocess.run(_cmd(config, out, "--workers", 1), cwd=REPO, capture_output=True, text=True)
+    third = _study(config, out, "--workers", 1)
     assert third.returncode == 0 and "0 task(s) run, 6 reused" in third.stderr, third.stderr
 
 
@@ -168,7 +170,7 @@ def test_runaway_studies_are_refused_fast_with_the_estimate(tmp_path, case):
     config.write_text(text)
     out = tmp_path / "out"
     t0 = time.perf_counter()
-    proc = subprocess.run(_cmd(config, out), cwd=REPO, capture_output=True, text=True)
+    proc = _study(config, out)
     wall = time.perf_counter() - t0
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
@@ -220,8 +222,7 @@ def test_config_workers_are_capped_at_the_cores_unless_the_command_insists():
 def test_the_memory_check_covers_every_worker(tmp_path):
     config = tmp_path / "small.toml"
     config.write_text(SMALL)
-    proc = subprocess.run(_cmd(config, tmp_path / "out", "--workers", 1000), cwd=REPO, capture_output=True,
-                          text=True)
+    proc = _study(config, tmp_path / "out", "--workers", 1000)
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert proc.returncode == 2 and len(lines) == 1, proc.stderr
     assert "1000 worker(s) need more than" in lines[0] and "fewer --workers" in lines[0]
@@ -278,7 +279,7 @@ def test_values_are_checked_with_the_config_and_nothing_is_written(tmp_path, cas
     config = tmp_path / f"{case}.toml"
     config.write_text(text)
     out = tmp_path / "out"
-    proc = subprocess.run(_cmd(config, out), cwd=REPO, capture_output=True, text=True, timeout=120)
+    proc = _study(config, out, timeout=120)
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
     assert f"{case}.toml: {key}:" in lines[0] and needle in lines[0], lines[0]
