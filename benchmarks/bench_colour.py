@@ -25,7 +25,7 @@ warnings.simplefilter("ignore")
 
 import cfa_mitsuba as cm  # noqa: E402
 from cfa_mitsuba import spectra  # noqa: E402
-from cfa_mitsuba.isp.colour import electrons_per_radiance_of, white_response  # noqa: E402
+from cfa_mitsuba.isp.colour_matrix import electrons_per_radiance_of, white_response  # noqa: E402
 from cfa_mitsuba.study.chain import CameraChain, ChainSettings  # noqa: E402
 from cfa_mitsuba.study.conditions import Condition  # noqa: E402
 

@@ -25,7 +25,7 @@ from scipy.special import erf
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
 import cfa_mitsuba.metrics as cm  # noqa: E402
-from cfa_mitsuba.metrics import colour as mc  # noqa: E402
+from cfa_mitsuba.metrics import colourspace as mc  # noqa: E402
 
 H, W = 636, 720
 WHITE = np.array([95.05, 100.0, 108.9])

@@ -136,6 +136,52 @@ def test_no_stage_imports_a_later_one():
     assert not bad, "backward stage imports:\n" + "\n".join(sorted(bad))
 
 
+#: Stages the report may not import: it draws what a study wrote (results
+#: files), never recomputes camera physics (a fit, a CFA, a readout).
+REPORT_FORBIDDEN = ("render", "optics", "sensor", "isp")
+
+
+def report_violations(graph: dict[str, set[str]]) -> list[str]:
+    """``report.* -> {render, optics, sensor, isp}.*`` import edges."""
+    bad = []
+    for mod, targets in graph.items():
+        if not mod.startswith("cfa_mitsuba.report"):
+            continue
+        bad += [f"{mod} -> {t}" for t in sorted(targets) if t.split(".")[1:2] and t.split(".")[1] in REPORT_FORBIDDEN]
+    return bad
+
+
+def test_the_report_reads_results_only():
+    graph = import_graph(_modules())
+    bad = report_violations(graph)
+    assert not bad, "the report imports camera stages:\n" + "\n".join(bad)
+
+
+def test_the_report_rule_catches_a_planted_import(tmp_path):
+    """The rule above fails on a report module that imports sensor/ (inside a
+    function too), isp/, optics/ or render/."""
+    for stage in REPORT_FORBIDDEN:
+        mods = _modules()
+        planted = tmp_path / f"planted_{stage}.py"
+        planted.write_text(f"def f():\n    from ..{stage} import something\n")
+        mods["cfa_mitsuba.report.planted"] = planted
+        graph = import_graph(mods)
+        assert report_violations(graph) == [f"cfa_mitsuba.report.planted -> cfa_mitsuba.{stage}"], stage
+
+
+def test_no_long_functions_in_study_and_report():
+    """No function over 120 lines in study/ and report/ (long ones are split into named steps)."""
+    long = []
+    for folder in ("study", "report"):
+        for p in (PACKAGE / folder).rglob("*.py"):
+            for node in ast.walk(ast.parse(p.read_text(), str(p))):
+                if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                    n = node.end_lineno - node.lineno + 1
+                    if n > 120:
+                        long.append(f"{p.relative_to(REPO)}:{node.lineno} {node.name} ({n} lines)")
+    assert not long, "functions over 120 lines:\n" + "\n".join(long)
+
+
 @pytest.mark.parametrize("folder", ["cfa_mitsuba", "tests", "benchmarks"])
 def test_no_source_file_over_500_lines(folder):
     long = [(str(p.relative_to(REPO)), n) for p in (REPO / folder).rglob("*.py")

@@ -8,7 +8,7 @@ import pytest
 
 import cfa_mitsuba as cm
 from cfa_mitsuba import spectra
-from cfa_mitsuba.isp.colour import electrons_per_radiance_of, white_response
+from cfa_mitsuba.isp.colour_matrix import electrons_per_radiance_of, white_response
 
 WL = spectra.DEFAULT_WAVELENGTHS
 D65 = spectra.illuminant("D65", WL)

@@ -10,12 +10,15 @@ import cfa_mitsuba as cm
 from cfa_mitsuba.isp.mosaic import _mirror_index, geometry
 
 CFAS = cm.sensor.list_cfas()
-METHODS = ("bilinear", "laplacian", "adaptive-laplacian", "pocs")
+#: Every registered method: a new one is covered without editing a list.
+METHODS = tuple(n for n, _ in cm.isp.list_demosaics())
+#: The paper's four, which the cross-channel comparison below is about.
+PAPER_METHODS = ("bilinear", "laplacian", "adaptive-laplacian", "pocs")
 
 
 def test_registry_lists_the_four_methods():
     names = [n for n, _ in cm.isp.list_demosaics()]
-    assert names[:4] == list(METHODS)
+    assert names[:4] == list(PAPER_METHODS)
     assert all(desc for _, desc in cm.isp.list_demosaics())
 
 
@@ -116,8 +119,8 @@ def test_cross_channel_methods_beat_bilinear_on_cmy_and_rgbw(edge_rich, cfa):
     raw = cm.isp.mosaic_image(truth, cfa)
     b = 6
     p = {m: peak_signal_noise_ratio(truth[b:-b, b:-b], cm.isp.demosaic(raw, cfa, m)[b:-b, b:-b], data_range=1.0)
-         for m in METHODS}
-    for m in METHODS[1:]:
+         for m in PAPER_METHODS}
+    for m in PAPER_METHODS[1:]:
         assert p[m] > p["bilinear"] + 1.0, p
 
 

@@ -10,7 +10,7 @@ import pytest
 import cfa_mitsuba as cm
 from cfa_mitsuba import spectra
 from cfa_mitsuba.colorimetry import realisable, xyz_to_xy
-from cfa_mitsuba.isp.colour import channel_noise, electrons_per_radiance_of, fit_colour_matrix
+from cfa_mitsuba.isp.colour_matrix import channel_noise, electrons_per_radiance_of, fit_colour_matrix
 from test_isp_process import WHITE, WL, synthetic_raw
 
 

@@ -8,7 +8,7 @@ import pytest
 
 import cfa_mitsuba as cm
 from cfa_mitsuba import spectra
-from cfa_mitsuba.isp.colour import electrons_per_radiance_of
+from cfa_mitsuba.isp.colour_matrix import electrons_per_radiance_of
 from cfa_mitsuba.values import RawImage
 
 WL = spectra.DEFAULT_WAVELENGTHS

@@ -11,7 +11,7 @@ import pytest
 from PIL import Image
 
 import cfa_mitsuba.metrics as cm
-from cfa_mitsuba.metrics import colour as mc
+from cfa_mitsuba.metrics import colourspace as mc
 
 from conftest import REFERENCE
 

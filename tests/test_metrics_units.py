@@ -10,7 +10,7 @@ import pytest
 
 import cfa_mitsuba.metrics as cm
 from cfa_mitsuba.errors import CfaMitsubaError
-from cfa_mitsuba.metrics import colour as mc
+from cfa_mitsuba.metrics import colourspace as mc
 
 WHITE = np.array([95.05, 100.0, 108.9])
 RNG = np.random.default_rng(7)

@@ -17,7 +17,7 @@ import cfa_mitsuba as cm
 from cfa_mitsuba import spectra
 from cfa_mitsuba.colorimetry import xyz_to_lab
 from cfa_mitsuba.errors import CfaMitsubaError
-from cfa_mitsuba.isp.colour import colour_fit_reflectances, electrons_per_radiance_of, fit_colour_matrix
+from cfa_mitsuba.isp.colour_matrix import colour_fit_reflectances, electrons_per_radiance_of, fit_colour_matrix
 from cfa_mitsuba.report import paper_comparison, paper_data
 from cfa_mitsuba.sensor.spectra_sets import FILTERS_DIR, get_spectra_set, read_curve_csv
 from cfa_mitsuba.study.chain import ChainSettings

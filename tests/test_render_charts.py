@@ -230,7 +230,7 @@ def test_scene_registry_declares_defaults_and_metrics():
     sizes = {"macbeth": (636, 720), "slanted-edge": (636, 720), "puppy": (636, 720), "chirp": (500, 500), "gray-bar": (500, 500)}
     for name, metrics in expect.items():
         sc = cm.render.get_scene(name)
-        assert sc.metrics == metrics
+        assert cm.metrics.metrics_for_scene(sc.kind) == metrics
         assert (sc.height, sc.width) == sizes[name]
         assert sc.fov_deg > 0 and sc.spp >= 1
     assert cm.render.get_scene("slanted-edge").oversample == 4 and cm.render.get_scene("chirp").oversample == 2

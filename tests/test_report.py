@@ -152,12 +152,12 @@ def test_tables_hold_the_csv_values(built_report):
                     & metrics["metric"].isin(["scielab", "ssim"])]
     assert len(sweep) and all(_has(values, v) for v in sweep["value"])
     # the best value per metric and demosaic is boxed (ties all boxed)
-    from cfa_mitsuba.report.style import metric_info
+    from cfa_mitsuba.report.style import metric_display
 
     higher = {"ssim", "mtf", "moire", "haarpsi"}
     n_best = 0
     for (d, m), g in scores.groupby(["demosaic", "metric"]):
-        shown = g["value"].map(lambda v: float(f"{v:.{metric_info(m).decimals}f}"))  # ties as printed: all boxed
+        shown = g["value"].map(lambda v: float(f"{v:.{metric_display(m).decimals}f}"))  # ties as printed: all boxed
         target = shown.max() if m in higher else shown.min()
         n_best += int((shown == target).sum())
     t2 = text[text.index('id="table2"'):text.index('id="table3"')]

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pytest
 
+import cfa_mitsuba as cm
 from cfa_mitsuba.errors import CfaMitsubaError
 from cfa_mitsuba.study.config import load_config
 from conftest import REPO, assert_one_line_error, run_cli
@@ -37,8 +38,8 @@ def test_paper_config_is_the_papers_study():
     assert len(cfg.cfas) == 12 and set(cfg.demosaics) == {"bilinear", "laplacian", "adaptive-laplacian", "pocs"}
     assert {s.name for s in cfg.scenes} == {"macbeth", "slanted-edge", "chirp", "gray-bar", "puppy"}
     (sweep,) = cfg.sweeps
-    assert sweep.scene == "puppy" and set(sweep.metrics) == {"scielab", "ssim"}
-    assert sweep.luminances == (3, 6, 12, 50, 100, 200, 400)
+    assert sweep.scenes == ("puppy",) and set(sweep.metrics) == {"scielab", "ssim"}
+    assert sweep.values["luminance"] == (3, 6, 12, 50, 100, 200, 400)
 
 
 def test_exposure_policies_set_where_auto_exposure_is_chosen(tmp_path):
@@ -53,7 +54,10 @@ def test_exposure_policies_set_where_auto_exposure_is_chosen(tmp_path):
 def test_good_config_values(tmp_path):
     cfg = load_config(write(tmp_path, GOOD + '[sensor]\npixel_pitch_um = 1.4\nnoise = "shot"\n'))
     assert cfg.sensor == {"pixel_pitch_um": 1.4} and cfg.capture == {"noise": "shot"}
-    assert [s.metrics for s in cfg.scenes] == [("delta-e",), ("scielab", "ssim", "mdsi", "haarpsi")]
+    # each scene feeds what the metric records name for its kind (the paper's ones among them)
+    assert [s.metrics for s in cfg.scenes] == [cm.metrics.metrics_for_scene(k) for k in ("macbeth", "natural")]
+    assert cfg.scenes[0].metrics[0] == "delta-e"
+    assert {"scielab", "ssim", "mdsi", "haarpsi"} <= set(cfg.scenes[1].metrics)
 
 
 BAD = [

@@ -151,7 +151,7 @@ def _stored_white(path):
 def _to_xyz(img: _Loaded, white):
     import numpy as np
 
-    from ..metrics import colour as mc
+    from ..metrics import colourspace as mc
 
     d = img.data if img.data.ndim == 3 else np.repeat(img.data[..., None], 3, axis=2)
     if img.mode == "xyz":
@@ -163,7 +163,7 @@ def _to_xyz(img: _Loaded, white):
 def _to_codes(xyz_or_none, img: _Loaded, white):
     import numpy as np
 
-    from ..metrics import colour as mc
+    from ..metrics import colourspace as mc
 
     if xyz_or_none is not None:
         return mc.xyz_to_srgb8(xyz_or_none, white, quantize=False)
@@ -178,7 +178,7 @@ def _to_codes(xyz_or_none, img: _Loaded, white):
 
 
 def _to_linear(img: _Loaded, white):
-    from ..metrics import colour as mc
+    from ..metrics import colourspace as mc
 
     d = img.data
     if img.mode == "srgb8":
@@ -219,7 +219,7 @@ def run(args) -> int:
     elif stored is not None:
         white = stored  # 'cfa-mitsuba process' stores the scene white of its XYZ
     else:
-        white = np.array(cm.colour.SRGB_WHITE_XYZ, dtype=np.float64)
+        white = np.array(cm.colourspace.SRGB_WHITE_XYZ, dtype=np.float64)
     require(bool(np.all(np.isfinite(white)) and np.all(white > 0)),
             f"--white must be positive, got {args.white}" if args.white else f"stored white_xyz {white.tolist()} is not positive")
     for im in imgs:

@@ -38,7 +38,7 @@
   between samples) is averaged over the tile.
 * ``colour`` (lower is better): mean CIEDE2000 of the 190 training
   reflectances after the white-preserving colour fit (what the ISP does,
-  :func:`cfa_mitsuba.isp.colour.fit_colour_matrix`); the Vora-Trussell
+  :func:`cfa_mitsuba.isp.colour_matrix.fit_colour_matrix`); the Vora-Trussell
   mu-factor (1 = the filters span the colour-matching functions; JOSA A
   10(7) 1993) is reported beside it.
 
@@ -58,7 +58,7 @@ import numpy as np
 
 from .. import spectra
 from ..colorimetry import delta_e00
-from ..isp.colour import electrons_per_radiance_of, fit_colour_matrix
+from ..isp.colour_matrix import electrons_per_radiance_of, fit_colour_matrix
 
 #: The proxies, each lower-is-better.
 PROXY_NAMES = ("aliasing", "aliasing_h", "noise", "colour")

@@ -7,11 +7,8 @@ runs the whole processor, RawImage -> RenderedImage.  docs/isp.md has the
 definitions, the generalisations and the measured numbers.
 """
 
-from .demosaic import demosaic, get_demosaic, list_demosaics, register_demosaic  # noqa: F401
-from .bilinear import bilinear as _bilinear
-from .laplacian import adaptive_laplacian as _adaptive_laplacian, laplacian as _laplacian
-from .pocs import pocs as _pocs
-from .colour import (  # noqa: F401
+from .demosaic import collect_demosaics, demosaic, get_demosaic, list_demosaics, register_demosaic  # noqa: F401
+from .colour_matrix import (  # noqa: F401
     COLOUR_FITS,
     ColourFit,
     delta_e00,
@@ -24,11 +21,4 @@ from .colour import (  # noqa: F401
 from .pipeline import WHITE_BALANCE_MODES, process  # noqa: F401
 from .synthetic import channels_from_rgb, mosaic_image  # noqa: F401
 
-register_demosaic("bilinear", _bilinear,
-                  description="normalised convolution per channel, tent wide enough for each channel's gaps")
-register_demosaic("laplacian", _laplacian,
-                  description="gradient-corrected linear (Malvar-He-Cutler on Bayer), then colour differences")
-register_demosaic("adaptive-laplacian", _adaptive_laplacian,
-                  description="edge-directed (Hamilton-Adams classifiers on Bayer), directional colour differences")
-register_demosaic("pocs", _pocs,
-                  description="alternating projections onto observation and detail sets (Gunturk et al. 2002)")
+collect_demosaics(__name__)  # each method module declares DEMOSAICS

@@ -28,6 +28,7 @@ __all__ = ["bilinear", "interpolate_channel"]
 
 import numpy as np
 
+from .demosaic import DemosaicMethod
 from .mosaic import Mosaic, apply_stencils, extend, geometry, tent_radius, tent_stencil
 
 
@@ -71,3 +72,8 @@ def bilinear(raw: np.ndarray, cfa) -> np.ndarray:
     for c in range(len(mosaic.channels)):
         interpolate_channel(ext, ph, pw, shape, mosaic, c, out[..., c])
     return out
+
+
+#: This module's method (registered by :func:`.demosaic.collect_demosaics`).
+DEMOSAICS = (DemosaicMethod(name="bilinear", function=bilinear, order=1,
+                            description="normalised convolution per channel, tent wide enough for each channel's gaps"),)

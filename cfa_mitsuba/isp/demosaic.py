@@ -7,12 +7,16 @@ gains of its own and keeps every observed sample as it was.
 
 A method is one registry entry: a function ``f(raw, cfa, **options)`` that
 receives the checked float64 mosaic and a CFA (``pattern``, ``channels``)
-and returns (H, W, C).  Add one with :func:`register_demosaic`.
+and returns (H, W, C).  A method of the package is one module of ``isp/``
+declaring ``DEMOSAICS = (DemosaicMethod(...), ...)`` beside its function
+(:func:`collect_demosaics` registers them when the package loads); a
+user's or a test's is added with :func:`register_demosaic`.
 """
 
 from __future__ import annotations
 
-__all__ = ["demosaic", "register_demosaic", "list_demosaics", "get_demosaic"]
+__all__ = ["demosaic", "register_demosaic", "list_demosaics", "get_demosaic", "DemosaicMethod", "collect_demosaics", "unregister_demosaic",
+           "demosaic_parameters"]
 
 import inspect
 from dataclasses import dataclass
@@ -32,6 +36,33 @@ class _Entry:
 
 
 _REGISTRY: dict[str, _Entry] = {}
+
+
+@dataclass(frozen=True, kw_only=True)
+class DemosaicMethod:
+    """A method's declaration in its module (``DEMOSAICS``): its name, its
+    function, a one-line description and its place in listings (``order``;
+    the paper's four first)."""
+
+    name: str
+    function: Callable
+    description: str
+    order: int = 1000
+
+
+def collect_demosaics(package: str) -> None:
+    """Register the ``DEMOSAICS`` declared by every module of ``package``,
+    in their ``order`` (done once by ``cfa_mitsuba.isp``)."""
+    import importlib
+    import pkgutil
+
+    found = []
+    for info in pkgutil.iter_modules(importlib.import_module(package).__path__):
+        if not info.name.startswith("_"):
+            found.extend(getattr(importlib.import_module(f"{package}.{info.name}"), "DEMOSAICS", ()))
+    for m in sorted(found, key=lambda m: m.order):
+        if m.name not in _REGISTRY:
+            register_demosaic(m.name, m.function, description=m.description)
 
 
 def register_demosaic(name: str, function: Callable | None = None, *, description: str = "", replace: bool = False):
@@ -64,6 +95,11 @@ def register_demosaic(name: str, function: Callable | None = None, *, descriptio
     return add(function) if function is not None else add
 
 
+def unregister_demosaic(name: str) -> None:
+    """Remove a registered method (a test's toy one)."""
+    _REGISTRY.pop(name, None)
+
+
 def list_demosaics() -> list[tuple[str, str]]:
     """(name, one-line description) of every registered method."""
     return [(e.name, e.description) for e in _REGISTRY.values()]
@@ -74,6 +110,19 @@ def get_demosaic(name: str) -> Callable:
     if name not in _REGISTRY:
         raise CfaMitsubaError(f"unknown demosaicing method {name!r} (known: {', '.join(_REGISTRY)})")
     return _REGISTRY[name].function
+
+
+#: Keywords the processing fills for a method (its luminance reference, the
+#: channels' luminance weights, an info dict): not options a user sets.
+SUPPLIED_KEYWORDS = frozenset({"reference", "luminance_weights", "info"})
+
+
+def demosaic_parameters(name: str) -> dict:
+    """{option: inspect.Parameter}: the keyword options of a method that a
+    study (``[demosaics.<name>]``) or the command line may set."""
+    fn = get_demosaic(name)
+    return {k: p for k, p in inspect.signature(fn).parameters.items()
+            if p.kind is inspect.Parameter.KEYWORD_ONLY and k not in SUPPLIED_KEYWORDS}
 
 
 def resolve_cfa(cfa):

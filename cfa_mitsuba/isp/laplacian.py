@@ -8,7 +8,7 @@ s. 3.2, 3.3):
 1. **Reference.**  The reference is the densest channel (G of Bayer, Y of
    cmy1, W of the Kodak RGBW tiles).  Where densities tie (stripes, CYGM,
    rgbw1, cmy2) it is a luminance estimate L = sum_c w_c x_c (weights of
-   :func:`cfa_mitsuba.isp.colour.luminance_weights`).  'laplacian' estimates
+   :func:`cfa_mitsuba.isp.colour_matrix.luminance_weights`).  'laplacian' estimates
    the reference at every pixel p that does not carry it (centre channel k)
    as the bilinear estimate plus a gradient correction from the centre's
    own samples::
@@ -74,6 +74,7 @@ import numpy as np
 
 from ..errors import CfaMitsubaError
 from .bilinear import interpolate_channel
+from .demosaic import DemosaicMethod
 from .mosaic import (
     Mosaic,
     Stencil,
@@ -109,7 +110,7 @@ def reference_for(cfa, mosaic: Mosaic, reference=None, luminance_weights=None) -
     or None for automatic (the unique densest channel, else luminance).
 
     ``luminance_weights``: (C,) or {channel: weight}; by default from the
-    CFA's spectral sensitivities (:func:`cfa_mitsuba.isp.colour.luminance_weights`).
+    CFA's spectral sensitivities (:func:`cfa_mitsuba.isp.colour_matrix.luminance_weights`).
     """
     n = len(mosaic.channels)
     if reference is None:
@@ -129,7 +130,7 @@ def reference_for(cfa, mosaic: Mosaic, reference=None, luminance_weights=None) -
         w[c] = 1.0
         return Reference(c, tuple(w.tolist()))
     if luminance_weights is None:
-        from .colour import cfa_luminance_weights
+        from .colour_matrix import cfa_luminance_weights
 
         w = cfa_luminance_weights(cfa)
     elif isinstance(luminance_weights, dict):
@@ -436,3 +437,12 @@ def adaptive_laplacian(raw, cfa, *, alpha: float = MHC_ALPHA, chroma_gain: float
     ref = reference_for(cfa, mosaic, reference, luminance_weights)
     refimg = reference_adaptive(raw, mosaic, ref, alpha, weighting)
     return colour_differences(raw, refimg, mosaic, ref, chroma_gain, weighting)
+
+
+#: This module's methods (registered by :func:`.demosaic.collect_demosaics`).
+DEMOSAICS = (
+    DemosaicMethod(name="laplacian", function=laplacian, order=2,
+                   description="gradient-corrected linear (Malvar-He-Cutler on Bayer), then colour differences"),
+    DemosaicMethod(name="adaptive-laplacian", function=adaptive_laplacian, order=3,
+                   description="edge-directed (Hamilton-Adams classifiers on Bayer), directional colour differences"),
+)

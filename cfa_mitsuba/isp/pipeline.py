@@ -3,7 +3,7 @@
     DN -> electrons (black level, DN per electron) -> white balance
        -> demosaic -> colour matrix -> XYZ (cd/m^2) -> sRGB
 
-Scales and the colour fit: :mod:`cfa_mitsuba.isp.colour`.  The ideal
+Scales and the colour fit: :mod:`cfa_mitsuba.isp.colour_matrix`.  The ideal
 sensor's RawImage (``raw`` (H, W, 3), already XYZ on the absolute scale)
 passes through unchanged to XYZ and sRGB.
 """
@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import CfaMitsubaError
 from ..values import RawImage, RenderedImage
 from ..colorimetry import realisable
-from .colour import (channel_noise, colour_fit_reflectances, fit_colour_matrix, gray_world_gains, luminance_weights,
+from .colour_matrix import (channel_noise, colour_fit_reflectances, fit_colour_matrix, gray_world_gains, luminance_weights,
                      white_balance_gains, white_response, xyz_to_srgb)
 from .demosaic import check_mosaic, demosaic as _demosaic, get_demosaic
 from .mosaic import geometry
@@ -138,7 +138,7 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         True): Tikhonov weights sigma_c = the relative noise of each balanced
         channel at an 18 % grey, shot noise (and read noise with noise
         'all') from the electrons the channel collects from the scene white
-        (:func:`~cfa_mitsuba.isp.colour.channel_noise`); a noise-free capture
+        (:func:`~cfa_mitsuba.isp.colour_matrix.channel_noise`); a noise-free capture
         gets the exact fit.  False: always the exact fit.
     clip_highlights : clip every balanced channel at the lowest balanced
         level at which any channel saturates (default True; dcraw's
@@ -148,7 +148,7 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     colour_fit : the reflectances the colour matrix is fitted on:
         'training' (default, the 190 training patches) or 'mcc' (the 24
         ColorChecker patches, ISETCam's 'MCC optimized';
-        :data:`~cfa_mitsuba.isp.colour.COLOUR_FITS`).
+        :data:`~cfa_mitsuba.isp.colour_matrix.COLOUR_FITS`).
     **options : passed to the demosaicing method (e.g. ``iterations=``).
         Methods that take ``luminance_weights`` receive the channels'
         luminance weights under this illuminant unless given.

@@ -58,6 +58,7 @@ from scipy import ndimage
 
 from ..errors import CfaMitsubaError
 from .bilinear import interpolate_channel
+from .demosaic import DemosaicMethod
 from .laplacian import MHC_ALPHA, reference_adaptive, reference_for
 from .mosaic import extend, geometry, tent_radius
 
@@ -222,3 +223,9 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
     if info is not None:
         info.update(iterations=done, change=change)
     return np.moveaxis(x, 0, -1)
+
+
+#: This module's method (registered by :func:`.demosaic.collect_demosaics`).
+DEMOSAICS = (DemosaicMethod(name="pocs", function=pocs, order=4,
+                            description="alternating projections onto observation and detail sets (Gunturk et al. "
+                                        "2002)"),)

@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import spectra
 from ..errors import CfaMitsubaError
-from .colour import electrons_per_radiance_of
+from .colour_matrix import electrons_per_radiance_of
 from .demosaic import resolve_cfa
 from .mosaic import geometry
 

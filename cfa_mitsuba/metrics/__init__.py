@@ -20,14 +20,16 @@ mdsi           :func:`mdsi`            puppy         MDSI (lower)
 haarpsi        :func:`haarpsi`         puppy         HaarPSI (higher)
 =============  ======================  ============  =====================
 
-Each metric has one record (:mod:`.records`): scenes, inputs, unit, direction,
-scoring, default range, label; :func:`evaluate` computes any of them by name.
+Each metric module holds its function and, beside it, its record
+(:class:`MetricRecord`: scenes, inputs, unit, direction, scoring, default
+range, label); :mod:`.registry` collects the records and :func:`evaluate`
+computes any metric by name.
 Conventions and their sources: docs/metrics.md.
 """
 
 from __future__ import annotations
 
-from . import colour  # noqa: F401
+from . import colourspace  # noqa: F401
 from ._result import MetricResult
 from .achromatic import achromatic
 from .delta_e import delta_e
@@ -37,18 +39,26 @@ from .mdsi import mdsi
 from .moire import moire
 from .mtf import find_edge_roi, mtf
 from .preprocess import mean_match
-from .records import (METRICS, NATURAL, MetricInputs, MetricRecord, evaluate, evaluate_many, get_metric,
-                      list_metrics, metric_names, metrics_for_scene, record_json, result_rows, scored_metrics)
+from .inputs import MetricInputs
+from .record import NATURAL, MetricRecord
+from .registry import (METRICS, evaluate, evaluate_many, get_metric, list_metrics, metric_names, metric_parameters,
+                       metrics_for_scene, record_json, register_metric, result_rows, scored_metrics,
+                       unregister_metric)
 from .scielab import scielab, scielab_filters
 from .ssim import ssim
 
-#: The old name of a metric's registry entry.
-MetricInfo = MetricRecord
-
 __all__ = [
-    "MetricResult", "MetricRecord", "MetricInfo", "MetricInputs", "METRICS", "NATURAL", "get_metric",
+    "MetricResult", "MetricRecord", "MetricInputs", "register_metric", "unregister_metric", "metric_parameters", "METRICS", "NATURAL", "get_metric",
     "list_metrics", "metric_names", "scored_metrics", "metrics_for_scene", "record_json", "evaluate",
     "evaluate_many", "result_rows",
     "delta_e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi",
-    "mean_match", "find_edge_roi", "scielab_filters", "scene_geometry", "colour",
+    "mean_match", "find_edge_roi", "scielab_filters", "scene_geometry", "colourspace",
 ]
+
+# Every registered metric's function is reachable as cm.metrics.<function>,
+# a module added later too (importing a submodule binds the package attribute
+# to the module; the function is what users call).
+for _record in METRICS.values():
+    if _record.function is not None:
+        globals()[_record.function.__name__] = _record.function
+del _record

@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
-__all__ = ["achromatic"]
+__all__ = ["RECORDS", "achromatic"]
 
 import numpy as np
 
 from ..errors import require
 from ._common import as_pair, as_white
 from ._result import MetricResult
-from .colour import lightness, realisable
+from .colourspace import lightness, realisable
+from .record import MetricRecord
 
 
 def achromatic(reference_xyz, test_xyz, white_xyz, *, row: int | None = None, border: int = 10,
@@ -77,3 +78,12 @@ def achromatic(reference_xyz, test_xyz, white_xyz, *, row: int | None = None, bo
             per.append(float(d[a:b].mean()) if b > a else None)
         details["per_step"] = per
     return MetricResult(float(d[x0:x1].mean()), name="achromatic", unit="L*", details=details)
+
+
+#: This module's metric records (collected by :mod:`.registry`).
+RECORDS = (
+    MetricRecord(name="achromatic", function=achromatic, scenes=("gray-bar",), inputs="xyz", unit="L*",
+                 higher_is_better=False, scored=True, label="AR error", order=6, decimals=3,
+                 description="achromatic reproduction error, mean |ΔL*| along the gray bar",
+                 paper="ΔR (s. 2.2.6, Fig 14)", score_range=(1.0, 0.5)),
+)

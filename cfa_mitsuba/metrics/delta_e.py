@@ -3,14 +3,15 @@
 
 from __future__ import annotations
 
-__all__ = ["delta_e"]
+__all__ = ["RECORDS", "delta_e"]
 
 import numpy as np
 
 from ..errors import require
 from ._common import as_pair, as_white
 from ._result import MetricResult, summarise_array
-from .colour import delta_e_1976, delta_e_2000, xyz_to_lab, xyz_to_xy
+from .colourspace import delta_e_1976, delta_e_2000, xyz_to_lab, xyz_to_xy
+from .record import MetricRecord
 
 _VERSIONS = ("2000", "1976")
 #: Grey patches of the 24-patch ColorChecker in reading order (last row).
@@ -41,7 +42,7 @@ def delta_e(reference_xyz, test_xyz, white_xyz, *, patches=None, grey_patches=No
     version : ``'2000'`` (CIEDE2000, ISETCam's default and our headline) or
         ``'1976'`` (the paper's Euclidean dE*ab).  Both are always reported.
     lab_constants : ``'cie'`` (exact CIE constants, default) or ``'isetcam'``
-        (ISETCam's rounded ones), see :func:`~cfa_mitsuba.metrics.colour.xyz_to_lab`.
+        (ISETCam's rounded ones), see :func:`~cfa_mitsuba.metrics.colourspace.xyz_to_lab`.
 
     Returns
     -------
@@ -110,3 +111,19 @@ def delta_e(reference_xyz, test_xyz, white_xyz, *, patches=None, grey_patches=No
         "xyz_reference": xyz_r, "xyz_test": xyz_t,
     }
     return MetricResult(details[f"mean_{key}"], name="delta-e", unit=unit, details=details)
+
+
+#: This module's metric records (collected by :mod:`.registry`).
+_DELTA_E = MetricRecord(
+    name="delta-e", function=delta_e, scenes=("macbeth",), inputs="xyz", unit="dE00", higher_is_better=False,
+    scored=True, label="ΔE00", order=1, decimals=2, paper="ΔE (s. 2.2.1, Fig 8)", score_range=(6.0, 2.2),
+    range_units=("dE00", "dE76"), description="colour error, mean CIEDE2000 over the 24 ColorChecker patches")
+RECORDS = (
+    _DELTA_E,
+    # values read from delta-e's details: reported, not scored
+    _DELTA_E.detail("mean_de1976", name="delta-e76", unit="dEab", label="ΔE*ab", order=101, decimals=2,
+                    description="colour error, mean CIE 1976 ΔE*ab over the 24 patches"),
+    _DELTA_E.detail("mean_dl_grey", name="delta-l", unit="L*", label="ΔL grey", order=102, decimals=2,
+                    paper="Table 1",
+                    description="mean |ΔL*| over the six grey patches (the paper's Table 1 'Mean ΔL')"),
+)

@@ -9,11 +9,12 @@ MATLAB's coefficients, C = 30, alpha = 4.2 for 0..255 data.
 
 from __future__ import annotations
 
-__all__ = ["haarpsi"]
+__all__ = ["RECORDS", "haarpsi"]
 
 import numpy as np
 
 from ._common import as_pair, code_range, conv2_same
+from .record import NATURAL, MetricRecord
 
 C, ALPHA = 30.0, 4.2
 _Y = np.array([0.299, 0.587, 0.114])
@@ -110,3 +111,12 @@ def haarpsi(reference, test, *, data_range: float = 255.0, subsample: bool = Tru
     # Similarities are <= 1, so the score is <= 1; the sigmoid/logit round trip
     # can overshoot by ~1e-15, which we clip so identical images give exactly 1.
     return float(min(_logit(pooled) ** 2, 1.0))
+
+
+#: This module's metric records (collected by :mod:`.registry`).
+RECORDS = (
+    MetricRecord(name="haarpsi", function=haarpsi, scenes=(NATURAL,), inputs="srgb8", unit="",
+                 higher_is_better=True, scored=True, label="HaarPSI", order=8, decimals=3,
+                 description="Haar wavelet perceptual similarity (Reisenhofer 2018), 1 = identical",
+                 paper="HaarPSI (s. 2.2.8, Fig 15)", score_range=(0.0, 1.0)),
+)

@@ -9,12 +9,13 @@ the MEAN absolute deviation, complex powers for negative similarities.
 
 from __future__ import annotations
 
-__all__ = ["mdsi"]
+__all__ = ["RECORDS", "mdsi"]
 
 import numpy as np
 
 from ..errors import require
 from ._common import as_pair, code_range, conv2_same, round_half_away
+from .record import NATURAL, MetricRecord
 
 C1, C2, C3 = 140.0, 55.0, 550.0
 ALPHA = 0.6  # 'sum' combination weight of the gradient similarity
@@ -102,3 +103,12 @@ def mdsi(reference, test, *, data_range: float = 255.0, combination: str = "sum"
     q = np.sqrt(np.sqrt(gcs.ravel()))  # principal branch, as MATLAB's (x.^0.5).^0.5
     value = np.mean(np.abs(q - q.mean())) ** 0.25
     return float(value)
+
+
+#: This module's metric records (collected by :mod:`.registry`).
+RECORDS = (
+    MetricRecord(name="mdsi", function=mdsi, scenes=(NATURAL,), inputs="srgb8", unit="", higher_is_better=False,
+                 scored=True, label="MDSI", order=7, decimals=3,
+                 description="mean deviation similarity index (Nafchi 2016), 0 = identical",
+                 paper="MDSI (s. 2.2.7, Fig 15)", score_range=(0.5, 0.0)),
+)

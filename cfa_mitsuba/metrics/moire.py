@@ -11,14 +11,15 @@ cycles per degree with the chirp's own frequency map.
 
 from __future__ import annotations
 
-__all__ = ["moire", "block_chroma"]
+__all__ = ["RECORDS", "moire", "block_chroma"]
 
 import numpy as np
 
 from ..errors import require, require_finite
 from ._common import as_pair, as_white
 from ._result import MetricResult
-from .colour import realisable, xyz_to_lab
+from .colourspace import realisable, xyz_to_lab
+from .record import MetricRecord
 
 
 def block_chroma(xyz, white_xyz, *, row: int, block: int = 15) -> tuple[np.ndarray, np.ndarray]:
@@ -118,3 +119,13 @@ def moire(reference_xyz, test_xyz, white_xyz, *, frequency_cy_per_deg, row: int 
         "out_of_gamut_fraction": float(np.mean(~realisable(test[row - half:row + half + 1]))),
     }
     return MetricResult(float(freq[col]), name="moire", unit="cy/deg", details=details)
+
+
+#: This module's metric records (collected by :mod:`.registry`).
+RECORDS = (
+    MetricRecord(name="moire", function=moire, scenes=("chirp",), inputs="xyz", unit="cy/deg",
+                 higher_is_better=True, scored=True, label="MSP", order=5, decimals=2,
+                 description="moiré starting point: first frequency where the block-mean C*ab passes 25",
+                 paper="MSP (s. 2.2.5, Figs 12-13)", score_range=(0.04, 0.30), range_scaling="chirp_cy_px",
+                 censored_key="censored"),
+)

@@ -25,13 +25,14 @@ sharpening overshoot raises the peak above 1 and MTF50, not MTF50P.
 
 from __future__ import annotations
 
-__all__ = ["mtf", "find_edge_roi"]
+__all__ = ["RECORDS", "mtf", "find_edge_roi"]
 
 import numpy as np
 
 from ..errors import CfaMitsubaError, require
 from ._common import as_image
 from ._result import MetricResult
+from .record import MetricRecord
 
 #: Luminance weights of the CFA paper and ISETCam (not sfrmat's Rec. 709 default).
 LUM_WEIGHTS = (0.3, 0.6, 0.1)
@@ -418,3 +419,19 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
     if pixel_pitch_um:
         return MetricResult(lum["mtf50_cy_mm"], name="mtf", unit="cy/mm", details=details)
     return MetricResult(lum["mtf50_cy_px"], name="mtf", unit="cy/px", details=details)
+
+
+#: This module's metric records (collected by :mod:`.registry`).
+_MTF = MetricRecord(
+    name="mtf", function=mtf, scenes=("slanted-edge",), inputs="linear", unit="cy/mm", higher_is_better=True,
+    scored=True, label="MTF50", order=4, decimals=1, paper="MTF50 (s. 2.2.4, Figs 6, 11)",
+    score_range=(30.0, 110.0), range_scaling="pixel_pitch", ideal_details=True,
+    description="luminance MTF50 of the slanted edge (ISO 12233 e-SFR)")
+RECORDS = (
+    _MTF,
+    _MTF.detail("mtf50p_cy_mm", name="mtf50p", unit="cy/mm", label="MTF50P", order=103, decimals=1,
+                higher_is_better=True,
+                description="luminance MTF50P: where the MTF falls to half its peak (Imatest; not raised by overshoot)"),
+    _MTF.detail("mtf_peak", name="mtf-peak", unit="", label="MTF peak", order=104, decimals=3,
+                description="peak of the luminance MTF up to Nyquist (1 without overshoot; above 1: sharpening)"),
+)

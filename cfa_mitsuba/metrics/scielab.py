@@ -12,14 +12,15 @@ circularly.  Away from the border (one degree in) both agree to 1e-13.
 
 from __future__ import annotations
 
-__all__ = ["scielab", "scielab_filters", "OPPONENT_MATRICES", "FILTER_PARAMETERS"]
+__all__ = ["RECORDS", "scielab", "scielab_filters", "OPPONENT_MATRICES", "FILTER_PARAMETERS"]
 
 import numpy as np
 
 from ..errors import require
 from ._common import as_image, as_pair, as_white
 from ._result import MetricResult, summarise_array
-from .colour import delta_e_1976, delta_e_2000, xyz_to_lab
+from .colourspace import delta_e_1976, delta_e_2000, xyz_to_lab
+from .record import NATURAL, MetricRecord
 
 #: XYZ -> opponent (luminance, red-green, blue-yellow), rows = output channels
 #: (ISETCam ``colorTransformMatrix('xyz2opp', 2 | 10)``).  'xyz2' matches CIE
@@ -145,7 +146,7 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
     version : ``'2000'`` (CIEDE2000, default, as ISETCam) or ``'1976'``.
     parameters : the filter set; only ``'distribution'``.
     lab_constants : ``'cie'`` (exact CIE constants, default) or ``'isetcam'``
-        (ISETCam's rounded ones), see :func:`~cfa_mitsuba.metrics.colour.xyz_to_lab`.
+        (ISETCam's rounded ones), see :func:`~cfa_mitsuba.metrics.colourspace.xyz_to_lab`.
     boundary : ``'symmetric'`` (default: symmetric extension, a map of the
         input's size registered to it) or ``'isetcam'`` (ISETCam's
         ``scielab.m`` exactly: the last row/column dropped when (size - N) is
@@ -214,3 +215,16 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
     }
     return MetricResult(stats["mean"], name="scielab", unit="dE00" if version == "2000" else "dE76",
                         details=details)
+
+
+#: This module's metric records (collected by :mod:`.registry`).
+_SCIELAB = MetricRecord(
+    name="scielab", function=scielab, scenes=(NATURAL,), inputs="xyz", unit="dE00", higher_is_better=False,
+    scored=True, label="S-CIELAB", order=2, decimals=2, paper="ΔEs (s. 2.2.2, Fig 10)", score_range=(9.5, 2.5),
+    range_units=("dE00", "dE76"), reference_cache=("reference_lab", scielab_reference_lab),
+    description="colour reproduction error, mean S-CIELAB ΔE00 over the image (Zhang-Wandell)")
+RECORDS = (
+    _SCIELAB,
+    _SCIELAB.detail("mean_interior", name="scielab-interior", unit="dE00", label="S-CIELAB interior", order=105,
+                    decimals=2, description="S-CIELAB mean ΔE00 away from the image border"),
+)

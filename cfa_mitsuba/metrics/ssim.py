@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-__all__ = ["ssim"]
+__all__ = ["RECORDS", "ssim"]
 
 import numpy as np
 
 from ..errors import require
 from ._common import as_pair, code_range, round_half_away
-from .colour import rgb_to_gray
+from .colourspace import rgb_to_gray
+from .record import NATURAL, MetricRecord
 
 #: 11 x 11 Gaussian window, sigma 1.5 px (``fspecial('gaussian', 11, 1.5)``).
 WINDOW_PX, SIGMA_PX = 11, 1.5
@@ -85,3 +86,12 @@ def ssim(reference, test, *, data_range: float = 255.0, channel: str = "gray",
         values.append(structural_similarity(a, b, data_range=255.0, gaussian_weights=True, sigma=SIGMA_PX,
                                             use_sample_covariance=False))
     return float(np.mean(values))
+
+
+#: This module's metric records (collected by :mod:`.registry`).
+RECORDS = (
+    MetricRecord(name="ssim", function=ssim, scenes=(NATURAL,), inputs="srgb8", unit="", higher_is_better=True,
+                 scored=True, label="SSIM", order=3, decimals=3,
+                 description="structural similarity (Wang 2004) of the 8-bit sRGB luma",
+                 paper="SSIM (s. 2.2.3, Fig 10)", score_range=(0.0, 1.0)),
+)

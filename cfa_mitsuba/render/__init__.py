@@ -5,7 +5,7 @@ spectral radiance, W/(m^2 sr nm)).
 Public interface::
 
     list_scenes()                 -> [(name, description)]
-    get_scene(name_or_xml_path)   -> Scene (defaults, .metrics)
+    get_scene(name_or_xml_path)   -> Scene (defaults, .kind)
     render(scene, **settings)     -> SpectralImage      (pure: no files)
     render_cached(scene, **settings) -> SpectralImage   (through the cache)
     cache_key(scene, **settings)  -> str
@@ -18,7 +18,7 @@ Mitsuba is imported lazily (only when something is rendered or a scene
 file is read), so importing this package is cheap.
 """
 
-from .types import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene  # noqa: F401
+from .types import NATURAL, Built, RenderConfig, Scene  # noqa: F401
 from .registry import get_scene, list_scenes, register_scene  # noqa: F401
 from . import builtins as _builtins  # noqa: F401  (registers the built-in scenes)
 from .variant import SPECTRAL_VARIANTS, choose_variant, find_libllvm  # noqa: F401

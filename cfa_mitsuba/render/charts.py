@@ -426,25 +426,25 @@ SCENES = (
     Scene(
         name="macbeth",
         description="ColorChecker (24 'ColorChecker N Ohta' reflectances, 4 x 6) under D65 on a dark surround; FOV 30 deg",
-        width=720, height=636, fov_deg=30.0, spp=16, oversample=1, metrics=("delta-e",),
+        width=720, height=636, fov_deg=30.0, spp=16, oversample=1, kind="macbeth",
         builder=_build_macbeth, jitter=False,
     ),
     Scene(
         name="slanted-edge",
         description="ISO 12233 edge, 5 deg from vertical, 4:1 contrast, dark left; FOV 2 deg; rendered at 4x the sensor's sampling",
-        width=720, height=636, fov_deg=2.0, spp=16, oversample=SUPER_NYQUIST_OVERSAMPLE, metrics=("mtf",),
+        width=720, height=636, fov_deg=2.0, spp=16, oversample=SUPER_NYQUIST_OVERSAMPLE, kind="slanted-edge",
         builder=_build_edge, jitter=False,
     ),
     Scene(
         name="chirp",
         description="black-and-white linear chirp along the row, 0 to twice the sensor Nyquist; FOV 10 deg; 2x the sensor's sampling",
-        width=500, height=500, fov_deg=10.0, spp=16, oversample=CHIRP_OVERSAMPLE, metrics=("moire",),
+        width=500, height=500, fov_deg=10.0, spp=16, oversample=CHIRP_OVERSAMPLE, kind="chirp",
         builder=_build_chirp, jitter=False,
     ),
     Scene(
         name="gray-bar",
         description="10 achromatic steps in equal L* (95 to 5), white to near black along the row; FOV 10 deg",
-        width=500, height=500, fov_deg=10.0, spp=16, oversample=1, metrics=("achromatic",),
+        width=500, height=500, fov_deg=10.0, spp=16, oversample=1, kind="gray-bar",
         builder=_build_gray, jitter=False,
     ),
 )

@@ -387,7 +387,7 @@ def _render_canonical(sc: Scene, cfg: RenderConfig) -> SpectralImage:
         "seed": cfg.seed,
         "render_time_s": round(elapsed, 3),
         "cache_key": key,
-        "metrics": list(sc.metrics),
+        "kind": sc.kind,
         "renderer": f"mitsuba {mi.__version__}",
         **meta_extra,
         **built.meta,

@@ -4,7 +4,7 @@ Nothing is rendered: the cube (any format of :mod:`cfa_mitsuba.io.hyperspectral`
 is put on the band grid (:func:`cfa_mitsuba.io.cube.cube_to_radiance`: exact
 box means of the linearly interpolated source, times the illuminant for a
 reflectance cube) and given the sidecar a render has (field of view,
-distance, oversampling, white radiance, the image metrics it feeds), then
+distance, oversampling, white radiance, its kind: natural), then
 scaled to the requested mean luminance as renders are
 (:func:`.engine.scale_to_luminance`).  Through :func:`measured_cached` the
 canonical image is kept in the render cache, keyed by the file's content and
@@ -26,7 +26,7 @@ from .. import spectra
 from ..errors import CfaMitsubaError
 from ..io.hyperspectral import is_measured_path
 from ..values import SpectralImage
-from .types import FULL_REFERENCE_METRICS
+from .types import NATURAL
 
 #: Options of a measured image (the render command's flags, a study's keys).
 MEASURED_OPTIONS = ("bands", "illuminant", "fov", "distance", "oversample", "wavelengths", "quantity", "mat_cube",
@@ -173,7 +173,7 @@ def measured_canonical(path, **options) -> SpectralImage:
                                                                           float(cube.wavelengths[-1])]},
         "read_notices": notices,
         "render_time_s": round(time.perf_counter() - t0, 3),
-        "metrics": list(FULL_REFERENCE_METRICS),
+        "kind": NATURAL,
         "geometry": {},
     }
     return SpectralImage(radiance, grid.copy(), meta)

@@ -71,7 +71,7 @@ import numpy as np
 from .. import spectra
 from . import puppy_textures as tex
 from .light import band_spectrum, d65_white_radiance
-from .types import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene
+from .types import NATURAL, Built, RenderConfig, Scene
 
 #: Distance (m) from the lens to the plane of focus, through the dog's middle.
 FOCUS_DISTANCE_M = 1.2
@@ -314,6 +314,6 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
 SCENE = Scene(
     name="puppy",
     description="3D toy dog on a table, coloured panels and blocks at 0.9-3 m, D65 area light, thin lens focused on the dog (f/2); FOV 10 deg",
-    width=720, height=636, fov_deg=10.0, spp=400, oversample=1, metrics=FULL_REFERENCE_METRICS,
+    width=720, height=636, fov_deg=10.0, spp=400, oversample=1, kind=NATURAL,
     builder=_build, max_depth=MAX_DEPTH, thin_lens=True, f_number=F_NUMBER,
 )

@@ -1,7 +1,7 @@
 """The scene registry: built-in scenes by name, users' Mitsuba XML by path.
 
 Each scene is a :class:`~.types.Scene` declaring its defaults (size, field
-of view, samples per pixel, oversampling) and the metrics it feeds, plus a
+of view, samples per pixel, oversampling) and its kind (what it feeds), plus a
 builder that turns resolved render settings into Mitsuba scene content.
 Adding a scene is one :func:`register_scene` call (STYLE.md: registries
 keyed by name, not chains of ifs).  The registry imports no scene: the
@@ -10,12 +10,12 @@ built-in ones are registered by :mod:`.builtins`, which the package imports.
 
 from __future__ import annotations
 
-__all__ = ["Scene", "Built", "RenderConfig", "register_scene", "get_scene", "list_scenes", "FULL_REFERENCE_METRICS"]
+__all__ = ["Scene", "Built", "RenderConfig", "register_scene", "get_scene", "list_scenes", "NATURAL"]
 
 from pathlib import Path
 
 from ..errors import CfaMitsubaError
-from .types import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene
+from .types import NATURAL, Built, RenderConfig, Scene
 from .userxml import user_scene
 
 _REGISTRY: dict[str, Scene] = {}

@@ -8,7 +8,7 @@ puppy -> types; builtins -> charts, puppy, registry).
 
 from __future__ import annotations
 
-__all__ = ["Scene", "Built", "RenderConfig", "FULL_REFERENCE_METRICS", "LENS_PIXEL_PITCH_M", "focal_length_m"]
+__all__ = ["Scene", "Built", "RenderConfig", "NATURAL", "LENS_PIXEL_PITCH_M", "focal_length_m"]
 
 import math
 from dataclasses import dataclass, field
@@ -30,8 +30,10 @@ def focal_length_m(width_px: int, fov_deg: float) -> float:
     return 0.5 * width_px * LENS_PIXEL_PITCH_M / math.tan(math.radians(fov_deg) / 2)
 
 
-#: The metrics a natural (3D) scene feeds: full-reference image comparisons.
-FULL_REFERENCE_METRICS = ("scielab", "ssim", "mdsi", "haarpsi")
+#: The kind of a natural scene (the puppy, a user's Mitsuba XML, a measured
+#: image); each chart is a kind of its own.  Which metrics a kind feeds is
+#: said once, in the metric records (``metrics.MetricRecord.scenes``).
+NATURAL = "natural"
 
 
 @dataclass(frozen=True)
@@ -110,7 +112,8 @@ class Scene:
     fov_deg : default horizontal field of view (degrees).
     spp : default samples per pixel.
     oversample : default K (EXR pixels per sensor pixel, per axis).
-    metrics : the CLI metric names this scene feeds.
+    kind : what the scene is, for the metrics it feeds: a chart's own kind
+        (``'macbeth'``, ...) or :data:`NATURAL`.
     max_depth : path length (1: emitters seen directly; flat charts).
     sampler : Mitsuba sampler plugin used (``stratified``: spp is rounded
         up to a square, s x s strata per pixel).
@@ -134,7 +137,7 @@ class Scene:
     fov_deg: float
     spp: int
     oversample: int
-    metrics: tuple[str, ...]
+    kind: str
     builder: Callable[["Scene", RenderConfig], Built] = field(repr=False, compare=False)
     max_depth: int = 1
     sampler: str = "stratified"

@@ -57,7 +57,7 @@ from ..errors import CfaMitsubaError
 from . import variant as _variant
 from . import xmlscan
 from .loading import first_line, inspect_settings
-from .types import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene, focal_length_m
+from .types import NATURAL, Built, RenderConfig, Scene, focal_length_m
 
 #: BSDF plugins whose sampling is wavelength-independent (Mitsuba 3.9).
 SUPPORTED_BSDFS = frozenset({
@@ -245,7 +245,7 @@ def user_scene(path, *, allow_outside_paths: bool = False) -> Scene:
         name=p.stem,
         description=f"Mitsuba scene file {p.name}",
         width=read.size[0], height=read.size[1], fov_deg=read.fov_deg, spp=DEFAULT_SPP, oversample=1,
-        metrics=FULL_REFERENCE_METRICS, builder=_build, max_depth=read.depth, path=read.scan.main,
+        kind=NATURAL, builder=_build, max_depth=read.depth, path=read.scan.main,
         identity=_identity(read), thin_lens=read.camera == "thinlens", allow_outside_paths=allow_outside_paths,
     )
 

@@ -148,11 +148,11 @@ def _facts(res: Results) -> dict:
             facts["best_per_demosaic"] = bpd
         if "out_of_range" in s.columns:
             lines = []
-            from .style import fmt_value, metric_info
+            from .style import fmt_value, metric_display
 
             for m, g in s[s["out_of_range"]].groupby("metric", sort=False):
                 worst, best = float(g["worst"].iloc[0]), float(g["best"].iloc[0])
-                info = metric_info(m)
+                info = metric_display(m)
                 beyond_best = ((g["raw_score"] > 1.0) if "raw_score" in g.columns else g["value"] == g["value"])
                 n_b = int(beyond_best.sum())
                 n_w = len(g) - n_b

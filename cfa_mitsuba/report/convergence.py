@@ -11,7 +11,7 @@ import numpy as np
 
 from ..study.convergence import ConvergenceResult, radiance_series, rate_text, rows_frame, write_outputs
 from .figure import RC
-from .style import metric_info
+from .style import metric_display
 
 
 def write_convergence(result: ConvergenceResult, out_dir, *, formats=("png", "svg")) -> dict:
@@ -56,110 +56,119 @@ def plot_convergence(result: ConvergenceResult, paths) -> None:
             f"{p.demosaic}; reference 2 x {p.reference_spp} spp, seeds {p.seed + 1}, {p.seed + 2}; "
             f"{s['cores']} cores, shared)", fontsize=10)
 
-        # (a) radiance
-        ax = axes[0]
-        lows = []
-        for prefix, label in (("radiance", "image"), ("uniform", "uniform region")):
-            t, med, mx, q = radiance_series(df, "render", prefix)
-            pairs = [("median band", med)] + ([("worst band", mx)] if prefix == "radiance" else [])
-            for agg, y in pairs:
-                key = f"radiance, {label}, {agg}"
-                st = _RADIANCE_STYLES[key]
-                lows += _draw_series(ax, t, 100 * y, q, p.default_spp, st,
-                                     f"{label}, {agg}: {_rates_label(s['rates']['render'][key], 'spp')}")
-                if key == "radiance, image, median band":
-                    _label_points(ax, t, 100 * y, q, "spp")
-        own = 100 * s["reference"]["own_noise_measured_median_band"]
-        floor = 100 * s["reference"]["own_noise_image_median_band"]
-        ax.axhline(floor, color="#000000", linestyle=":", linewidth=1,
-                   label=(f"floor: reference's own noise, median band ({floor:.2g} %)" if own >= floor else
-                          f"floor: float32 rounding ({floor:.2g} %; reference's own noise {own:.2g} %)"))
-        title = "(a) render: radiance per band"
-        if all(v["per_wall_time"] is None for k, v in s["rates"]["render"].items() if k.startswith("radiance")):
-            title += "\nevery level at the float32 floor: exact at any spp"
-        _finish(ax, "render wall time (s)", "radiance error: rms / mean (%)", title, lows)
-
-        # (b) metrics vs render time
-        ax = axes[1]
-        lows = []
-        for i, m in enumerate(headline):
-            sub = df[(df["stage"] == "render") & (df["quantity"] == m)].sort_values("quality")
-            info = metric_info(m)
-            unit = s["checks"][m]["unit"] or "-"
-            st = dict(color=_METRIC_COLOURS[i % 7], marker=_METRIC_MARKERS[i % 7], linestyle="-")
-            lows += _draw_series(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
-                                 sub["quality"].to_numpy(float), p.default_spp, st,
-                                 f"{info.short} [{unit}]: {_rates_label(s['rates']['render'][m], 'spp')}")
-            seeds = df[(df["stage"] == "render-seeds") & (df["quantity"] == m) & (df["error"] > 0)]
-            at = sub[sub["quality"] == p.default_spp]["wall_s"]
-            if len(seeds) and len(at):  # drawn at the default level's time (the same render cost)
-                ax.plot(np.full(len(seeds), float(at.iloc[0])), seeds["error"].to_numpy(float), linestyle="none",
-                        marker=st["marker"], markersize=4, markerfacecolor="none", markeredgecolor=st["color"],
-                        alpha=0.8)
-            pair = s["checks"][m].get("cfa_difference_deviation")
-            if pair and pair > 0 and len(at):
-                ax.plot([float(at.iloc[0]) * 1.12], [pair], linestyle="none", marker="*", markersize=10,
-                        color=st["color"], markeredgecolor="#000000", markeredgewidth=0.4)
-            spread = s["checks"][m].get("cfa_spread")
-            gap = s["checks"][m].get("cfa_smallest_gap")
-            if spread and spread > 0:
-                ax.axhline(spread, color=st["color"], linestyle="--", linewidth=1)
-            if gap and gap > 0:
-                ax.axhline(gap, color=st["color"], linestyle=":", linewidth=1)
-        if len(headline) and len(df[df["stage"] == "render"]):
-            sub = df[(df["stage"] == "render") & (df["quantity"] == headline[0])].sort_values("quality")
-            _label_points(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
-                          sub["quality"].to_numpy(float), "spp", below=True)
-        if p.compare_cfas:
-            names = ", ".join(p.compare_cfas)
-            ax.plot([], [], color="#555555", linestyle="--", linewidth=1,
-                    label=f"dashed, metric's colour: spread between {names} ({p.demosaic})")
-            ax.plot([], [], color="#555555", linestyle=":", linewidth=1,
-                    label="dotted: smallest gap between two of them")
-            if (df["stage"] == "cfa-pairs").any():
-                ax.plot([], [], linestyle="none", marker="*", markersize=10, color="#999999", markeredgecolor="#000000",
-                        markeredgewidth=0.4, label="star: rms change of the differences between those CFAs "
-                                                   "at the default (what can reorder them)")
-        noise = "sensor noise off" if p.render_noise == "off" else f"sensor noise '{p.render_noise}'"
-        title = f"(b) render: metric deviation ({noise})" + _zero_note(df, "render", headline)
-        _finish(ax, "render wall time (s)", "|metric - reference's| (metric's unit)", title, lows,
-                seeds_note=bool((df["stage"] == "render-seeds").any()))
-
-        # (c) POCS
-        ax = axes[2]
-        lows = []
-        pdflt = s["pocs_default"]
-        for i, m in enumerate(headline):
-            sub = df[(df["stage"] == "pocs") & (df["quantity"] == m)].sort_values("quality")
-            info = metric_info(m)
-            unit = s["checks"][m]["unit"] or "-"
-            st = dict(color=_METRIC_COLOURS[i % 7], marker=_METRIC_MARKERS[i % 7], linestyle="-")
-            lows += _draw_series(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
-                                 sub["quality"].to_numpy(float), None, st,
-                                 f"{info.short} [{unit}]: {_rates_label(s['rates']['pocs'][m], 'iteration')}")
-            pspread = s.get("pocs_checks", {}).get(m, {}).get("cfa_spread")
-            if pspread and pspread > 0:
-                ax.axhline(pspread, color=st["color"], linestyle="--", linewidth=1)
-            dev = pdflt["deviation"][m]
-            if dev > 0:
-                ax.plot([pdflt["wall_s"]], [dev], linestyle="none", marker="o", markersize=13, markerfacecolor="none",
-                        markeredgecolor=st["color"], markeredgewidth=1.4)
-        if headline:
-            sub = df[(df["stage"] == "pocs") & (df["quantity"] == headline[0])].sort_values("quality")
-            _label_points(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
-                          sub["quality"].to_numpy(float), "it")
-        if p.compare_cfas:
-            ax.plot([], [], color="#555555", linestyle="--", linewidth=1,
-                    label=f"dashed, metric's colour: spread between {', '.join(p.compare_cfas)} (pocs)")
-        ax.axvline(pdflt["wall_s"], color="#555555", linestyle=":", linewidth=1,
-                   label=f"default: {p.pocs_default_iterations} iterations, tolerance 1e-3 "
-                         f"(stopped at {pdflt['iterations_done']}; ringed)")
-        _finish(ax, "processing wall time (s)", "|metric - converged POCS| (metric's unit)",
-                f"(c) processing: POCS iterations vs {p.pocs_reference_iterations} (tolerance 0)"
-                + _zero_note(df, "pocs", headline), lows)
+        _panel_radiance(axes[0], p, s, df)
+        _panel_metrics(axes[1], p, s, df, headline)
+        _panel_pocs(axes[2], p, s, df, headline)
 
         for path in paths:
             fig.savefig(path, metadata={"Date": None} if str(path).endswith(".svg") else None)
+
+
+def _metric_style(i: int, m: str, s: dict) -> tuple:
+    """(display info, unit text, line style) of the i-th headline metric."""
+    st = dict(color=_METRIC_COLOURS[i % 7], marker=_METRIC_MARKERS[i % 7], linestyle="-")
+    return metric_display(m), s["checks"][m]["unit"] or "-", st
+
+
+def _panel_radiance(ax, p, s, df) -> None:
+    """(a) radiance error per band against render wall time."""
+    lows = []
+    for prefix, label in (("radiance", "image"), ("uniform", "uniform region")):
+        t, med, mx, q = radiance_series(df, "render", prefix)
+        pairs = [("median band", med)] + ([("worst band", mx)] if prefix == "radiance" else [])
+        for agg, y in pairs:
+            key = f"radiance, {label}, {agg}"
+            st = _RADIANCE_STYLES[key]
+            lows += _draw_series(ax, t, 100 * y, q, p.default_spp, st,
+                                 f"{label}, {agg}: {_rates_label(s['rates']['render'][key], 'spp')}")
+            if key == "radiance, image, median band":
+                _label_points(ax, t, 100 * y, q, "spp")
+    own = 100 * s["reference"]["own_noise_measured_median_band"]
+    floor = 100 * s["reference"]["own_noise_image_median_band"]
+    ax.axhline(floor, color="#000000", linestyle=":", linewidth=1,
+               label=(f"floor: reference's own noise, median band ({floor:.2g} %)" if own >= floor else
+                      f"floor: float32 rounding ({floor:.2g} %; reference's own noise {own:.2g} %)"))
+    title = "(a) render: radiance per band"
+    if all(v["per_wall_time"] is None for k, v in s["rates"]["render"].items() if k.startswith("radiance")):
+        title += "\nevery level at the float32 floor: exact at any spp"
+    _finish(ax, "render wall time (s)", "radiance error: rms / mean (%)", title, lows)
+
+
+def _panel_metrics(ax, p, s, df, headline) -> None:
+    """(b) metric deviation against render wall time."""
+    lows = []
+    for i, m in enumerate(headline):
+        sub = df[(df["stage"] == "render") & (df["quantity"] == m)].sort_values("quality")
+        info, unit, st = _metric_style(i, m, s)
+        lows += _draw_series(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
+                             sub["quality"].to_numpy(float), p.default_spp, st,
+                             f"{info.short} [{unit}]: {_rates_label(s['rates']['render'][m], 'spp')}")
+        seeds = df[(df["stage"] == "render-seeds") & (df["quantity"] == m) & (df["error"] > 0)]
+        at = sub[sub["quality"] == p.default_spp]["wall_s"]
+        if len(seeds) and len(at):  # drawn at the default level's time (the same render cost)
+            ax.plot(np.full(len(seeds), float(at.iloc[0])), seeds["error"].to_numpy(float), linestyle="none",
+                    marker=st["marker"], markersize=4, markerfacecolor="none", markeredgecolor=st["color"],
+                    alpha=0.8)
+        pair = s["checks"][m].get("cfa_difference_deviation")
+        if pair and pair > 0 and len(at):
+            ax.plot([float(at.iloc[0]) * 1.12], [pair], linestyle="none", marker="*", markersize=10,
+                    color=st["color"], markeredgecolor="#000000", markeredgewidth=0.4)
+        spread = s["checks"][m].get("cfa_spread")
+        gap = s["checks"][m].get("cfa_smallest_gap")
+        if spread and spread > 0:
+            ax.axhline(spread, color=st["color"], linestyle="--", linewidth=1)
+        if gap and gap > 0:
+            ax.axhline(gap, color=st["color"], linestyle=":", linewidth=1)
+    if len(headline) and len(df[df["stage"] == "render"]):
+        sub = df[(df["stage"] == "render") & (df["quantity"] == headline[0])].sort_values("quality")
+        _label_points(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
+                      sub["quality"].to_numpy(float), "spp", below=True)
+    if p.compare_cfas:
+        names = ", ".join(p.compare_cfas)
+        ax.plot([], [], color="#555555", linestyle="--", linewidth=1,
+                label=f"dashed, metric's colour: spread between {names} ({p.demosaic})")
+        ax.plot([], [], color="#555555", linestyle=":", linewidth=1,
+                label="dotted: smallest gap between two of them")
+        if (df["stage"] == "cfa-pairs").any():
+            ax.plot([], [], linestyle="none", marker="*", markersize=10, color="#999999", markeredgecolor="#000000",
+                    markeredgewidth=0.4, label="star: rms change of the differences between those CFAs "
+                                               "at the default (what can reorder them)")
+    noise = "sensor noise off" if p.render_noise == "off" else f"sensor noise '{p.render_noise}'"
+    title = f"(b) render: metric deviation ({noise})" + _zero_note(df, "render", headline)
+    _finish(ax, "render wall time (s)", "|metric - reference's| (metric's unit)", title, lows,
+            seeds_note=bool((df["stage"] == "render-seeds").any()))
+
+
+def _panel_pocs(ax, p, s, df, headline) -> None:
+    """(c) metric deviation against POCS processing time."""
+    lows = []
+    pdflt = s["pocs_default"]
+    for i, m in enumerate(headline):
+        sub = df[(df["stage"] == "pocs") & (df["quantity"] == m)].sort_values("quality")
+        info, unit, st = _metric_style(i, m, s)
+        lows += _draw_series(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
+                             sub["quality"].to_numpy(float), None, st,
+                             f"{info.short} [{unit}]: {_rates_label(s['rates']['pocs'][m], 'iteration')}")
+        pspread = s.get("pocs_checks", {}).get(m, {}).get("cfa_spread")
+        if pspread and pspread > 0:
+            ax.axhline(pspread, color=st["color"], linestyle="--", linewidth=1)
+        dev = pdflt["deviation"][m]
+        if dev > 0:
+            ax.plot([pdflt["wall_s"]], [dev], linestyle="none", marker="o", markersize=13, markerfacecolor="none",
+                    markeredgecolor=st["color"], markeredgewidth=1.4)
+    if headline:
+        sub = df[(df["stage"] == "pocs") & (df["quantity"] == headline[0])].sort_values("quality")
+        _label_points(ax, sub["wall_s"].to_numpy(float), sub["error"].to_numpy(float),
+                      sub["quality"].to_numpy(float), "it")
+    if p.compare_cfas:
+        ax.plot([], [], color="#555555", linestyle="--", linewidth=1,
+                label=f"dashed, metric's colour: spread between {', '.join(p.compare_cfas)} (pocs)")
+    ax.axvline(pdflt["wall_s"], color="#555555", linestyle=":", linewidth=1,
+               label=f"default: {p.pocs_default_iterations} iterations, tolerance 1e-3 "
+                     f"(stopped at {pdflt['iterations_done']}; ringed)")
+    _finish(ax, "processing wall time (s)", "|metric - converged POCS| (metric's unit)",
+            f"(c) processing: POCS iterations vs {p.pocs_reference_iterations} (tolerance 0)"
+            + _zero_note(df, "pocs", headline), lows)
 
 
 def _zero_note(df, stage: str, metrics) -> str:

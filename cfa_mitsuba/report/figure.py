@@ -176,11 +176,11 @@ _NOT_RUN = {
 def no_details(section, title, res, metric, what):
     """The Absent note of a detail figure: the study ran no scene for
     ``metric``, or its details files are missing."""
-    from .style import metric_info
+    from .style import metric_display
 
     scene = res.scene_for(metric)
     if scene is None:
-        return Absent(section, title, _NOT_RUN.get(metric, f"a scene for {metric_info(metric).short}"),
+        return Absent(section, title, _NOT_RUN.get(metric, f"a scene for {metric_display(metric).short}"),
                       not_in_study=True)
     return Absent(section, title, f"'{metric}' was measured on {scene!r} but its details "
                   f"(details/{scene}/<cfa>/<demosaic>/L*.json) are missing: rerun the study to rebuild them")

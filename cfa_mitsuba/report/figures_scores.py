@@ -12,7 +12,7 @@ import numpy as np
 
 from .figure import Absent, ReportFigure, cfa_legend, grid_shape, label_sweep_panel, legend_rows, panel_grid
 from .results import SCORED_METRICS, Results
-from .style import cfa_styles, demosaic_styles, metric_info
+from .style import cfa_styles, demosaic_styles, metric_display
 
 
 def _score_grid(res: Results):
@@ -81,7 +81,7 @@ class _Radar:
             ax.plot([0, c], [0, s_], color="#dddddd", linewidth=0.6, zorder=0)
             ha = "left" if c > 0.15 else ("right" if c < -0.15 else "center")
             va = "bottom" if s_ > 0.15 else ("top" if s_ < -0.15 else "center")
-            ax.text(1.16 * c, 1.16 * s_, metric_info(m).short, fontsize=label_size, ha=ha, va=va)
+            ax.text(1.16 * c, 1.16 * s_, metric_display(m).short, fontsize=label_size, ha=ha, va=va)
         ax.text(0, lim * 1.02, title, ha="center", va="bottom", fontsize=9.5, fontweight="bold")
 
     def band(self, low, high, color):
@@ -291,7 +291,7 @@ def luminance_sweep(res: Results):
                            bottom=0.5, wspace=0.15, hspace=0.35, width=6.0)
     cfas_drawn = []
     for r, (scene, metric) in enumerate(pairs):
-        info = metric_info(metric)
+        info = metric_display(metric)
         g = m[(m["scene"] == scene) & (m["metric"] == metric)]
         lums = sorted(g["luminance"].unique())
         share = None

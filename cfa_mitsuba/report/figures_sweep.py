@@ -16,7 +16,7 @@ import numpy as np
 from ..study.conditions import AXES, AXIS_UNITS
 from .figure import Absent, ReportFigure, cfa_legend, label_sweep_panel, legend_rows, panel_grid
 from .results import SCORED_METRICS, Results
-from .style import cfa_styles, metric_info
+from .style import cfa_styles, metric_display
 
 _LABELS = {"f_number": "f-number", "pixel_pitch_um": "pixel pitch", "exposure": "exposure time",
            "read_noise_e": "read noise", "seed": "noise seed (realisation)", "spectra": "spectra set",
@@ -29,7 +29,7 @@ def axis_rows(res: Results, axis: str):
     m = res.all_metrics if res.all_metrics is not None else res.metrics
     if axis not in m.columns:
         return m.iloc[0:0]
-    others = [a for a in AXES[1:] if a != axis and a in m.columns]
+    others = [a for a in list(AXES)[1:] if a != axis and a in m.columns]
     base = res.metrics
     keep = np.zeros(len(m), dtype=bool)
     for (scene, cfa), g in base.groupby(["scene", "cfa"], sort=False):
@@ -62,7 +62,7 @@ def axis_sweep(res: Results, axis: str):
     drawn = []
     unit = AXIS_UNITS.get(axis, "")
     for r, (scene, metric) in enumerate(pairs):
-        info = metric_info(metric)
+        info = metric_display(metric)
         g = m[(m["scene"] == scene) & (m["metric"] == metric)]
         levels = sorted(g[axis].astype(float).unique()) if numeric else list(dict.fromkeys(g[axis].astype(str)))
         share = None

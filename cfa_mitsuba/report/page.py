@@ -16,7 +16,7 @@ from pathlib import Path
 
 from .._version import __version__
 from .results import Results
-from .style import cfa_styles, metric_info
+from .style import cfa_styles, metric_display
 
 #: Report sections in page order: (id, heading, paper figures, intro).
 SECTIONS = (
@@ -191,7 +191,7 @@ def _summary(res: Results, facts: dict, not_run: list) -> str:
         if isinstance(s, dict):
             r = s.get("render") or {}
             size = f" {r['width']}×{r['height']}" if r.get("width") and r.get("height") else ""
-            mets = ", ".join(metric_info(m).short for m in s.get("metrics") or [])
+            mets = ", ".join(metric_display(m).short for m in s.get("metrics") or [])
             src = f", {Path(str(s['file'])).name}" if s.get("file") else ""
             scenes.append(f"{s.get('name')}{size}{src} ({mets})" if mets else f"{s.get('name')}{size}{src}")
     if not scenes:
@@ -204,7 +204,7 @@ def _summary(res: Results, facts: dict, not_run: list) -> str:
     sweeps = []
     for sw in cfg.get("sweeps") or []:
         if isinstance(sw, dict):
-            sweeps.append(f"{', '.join(metric_info(m).short for m in sw.get('metrics') or [])} on "
+            sweeps.append(f"{', '.join(metric_display(m).short for m in sw.get('metrics') or [])} on "
                           f"{sw.get('scene')} at {', '.join(f'{float(v):g}' for v in sw.get('luminances') or [])}"
                           " cd/m²")
     if sweeps:
@@ -283,6 +283,29 @@ def render_page(res: Results, *, figures: list, absents: list, embeds: dict, tab
     absents = [a for a in absents if a.section not in skipped]
     body.append(f'<section id="summary"><h2>Summary</h2>{_summary(res, facts, not_run)}</section>')
 
+    body.append(_tables_section(res, tables))
+    body.append(_ranges_section(res, tables, facts))
+    n_tabs = _figure_sections(body, nav, figures, absents, embeds)
+    nav.append(("conventions", "Units"))
+    body.append(f'<section id="conventions"><h2>Units and conventions</h2>{_conventions(res)}</section>')
+
+    nav_html = "".join(f'<a href="#{k}">{_e(v)}</a>' for k, v in nav)
+    css = _CSS.replace("/*TAB_RULES*/", _tab_rules(n_tabs))
+    sub = _e(desc) if desc else "Bae 2020 (PLoS ONE 15(5): e0232583) image-quality metric system, re-created"
+    return (
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+        "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
+        f"<title>{_e(title)}</title><style>{css}</style></head><body>"
+        f"<header><h1>{_e(title)}</h1><p>{sub}</p></header>"
+        f"<nav>{nav_html}</nav><main>{''.join(body)}</main>"
+        f"<footer>cfa-mitsuba {_e(__version__)} · built from <code>{_e(res.root.name)}/</code> "
+        "(metrics.csv, scores.csv, details/) · metric system of Bae 2020, PLoS ONE 15(5): e0232583"
+        "</footer></body></html>\n"
+    )
+
+
+def _tables_section(res: Results, tables: dict) -> str:
+    """Tables 1-3 and the unscored and sweep tables."""
     t = ['<section id="tables"><h2>Tables</h2>']
     lum = res.primary_luminance
     t.append('<h3 id="table1">Table 1. Mean colour error over the 24 patches and lightness error of the 6 grey '
@@ -325,8 +348,11 @@ def render_page(res: Results, *, figures: list, absents: list, embeds: dict, tab
         t.append('<details class="more"><summary>The luminance sweep\'s values</summary>')
         t.append(f'<div class="tablewrap">{tables["sweep"]}</div></details>')
     t.append("</section>")
-    body.append("".join(t))
+    return "".join(t)
 
+
+def _ranges_section(res: Results, tables: dict, facts: dict) -> str:
+    """The score ranges, the policies compared, the values outside their range."""
     policy_text = {
         "paper": "the paper's printed ranges, with the MSP range moved to true cycles per degree for this "
                  "study's chirp and the MTF50 range to its pixel pitch",
@@ -356,8 +382,12 @@ def render_page(res: Results, *, figures: list, absents: list, embeds: dict, tab
         r.append('<p class="note">Values outside their range:</p><ul class="tight">'
                  + "".join(f"<li>{_e(x)}</li>" for x in facts["oor_lines"]) + "</ul>")
     r.append("</section>")
-    body.append("".join(r))
+    return "".join(r)
 
+
+def _figure_sections(body: list, nav: list, figures: list, absents: list, embeds: dict) -> int:
+    """One section per figure group (appended to ``body`` and ``nav``);
+    returns the most tabs a figure group needs."""
     n_tabs = 1
     for sec, heading, paper, intro in SECTIONS:
         items = [f for f in figures if f.section == sec]
@@ -378,19 +408,4 @@ def render_page(res: Results, *, figures: list, absents: list, embeds: dict, tab
         n_tabs = max([n_tabs] + list(groups.values()))
         s.append("</section>")
         body.append("".join(s))
-    nav.append(("conventions", "Units"))
-    body.append(f'<section id="conventions"><h2>Units and conventions</h2>{_conventions(res)}</section>')
-
-    nav_html = "".join(f'<a href="#{k}">{_e(v)}</a>' for k, v in nav)
-    css = _CSS.replace("/*TAB_RULES*/", _tab_rules(n_tabs))
-    sub = _e(desc) if desc else "Bae 2020 (PLoS ONE 15(5): e0232583) image-quality metric system, re-created"
-    return (
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-        "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-        f"<title>{_e(title)}</title><style>{css}</style></head><body>"
-        f"<header><h1>{_e(title)}</h1><p>{sub}</p></header>"
-        f"<nav>{nav_html}</nav><main>{''.join(body)}</main>"
-        f"<footer>cfa-mitsuba {_e(__version__)} · built from <code>{_e(res.root.name)}/</code> "
-        "(metrics.csv, scores.csv, details/) · metric system of Bae 2020, PLoS ONE 15(5): e0232583"
-        "</footer></body></html>\n"
-    )
+    return n_tabs

@@ -24,7 +24,6 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
 
 from ..errors import CfaMitsubaError
 from ..metrics import get_metric
@@ -139,27 +138,17 @@ def _section(paper_metric: str, heading: str, metrics, runs, paper, iset) -> lis
     return out
 
 
-def _fit_only(iset) -> list[str]:
+def _fit_only(iset, runs) -> list[str]:
     """The colour fit alone (no optics, mosaic or noise) against ISETCam's:
-    a check of the *-raw filter sets and the MCC fit that needs no render."""
-    from .. import spectra
-    from ..colorimetry import xyz_to_lab
-    from ..isp.colour import colour_fit_reflectances, electrons_per_radiance_of, fit_colour_matrix
-    from ..sensor import get_cfa
-
-    wl = spectra.DEFAULT_WAVELENGTHS
-    d65 = spectra.illuminant("D65", wl)
-    refl = colour_fit_reflectances("mcc", wl)
-    white = spectra.xyz_from_radiance(d65, wl)
+    a check of the *-raw filter sets and the MCC fit that needs no render,
+    read from the ISETCam-procedure run's cfas.json (study/cfa_facts.py)."""
+    facts = next((run.cfa_facts for run in runs if run.key == "isetcam" and run.cfa_facts), {})
     rows = []
-    for cfa, raw in (("rgbw1", "isetcam-rgbw-raw"), ("cmy1", "isetcam-cmy-raw"), ("bayer", "isetcam-rgb-raw")):
-        epr = electrons_per_radiance_of(get_cfa(cfa, spectra=raw).sensitivities(wl), wl)
-        fit = fit_colour_matrix(epr, d65, wl, white_preserving=False, reflectances=refl)
-        cam = (refl * d65) @ epr.T / (epr @ d65)
-        ref = spectra.xyz_from_radiance(refl * d65, wl)
-        de = float(np.linalg.norm(xyz_to_lab(fit.apply(cam), white) - xyz_to_lab(ref, white), axis=1).mean())
+    for cfa in ("rgbw1", "cmy1", "bayer"):
+        f = facts.get(cfa, {})
         sel = iset[(iset["cfa"] == cfa) & (iset["metric"] == "fit-only-e76")]
-        rows.append((cfa_label(cfa), raw, sel["value"].iloc[0] if len(sel) else "-", f"{de:.2f}"))
+        ours = f"{f['mcc_fit_de76']:.2f}" if "mcc_fit_de76" in f else "-"
+        rows.append((cfa_label(cfa), f.get("spectra", "-"), sel["value"].iloc[0] if len(sel) else "-", ours))
     return (["The colour fit alone, without optics, mosaic or noise (the MCC's responses under D65 -> "
              "least-squares matrix on the same 24 patches -> XYZ, mean dE*ab against the chart): "
              "a check of the `*-raw` filter sets and the MCC fit that needs no render. "
@@ -261,7 +250,7 @@ def comparison_markdown(runs) -> str:
     for metric, heading, ours in SECTIONS:
         out += _section(metric, heading, ours, runs, paper, iset)
         if metric == "delta-e76":
-            out += _fit_only(iset)
+            out += _fit_only(iset, runs)
     out += _table3(runs, paper)
     out += ["## Not compared", "",
             "- Table 2 beyond the cells placed above: the text extraction of the PDF drops the best cell of "

@@ -20,7 +20,7 @@ __all__ = ["PAPER_DIR", "Run", "load_run", "paper_values", "isetcam_values", "cl
 
 import json
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -79,6 +79,7 @@ class Run:
     scores: object
     config: dict
     timing: dict
+    cfa_facts: dict = field(default_factory=dict)
 
     def value(self, metric: str, demosaic: str, cfa: str):
         """(value, ci_low, ci_high, unit) of one CFA, or None."""
@@ -141,7 +142,8 @@ def load_run(path, key: str, label: str) -> Run:
         f = p / name
         return json.loads(f.read_text()) if f.is_file() else {}
 
-    return Run(key, label, p, base.reset_index(drop=True), scores, read("config.json"), read("timing.json"))
+    return Run(key, label, p, base.reset_index(drop=True), scores, read("config.json"), read("timing.json"),
+               read("cfas.json"))
 
 
 def _group(run: Run, metric: str, demosaic: str, cfas) -> list[tuple]:

@@ -9,6 +9,7 @@ missing; :class:`Results` says what is absent rather than failing.
     metrics.csv   tidy rows: scene, cfa, demosaic, luminance, metric, value, unit
     scores.csv    the scored rows with normalised scores and ranks (optional)
     ranges.json   {metric: [worst, best]} (optional)
+    cfas.json     each CFA's tile, channels, spectra set (optional; study/cfa_facts.py)
     timing.json   where the time went (optional; may predate metrics.csv)
     config.json   the validated config (optional)
     details/<scene>/<cfa>/<demosaic>/L<lum>.json|.png|.scielab.npy
@@ -27,15 +28,21 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CfaMitsubaError
-from ..metrics import METRICS, NATURAL, scored_metrics
+from ..metrics import scored_metrics
 from ..study.conditions import AXES
 from ..study.tasks import safe_label
 
 #: The paper's eight metrics in the order of its tables and radar plots (the metric records).
 SCORED_METRICS = scored_metrics()
-#: The built-in scene that feeds each metric (a user scene may feed the image metrics).
-METRIC_SCENES = {r.name: ("puppy" if NATURAL in r.scenes else r.scenes[0]) for r in METRICS.values()}
 _COLUMNS = ("scene", "cfa", "demosaic", "luminance", "metric", "value", "unit")
+
+
+def preferred_scene(scenes: list, config: dict | None) -> str:
+    """Of the scenes that measured a metric, the one scored (as the runner
+    picks it): the first built-in scene of the study's config (a scene
+    without a ``file``), else the first."""
+    builtin = [s.get("name") for s in (config or {}).get("scenes") or [] if isinstance(s, dict) and not s.get("file")]
+    return next((s for s in scenes if s in builtin), scenes[0])
 
 
 def lum_tag(luminance: float) -> str:
@@ -75,6 +82,9 @@ class Results:
     primary_luminance: float | None
     scored_here: bool = False
     notes: list = field(default_factory=list)
+    #: {CFA label: its tile, channels, spectra set, ...} from cfas.json
+    #: (study/cfa_facts.py); empty for results written before it existed
+    cfa_facts: dict = field(default_factory=dict)
     #: every row of metrics.csv, sweeps of any axis included (``metrics``
     #: keeps the rows at the study's own values of every axis but luminance)
     all_metrics: object = None
@@ -105,9 +115,7 @@ class Results:
         rows = self.metrics[self.metrics["metric"] == metric]
         if not len(rows):
             return None
-        scenes = list(dict.fromkeys(rows["scene"]))
-        want = METRIC_SCENES.get(metric)
-        return want if want in scenes else scenes[0]
+        return preferred_scene(list(dict.fromkeys(rows["scene"])), self.config)
 
     def value(self, scene, cfa, demosaic, luminance, metric) -> float | None:
         m = self._index()
@@ -212,7 +220,7 @@ def split_sweeps(metrics):
     first part when its scene has a base row (``base`` column) with the same
     values of those axes (for its CFA: the spectra set is a CFA's own); tables
     without axis columns are all base."""
-    others = [a for a in AXES[1:] if a in metrics.columns]
+    others = [a for a in list(AXES)[1:] if a in metrics.columns]
     if not others or "base" not in metrics.columns:
         return metrics, {}
     base_flag = metrics["base"].astype(str).str.lower().isin(("true", "1"))
@@ -251,7 +259,7 @@ def _base_luminances(metrics, config: dict, scores) -> list[float]:
     return lums
 
 
-def _score_here(metrics, base, ranges):
+def _score_here(metrics, base, ranges, config):
     """Scores for a results directory without scores.csv (e.g. the output of
     ``cfa-mitsuba evaluate``): the eight metrics at the base luminances, one
     scene per metric, with the given or the default ranges."""
@@ -262,9 +270,7 @@ def _score_here(metrics, base, ranges):
     df = metrics[metrics["metric"].isin(SCORED_METRICS) & metrics["luminance"].isin(base)]
     keep = []
     for name, group in df.groupby("metric", sort=False):
-        scenes = list(dict.fromkeys(group["scene"]))
-        want = METRIC_SCENES.get(name)
-        keep.append(group[group["scene"] == (want if want in scenes else scenes[0])])
+        keep.append(group[group["scene"] == preferred_scene(list(dict.fromkeys(group["scene"])), config)])
     if not keep:
         return None
     return score(pd.concat(keep).reset_index(drop=True), ranges or None)
@@ -317,7 +323,7 @@ def load_results(out_dir) -> Results:
     base = _base_luminances(metrics, config, scores)
     if scores is None and len(metrics):
         try:
-            scores = _score_here(metrics, base, ranges)
+            scores = _score_here(metrics, base, ranges, config)
         except CfaMitsubaError as exc:
             notes.append(f"no scores: {exc}")
             scores = None
@@ -356,4 +362,14 @@ def load_results(out_dir) -> Results:
                    cfas=cfas, demosaics=demosaics, scenes=scenes, base_luminances=base,
                    primary_luminance=primary, scored_here=scored_here, notes=notes, all_metrics=all_metrics,
                    swept_axes=swept, range_policy=policy if isinstance(policy, str) else None,
-                   constant_metrics=constant, policies=_read_policies(root / "policies.csv"))
+                   constant_metrics=constant, policies=_read_policies(root / "policies.csv"),
+                   cfa_facts=_cfa_facts(root / "cfas.json"))
+
+
+def _cfa_facts(path: Path) -> dict:
+    """cfas.json as {label: record}, keeping only well-formed records (a tile of names)."""
+    raw = _read_json(path)
+    if not isinstance(raw, dict):
+        return {}
+    return {str(k): v for k, v in raw.items() if isinstance(v, dict) and isinstance(v.get("pattern"), list)
+            and v["pattern"] and all(isinstance(r, list) for r in v["pattern"])}

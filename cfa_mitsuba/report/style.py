@@ -12,7 +12,7 @@ dashed line.
 
 from __future__ import annotations
 
-__all__ = ["MetricInfo", "metric_info", "cfa_styles", "demosaic_styles", "fmt_value"]
+__all__ = ["MetricDisplay", "metric_display", "cfa_styles", "demosaic_styles", "fmt_value"]
 
 from dataclasses import dataclass
 
@@ -27,9 +27,9 @@ _DEMOSAIC_LINES = ("-", "--", "-.", ":", (0, (5, 1, 1, 1)), (0, (3, 1, 1, 1, 1, 
 
 
 @dataclass(frozen=True)
-class MetricInfo:
+class MetricDisplay:
     """How a metric is named, shown and read: a view of its record
-    (:mod:`cfa_mitsuba.metrics.records`) with the unit as typeset."""
+    (:mod:`cfa_mitsuba.metrics.record`) with the unit as typeset."""
 
     short: str          # column / axis label
     long: str           # what it measures
@@ -43,14 +43,14 @@ class MetricInfo:
 _DISPLAY_UNITS = {"dE00": "ΔE00", "dEab": "ΔE*ab", "dE76": "ΔE*ab", "L*": "ΔL*"}
 
 
-def metric_info(name: str) -> MetricInfo:
+def metric_display(name: str) -> MetricDisplay:
     """The display info of a metric, from its record; an unknown metric gets a plain one."""
     from ..metrics import METRICS
 
     r = METRICS.get(name)
     if r is None:
-        return MetricInfo(name, name, "", 3, True, "—")
-    return MetricInfo(r.label, r.description, _DISPLAY_UNITS.get(r.unit, r.unit), r.decimals, r.higher_is_better,
+        return MetricDisplay(name, name, "", 3, True, "—")
+    return MetricDisplay(r.label, r.description, _DISPLAY_UNITS.get(r.unit, r.unit), r.decimals, r.higher_is_better,
                       r.paper)
 
 
@@ -62,7 +62,7 @@ def fmt_value(metric: str, value) -> str:
         return "—"
     if v != v:
         return "—"
-    return f"{v:.{metric_info(metric).decimals}f}"
+    return f"{v:.{metric_display(metric).decimals}f}"
 
 
 def cfa_styles(cfas) -> dict:

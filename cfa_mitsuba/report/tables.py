@@ -21,7 +21,7 @@ import html
 import numpy as np
 
 from .results import SCORED_METRICS, Results
-from .style import cfa_styles, fmt_value, metric_info
+from .style import cfa_styles, fmt_value, metric_display
 
 
 def _e(text) -> str:
@@ -50,11 +50,11 @@ def _direction(metric: str, res: Results) -> bool:
     r = res.ranges.get(metric)
     if r is not None and r[0] != r[1]:
         return r[1] > r[0]
-    return metric_info(metric).higher_better
+    return metric_display(metric).higher_better
 
 
 def _metric_label(metric: str, res: Results) -> str:
-    info = metric_info(metric)
+    info = metric_display(metric)
     arrow = "↑" if _direction(metric, res) else "↓"
     unit = f' <span class="unit">({_e(info.unit)})</span>' if info.unit and info.unit not in info.short else ""
     return f'<span title="{_e(info.long)}">{_e(info.short)}</span>{unit} <span class="dir">{arrow}</span>'
@@ -86,7 +86,7 @@ def table1(res: Results) -> str | None:
         present = [m for m in rows_metrics if any(res.value(scene, c, d, lum, m) is not None for c in cfas)]
         for i, m in enumerate(present):
             vals = {c: res.value(scene, c, d, lum, m) for c in cfas}
-            best = _best(vals, higher=False, decimals=metric_info(m).decimals)
+            best = _best(vals, higher=False, decimals=metric_display(m).decimals)
             row = [_tr(i)]
             if i == 0:
                 row.append(f'<th rowspan="{len(present)}" class="rowgroup">{_e(d)}</th>')
@@ -128,7 +128,7 @@ def table2(res: Results, luminance: float) -> str | None:
             row.append(f'<th class="metric">{_metric_label(m, res)}</th>')
             # the best value, not metric_rank 1: clipped scores tie at 1 for every value beyond the best end
             best = _best({c: float(by[(c, d, m)].value) for c in cfas if (c, d, m) in by}, _direction(m, res),
-                         metric_info(m).decimals)
+                         metric_display(m).decimals)
             for c in cfas:
                 r = by.get((c, d, m))
                 if r is None:
@@ -175,7 +175,7 @@ def _table2_from_metrics(res: Results, luminance: float) -> str | None:
         for i, k in enumerate(present):
             scene = res.scene_for(k)
             vals = {c: res.value(scene, c, d, luminance, k) for c in cfas}
-            best = _best(vals, _direction(k, res), metric_info(k).decimals)
+            best = _best(vals, _direction(k, res), metric_display(k).decimals)
             row = [_tr(i)]
             if i == 0:
                 row.append(f'<th rowspan="{len(present)}" class="rowgroup">{_e(d)}</th>')
@@ -401,7 +401,7 @@ def ranges_table(res: Results) -> str | None:
             klass = ' class="warn"' if n_oor else ""
         else:
             meas, oor, klass = "not measured", "—", ""
-        info = metric_info(m)
+        info = metric_display(m)
         unit = f" {info.unit}" if info.unit else ""
         w, b = (fmt_value(m, r[0]) + unit, fmt_value(m, r[1]) + unit) if r else ("—", "—")
         out.append(f'<tr><th class="metric">{_metric_label(m, res)}</th>'

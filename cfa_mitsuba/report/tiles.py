@@ -60,18 +60,8 @@ def draw_tile(ax, pattern, x0: float, y0: float, size: float, block: int = 1) ->
                                        block * cell, fill=False, edgecolor="black", linewidth=1.0))
 
 
-def _cfa_objects(res: Results) -> dict:
-    """{label: CFA} for the study's CFAs that can be rebuilt (names, TOML files)."""
-    from ..sensor import get_cfa
-
-    out = {}
-    for c in [str(c) for c in res.config.get("cfas") or []] + list(res.cfas):
-        try:
-            cfa = get_cfa(c)
-        except Exception:  # a TOML moved since the study: its tile is not drawn
-            continue
-        out.setdefault(cfa.name, cfa)
-    return out
+def _block_size(facts: dict) -> int:
+    return int(facts.get("block") or 1)
 
 
 def _ranges(res: Results) -> tuple[dict, set]:
@@ -118,18 +108,16 @@ def tiles_by_family(res: Results):
     """The figure: CFAs grouped by family and read-out mode, tile beside scores."""
     import matplotlib.pyplot as plt
 
-    from ..sensor.readout import binned_pattern, block_size
-
     title = "CFAs by family and read-out mode"
     scores = _scores(res)
     if not scores:
         return Absent("scores", title, "scored metrics at the primary luminance")
-    cfas = _cfa_objects(res)
+    cfas = res.cfa_facts  # cfas.json: what the study recorded of each CFA
     families: dict = {}
     for cfa in res.cfas:
         for readout in _READOUT_ORDER:
             if (cfa, readout) in scores:
-                fam = family_of(cfas[cfa].channels) if cfa in cfas else "other"
+                fam = family_of(cfas[cfa]["channels"]) if cfa in cfas else "other"
                 families.setdefault(fam, []).append((cfa, readout))
     dems = [d for d in res.demosaics if any(d in by for by in scores.values())]
     dst = demosaic_styles(res.demosaics)
@@ -144,10 +132,10 @@ def tiles_by_family(res: Results):
         for cfa, readout in entries:
             obj = cfas.get(cfa)
             if obj is not None:
-                n = block_size(obj.pattern)
-                draw_tile(ax, obj.pattern, 0.05, y - 0.92, 0.84, block=n if readout == "bin" else 1)
-                if readout in ("remosaic", "bin") and n > 1:
-                    draw_tile(ax, binned_pattern(obj.pattern), 1.0, y - 0.7, 0.44)
+                n = _block_size(obj)
+                draw_tile(ax, obj["pattern"], 0.05, y - 0.92, 0.84, block=n if readout == "bin" else 1)
+                if readout in ("remosaic", "bin") and n > 1 and obj.get("binned_pattern"):
+                    draw_tile(ax, obj["binned_pattern"], 1.0, y - 0.7, 0.44)
             label = cfa if readout == "full" else (f"{cfa}\nremosaic to Bayer" if readout == "remosaic"
                                                    else f"{cfa}\nbinned {n}×{n}" if obj is not None
                                                    else f"{cfa}\n{readout}")

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .axes import AXES
 from .conditions import Condition
 
 #: Set to 1 to recompute the optical image for every capture (what the
@@ -40,7 +41,8 @@ class ChainSettings:
     'off', 'shot' or 'all'; ``reference_luminance_cd_m2`` is where 'auto'
     exposure is chosen (None: at each capture's own luminance, ISETCam's
     plain auto exposure); ``isp`` the processing options (white balance,
-    white preserving, pocs_iterations) as sorted (key, value) pairs;
+    white preserving, ...) as sorted (key, value) pairs; ``demosaic_options``
+    each method's own options (``[demosaics.<name>]``);
     ``mean_match`` scales each camera output to the ideal's mean (ISETCam);
     ``spectra_sets`` maps a CFA's own spectra set to the set used instead
     (``[sensor.spectra_sets]``); ``metric_options`` the keyword options of
@@ -55,6 +57,7 @@ class ChainSettings:
     mean_match: bool = True
     spectra_sets: tuple = ()
     metric_options: tuple = ()
+    demosaic_options: tuple = ()
 
     def __post_init__(self):
         from ..optics import OpticsParams
@@ -68,9 +71,10 @@ class ChainSettings:
             object.__setattr__(self, "isp", tuple(sorted(self.isp.items())))
         if isinstance(self.spectra_sets, dict):
             object.__setattr__(self, "spectra_sets", tuple(sorted(self.spectra_sets.items())))
-        if isinstance(self.metric_options, dict):
-            object.__setattr__(self, "metric_options", tuple(sorted(
-                (m, tuple(sorted(o.items()))) for m, o in self.metric_options.items())))
+        for name in ("metric_options", "demosaic_options"):  # {name: {option: value}} as sorted pairs
+            value = getattr(self, name)
+            if isinstance(value, dict):
+                object.__setattr__(self, name, tuple(sorted((m, tuple(sorted(o.items()))) for m, o in value.items())))
 
     def options_of_metrics(self) -> dict:
         """{metric: {keyword: value}}: the options every evaluation passes."""
@@ -89,25 +93,40 @@ class ChainSettings:
         return dict(self.spectra_sets).get(get_cfa(cfa).spectra)
 
     def base_condition(self, *, luminance: float = 100.0, exposure="auto", seed: int = 0) -> Condition:
-        """The condition these settings describe (optics f-number, sensor
-        pitch and read noise) at ``luminance``."""
-        return Condition(luminance=float(luminance), f_number=self.optics.f_number,
-                         pixel_pitch_um=self.sensor.pixel_pitch_um, exposure=exposure,
-                         read_noise_e=self.sensor.read_noise_e, seed=int(seed), readout=self.sensor.readout)
+        """The condition these settings describe at ``luminance``: every
+        optics, sensor, ISP and metric axis at these settings' value."""
+        given = {"luminance": float(luminance), "exposure": exposure, "seed": int(seed)}
+        return Condition(**{name: given[name] if name in given else axis.value_in(self)
+                            for name, axis in AXES.items()})
+
+    def _targets(self, cond: Condition, where: str) -> dict:
+        """{field: value} of the condition's axes that apply to ``where``."""
+        return {a.field: getattr(cond, name) for name, a in AXES.items() if a.applies_to == where}
 
     def for_condition(self, cond: Condition):
         """(OpticsParams, SensorParams) with the condition's values applied."""
-        optics = replace(self.optics, f_number=cond.f_number)
-        sensor = self.sensor.with_(pixel_pitch_um=cond.pixel_pitch_um, read_noise_e=cond.read_noise_e,
-                                   readout=cond.readout)
+        optics = replace(self.optics, **self._targets(cond, "optics"))
+        sensor = self.sensor.with_(**self._targets(cond, "sensor"))
         return optics, sensor
 
-    def isp_options(self, method: str) -> dict:
-        opts = dict(self.isp)
-        iterations = opts.pop("pocs_iterations", None)
-        if method == "pocs" and iterations is not None:
-            opts["iterations"] = iterations
+    def isp_options(self, method: str, cond: Condition | None = None) -> dict:
+        """The keywords of :func:`cfa_mitsuba.isp.process` for ``method``: the
+        ``[isp]`` options, the method's own (``[demosaics.<name>]``) and the
+        condition's ISP axes."""
+        opts = {**dict(self.isp), **dict(dict(self.demosaic_options).get(method, ()))}
+        if cond is not None:
+            opts.update(self._targets(cond, "isp"))
         return opts
+
+    def metric_options_for(self, cond: Condition | None = None) -> dict:
+        """{metric: {option: value}}: the ``[metrics.<name>]`` options with the
+        condition's metric axes (``field`` = ``'metric.option'``) applied."""
+        out = self.options_of_metrics()
+        if cond is not None:
+            for dotted, v in self._targets(cond, "metric").items():
+                metric, option = dotted.split(".", 1)
+                out.setdefault(metric, {})[option] = v
+        return out
 
 
 @dataclass
@@ -212,10 +231,10 @@ class CameraChain:
                            noise=noise or self.settings.noise, seed=seed, sensor=sensor,
                            reference_luminance_cd_m2=self.settings.reference_luminance_cd_m2)
 
-    def process(self, raw, method: str, **options):
+    def process(self, raw, method: str, cond: Condition | None = None, **options):
         from ..isp import process
 
-        opts = {**self.settings.isp_options(method), **options}
+        opts = {**self.settings.isp_options(method, cond), **options}
         return self._timed("process_s", process, raw, method, **opts)
 
     def inputs(self, ideal, cam_xyz, cond: Condition):
@@ -239,7 +258,7 @@ class CameraChain:
             cam, scale = m.mean_match(cam, ideal.xyz, return_scale=True)
         failures: list = []
         results = self._timed("metrics_s", m.evaluate_many, metric_names, self.inputs(ideal, cam, cond), failures,
-                              options=self.settings.options_of_metrics())
+                              options=self.settings.metric_options_for(cond))
         return results, failures, float(scale)
 
     def evaluate(self, scene_image, cfa, demosaics, metric_names, cond: Condition, seed: int, scene_key=None):
@@ -251,7 +270,7 @@ class CameraChain:
         raw = self.capture(oi, cfa, cond, seed)
         for method in demosaics:
             try:
-                out = self.process(raw, method)
+                out = self.process(raw, method, cond)
                 results, failures, scale = self.measure(ideal, out, metric_names, cond)
             except CfaMitsubaError as exc:
                 yield raw, ideal, method, exc

@@ -1,28 +1,14 @@
-"""Conditions: the named values a study can sweep, one column each in metrics.csv.
+"""Conditions: one value of every study axis (:mod:`.axes`) for one evaluation.
 
-A :class:`Condition` fixes every axis of :data:`AXES` for one evaluation:
-
-==================  ==========================================  ==============
-axis                what it sets                                default
-==================  ==========================================  ==============
-``luminance``       mean scene luminance (cd/m^2)               100
-``f_number``        the lens f-number: diffraction OTF *and*    the scene's
-                    the thin-lens defocus of a 3D render        own (sidecar)
-``pixel_pitch_um``  sensor pixel pitch (um)                     2.2
-``exposure``        ``"auto"`` (ISETCam's rule at the           ``"auto"``
-                    reference luminance) or seconds
-``read_noise_e``    read noise (electrons rms)                  6.2
-``seed``            the noise realisation (the study seed)      the study's
-``spectra``         the spectra set of every CFA's filters      each layout's
-                    (``cfa-mitsuba list spectra``)              family set
-``readout``         ``full``, ``remosaic`` or ``bin`` (the      ``[sensor]
-                    block layouts; others are read full)        readout``
-==================  ==========================================  ==============
-
-A config's base values come from ``[optics]``, ``[sensor]`` and the top-level
-``seed``; ``[[sweep]]`` tables cross lists of axis values (see
-:mod:`.config`).  Adding an axis is one entry in :data:`AXES` plus where the
-chain applies it (:meth:`cfa_mitsuba.study.chain.ChainSettings.for_condition`).
+A :class:`Condition` holds a value for each registered axis (``luminance``,
+``f_number``, ``pixel_pitch_um``, ``exposure``, ``read_noise_e``, ``seed``,
+``spectra``, ``readout``, and any axis a plug-in registers), read as
+attributes (``cond.luminance``).  An axis not given takes its default
+(:meth:`.axes.Axis.default_value`: the stage's own parameter default).  A
+config's base values come from ``[optics]``, ``[sensor]``, ``[isp]``,
+``[metrics.<name>]`` and the top-level ``seed``
+(:meth:`.chain.ChainSettings.base_condition`); ``[[sweep]]`` tables cross
+lists of axis values (:func:`cross`).
 """
 
 from __future__ import annotations
@@ -30,55 +16,97 @@ from __future__ import annotations
 __all__ = ["AXES", "AXIS_UNITS", "Condition", "cross"]
 
 import itertools
-from dataclasses import asdict, dataclass, replace
 
-#: The study axes, in metrics.csv column order.
-AXES = ("luminance", "f_number", "pixel_pitch_um", "exposure", "read_noise_e", "seed", "spectra", "readout")
-#: Units of the axes, for labels.
-AXIS_UNITS = {"luminance": "cd/m²", "f_number": "", "pixel_pitch_um": "µm", "exposure": "s",
-              "read_noise_e": "e⁻", "seed": "", "spectra": "", "readout": ""}
+from .axes import AXES, axis_unit
 
 
-@dataclass(frozen=True)
+class _Units(dict):
+    """{axis: unit} of the registered axes, read live (a registered axis shows)."""
+
+    def get(self, key, default=""):
+        return axis_unit(key) if key in AXES else default
+
+    def __getitem__(self, key):
+        return axis_unit(key)
+
+
+AXIS_UNITS = _Units()
+
+
 class Condition:
-    """The value of every axis for one evaluation.
+    """The value of every axis for one evaluation (immutable, hashable).
 
-    ``f_number`` None means the scene's own (a render's sidecar records the
-    aperture it modelled; charts: the optics default f/4).  ``exposure`` is
-    ``"auto"`` or a time in seconds.  ``spectra`` None means each CFA's
-    own spectra set (its family's filters).  ``readout`` is the sensor's
-    read-out mode (:data:`cfa_mitsuba.sensor.params.READOUT_MODES`).
+    ``Condition(100.0)`` or ``Condition(luminance=100.0, readout="bin")``;
+    an axis not named takes its default.  ``f_number`` None means the
+    scene's own (a render's sidecar records the aperture it modelled;
+    charts: the optics default f/4); ``exposure`` is ``"auto"`` or seconds;
+    ``spectra`` None means each CFA's own spectra set.
     """
 
-    luminance: float = 100.0
-    f_number: float | None = None
-    pixel_pitch_um: float = 2.2
-    exposure: object = "auto"
-    read_noise_e: float = 6.2
-    seed: int = 0
-    spectra: str | None = None
-    readout: str = "full"
+    __slots__ = ("_values",)
+
+    def __init__(self, luminance=None, **values):
+        if luminance is not None:
+            values["luminance"] = luminance
+        unknown = set(values) - set(AXES)
+        if unknown:
+            raise TypeError(f"Condition has no axis {sorted(unknown)} (axes: {', '.join(AXES)})")
+        full = {name: values[name] if name in values else axis.default_value() for name, axis in AXES.items()}
+        if isinstance(full["luminance"], int):
+            full["luminance"] = float(full["luminance"])
+        object.__setattr__(self, "_values", tuple(full.items()))
+
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        for k, v in object.__getattribute__(self, "_values"):
+            if k == name:
+                return v
+        if name in AXES:  # registered after this condition was made
+            return AXES[name].default_value()
+        raise AttributeError(f"Condition has no axis {name!r}")
+
+    def __setattr__(self, name, value):
+        raise AttributeError("a Condition is immutable; use with_()")
+
+    def __reduce__(self):
+        return (_rebuild, (self._values,))
+
+    def __eq__(self, other):
+        return isinstance(other, Condition) and self._values == other._values
+
+    def __hash__(self):
+        return hash(self._values)
+
+    def __repr__(self):
+        return "Condition(" + ", ".join(f"{k}={v!r}" for k, v in self._values) + ")"
 
     def with_(self, **changes) -> "Condition":
-        return replace(self, **changes)
+        return Condition(**{**dict(self._values), **changes})
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        return dict(self._values)
 
     def label(self, base: "Condition | None" = None) -> str:
         """A short text naming the axes that differ from ``base`` (all but
-        luminance when no base), e.g. ``L100 f8 seed2``; file-name safe."""
+        luminance when no base), e.g. ``L100_f8_seed2``; file-name safe."""
         parts = [f"L{self.luminance:g}"]
-        short = {"f_number": "f", "pixel_pitch_um": "p", "exposure": "t", "read_noise_e": "rn", "seed": "seed",
-                 "spectra": "s-", "readout": "ro-"}
-        for axis in AXES[1:]:
-            v = getattr(self, axis)
+        for axis, v in self._values:
+            if axis == "luminance":
+                continue
             if base is not None and v == getattr(base, axis):
                 continue
             if base is None and v is None:
                 continue
-            parts.append(f"{short[axis]}{v:g}" if isinstance(v, (int, float)) else f"{short[axis]}{v}")
+            short = AXES[axis].short if axis in AXES else axis
+            parts.append(f"{short}{v:g}" if isinstance(v, (int, float)) else f"{short}{v}")
         return "_".join(parts)
+
+
+def _rebuild(values):
+    c = Condition.__new__(Condition)
+    object.__setattr__(c, "_values", tuple(values))
+    return c
 
 
 def cross(base: Condition, values: dict) -> list[Condition]:

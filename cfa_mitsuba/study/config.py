@@ -14,7 +14,7 @@ relative to the config file.
 
 from __future__ import annotations
 
-__all__ = ["StudyConfig", "SceneSpec", "SweepSpec", "load_config", "parse_config"]
+__all__ = ["StudyConfig", "SceneSpec", "SweepSpec", "load_config", "parse_config", "IMAGE_METRICS"]
 
 import dataclasses
 from dataclasses import dataclass, field
@@ -23,12 +23,9 @@ from pathlib import Path
 from ..errors import CfaMitsubaError
 from .checker import _Checker, _typename, read_toml
 from .sweeps import SweepSpec, _sweeps
-from ..io.validate import safe_name
 
-from ..metrics import metrics_for_scene
+from .scene_specs import IMAGE_METRICS, SceneSpec, parse_scenes, render_common as render_common_of  # noqa: F401
 
-#: Metrics a user scene feeds (the image metrics of DESIGN.md), from the metric records.
-IMAGE_METRICS = metrics_for_scene("", natural=True)
 #: How a study chooses the exposure: 'reference' (ISETCam's auto exposure,
 #: chosen once at the reference luminance and kept at every luminance: the
 #: camera of a fixed scene brightness, the default), 'each' (auto exposure at
@@ -37,21 +34,6 @@ EXPOSURE_POLICIES = ("reference", "each", "fixed")
 #: Noise realisations of every capture unless a config says otherwise (each
 #: value is their mean with a 95 % interval: study/intervals.py).
 DEFAULT_SEEDS = 3
-
-
-@dataclass(frozen=True)
-class SceneSpec:
-    """One scene of a study: a built-in name or a user's Mitsuba XML.
-
-    ``render`` holds the render settings that differ from the scene's
-    defaults (width, height, spp, oversample, seed, ...), passed to the
-    render stage as keywords.
-    """
-
-    name: str
-    file: str | None = None
-    render: dict = field(default_factory=dict)
-    metrics: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -80,6 +62,7 @@ class StudyConfig:
     output: dict
     workers: int | None
     metric_options: dict = field(default_factory=dict)
+    demosaic_options: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -96,32 +79,14 @@ class StudyConfig:
             reference_luminance_cd_m2=(None if self.capture.get("exposure_policy") == "each"
                                        else float(self.capture.get("reference_luminance_cd_m2", 100.0))),
             isp=dict(self.isp), mean_match=self.mean_match,
-            spectra_sets=dict(self.capture.get("spectra_sets", {})), metric_options=dict(self.metric_options))
+            spectra_sets=dict(self.capture.get("spectra_sets", {})), metric_options=dict(self.metric_options),
+            demosaic_options=dict(self.demosaic_options))
 
     def base_condition(self, luminance: float | None = None):
         """The study's own condition (no sweep) at ``luminance`` (default: the first)."""
         lum = self.luminances[0] if luminance is None else luminance
         return self.chain_settings().base_condition(luminance=lum, exposure=self.capture.get("exposure", "auto"),
                                                     seed=self.seed)
-
-
-# Render settings a config may override per scene, with their checks.
-_RENDER_KEYS = {
-    "width": ("integer", 1), "height": ("integer", 1), "spp": ("integer", 1),
-    "oversample": ("integer", 1), "seed": ("integer", 0), "fov": ("number", None), "max_depth": ("integer", 1),
-}
-
-
-def _render_overrides(ck: _Checker, data, key: str) -> dict:
-    ck.table(data, key, _RENDER_KEYS)
-    out = {}
-    for k, v in data.items():
-        kind, lo = _RENDER_KEYS[k]
-        if kind == "integer":
-            out[k] = ck.integer(v, f"{key}.{k}", lo)
-        else:
-            out[k] = ck.number(v, f"{key}.{k}", positive=True, maximum=179.0)
-    return out
 
 
 def _dataclass_table(ck: _Checker, data, key: str, cls, extra: dict) -> dict:
@@ -227,94 +192,12 @@ def _spectra_map(ck: _Checker, value, key: str) -> dict:
     return dict(value)
 
 
-def parse_config(data: dict, *, where: str = "config", base: Path | None = None) -> StudyConfig:
-    """Validate a config already parsed from TOML; see :func:`load_config`."""
-    from .. import isp, render, sensor
-    from ..optics import OpticsParams
-    from ..sensor.params import NOISE_MODES, SensorParams
-    from .measured_scenes import image_scene_spec
-    from .ranking import DEFAULT_POLICY, POLICIES
-    from .scoring import DEFAULT_RANGES
+def _cfas(ck: _Checker, value, base: Path) -> list[str]:
+    """``cfas``: registered names, or CFA TOML files (resolved paths)."""
+    from .. import sensor
 
-    ck = _Checker(where)
-    base = base or Path(".")
-    top = {
-        "name": None, "description": None, "seed": None, "scenes": None, "custom_scenes": None, "cfas": None,
-        "demosaics": None, "luminances": None, "sweep": None, "render": None, "optics": None, "sensor": None,
-        "isp": None, "mean_match": None, "normalisation": None, "output": None, "workers": None, "seeds": None,
-        "metrics": None,
-    }
-    ck.table(data, "", top)
-    for required in ("scenes", "cfas", "demosaics"):
-        if required not in data and not (required == "scenes" and "custom_scenes" in data):
-            ck.fail(required, "missing (required)")
-
-    name, description, seed, workers = ck.header(data)
-    seeds = ck.integer(data.get("seeds", DEFAULT_SEEDS), "seeds", 1)
-
-    # --- render ---------------------------------------------------------
-    known_scenes = [n for n, _ in render.list_scenes()]
-    render_cfg = data.get("render", {})
-    render_allowed = {"variant": None, "bands": None, **{s: None for s in known_scenes}}
-    ck.table(render_cfg, "render", render_allowed)
-    render_common = {}
-    if "variant" in render_cfg:
-        render_common["variant"] = ck.string(render_cfg["variant"], "render.variant",
-                                             ("auto", "cuda_ad_spectral", "llvm_ad_spectral", "scalar_spectral"))
-        if render_common["variant"] == "auto":
-            del render_common["variant"]
-    if "bands" in render_cfg:
-        from ..spectra import parse_band_grid
-
-        try:
-            render_common["bands"] = ck.string(render_cfg["bands"], "render.bands")
-            parse_band_grid(render_common["bands"])
-        except CfaMitsubaError as exc:
-            ck.fail("render.bands", str(exc))
-
-    # --- scenes ---------------------------------------------------------
-    scenes = []
-    for i, s in enumerate(ck.string_list(data.get("scenes", []), "scenes", allow_empty=True)):
-        if s not in known_scenes:
-            ck.fail(f"scenes[{i}]", f"unknown scene {s!r} (known: {', '.join(known_scenes)}; "
-                                    "user XML scenes go under [[custom_scenes]])")
-        over = _render_overrides(ck, render_cfg.get(s, {}), f"render.{s}")
-        scenes.append(SceneSpec(s, None, over, metrics_for_scene(s)))
-    custom = data.get("custom_scenes", [])
-    if not isinstance(custom, list):
-        ck.fail("custom_scenes", "must be an array of tables ([[custom_scenes]])")
-    for i, c in enumerate(custom):
-        key = f"custom_scenes[{i}]"
-        if isinstance(c, dict) and "image" in c:  # a measured spectral image (study/measured_scenes.py)
-            iname, image, opts = image_scene_spec(ck, c, key, base, [*known_scenes, *(s.name for s in scenes)])
-            scenes.append(SceneSpec(iname, image, opts, IMAGE_METRICS))
-            continue
-        ck.table(c, key, {"name": None, "file": None, "allow_outside_paths": None, **_RENDER_KEYS})
-        cname = ck.string(c.get("name"), f"{key}.name")
-        if safe_name(cname) != cname:  # it names folders under details/: a label, never a path
-            ck.fail(f"{key}.name", f"must be a label of letters, digits, '-', '_' and inner '.' (got {cname!r})")
-        if "file" not in c:
-            ck.fail(f"{key}.file", "missing (the scene's Mitsuba XML file, or image = a measured spectral image)")
-        f = base / ck.string(c["file"], f"{key}.file")
-        if not f.is_file():
-            ck.fail(f"{key}.file", f"no such file {str(f)!r}")
-        if cname in known_scenes or any(s.name == cname for s in scenes):
-            ck.fail(f"{key}.name", f"{cname!r} is already a scene name")
-        over = _render_overrides(ck, {k: v for k, v in c.items() if k not in ("name", "file", "allow_outside_paths")}, key)
-        if "allow_outside_paths" in c:  # the scene may name files outside its folder
-            if not isinstance(c["allow_outside_paths"], bool):
-                ck.fail(f"{key}.allow_outside_paths", "must be true or false")
-            over["allow_outside_paths"] = c["allow_outside_paths"]
-        scenes.append(SceneSpec(cname, str(f.resolve()), over, IMAGE_METRICS))
-    if not scenes:
-        ck.fail("scenes", "no scenes to run")
-    from .budget import check_scenes
-
-    check_scenes(ck.fail, scenes, render_common)  # renders and tasks within the limits, before any work
-
-    # --- CFAs, demosaics, luminances -----------------------------------
     cfas = []
-    for i, c in enumerate(ck.string_list(data["cfas"], "cfas")):
+    for i, c in enumerate(ck.string_list(value, "cfas")):
         if c.lower().endswith(".toml"):
             p = base / c
             try:
@@ -326,16 +209,63 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
             if c not in sensor.list_cfas():
                 ck.fail(f"cfas[{i}]", f"unknown CFA {c!r} (known: {', '.join(sensor.list_cfas())}; or a .toml file)")
             cfas.append(c)
-    known_demosaics = [n for n, _ in isp.list_demosaics()]
-    demosaics = ck.string_list(data["demosaics"], "demosaics")
-    for i, d in enumerate(demosaics):
-        if d not in known_demosaics:
-            ck.fail(f"demosaics[{i}]", f"unknown demosaicing method {d!r} (known: {', '.join(known_demosaics)})")
-    luminances = ck.number_list(data.get("luminances", [100.0]), "luminances")
+    return cfas
 
-    sweeps = tuple(_sweeps(ck, data.get("sweep", []), scenes))
 
-    # --- optics / sensor / isp -----------------------------------------
+def _demosaics(ck: _Checker, value, isp_cfg: dict) -> tuple[tuple[str, ...], dict]:
+    """``demosaics``: a list of method names, or ``[demosaics.<name>]``
+    tables giving each method's options (checked against the method's
+    signature as ``[metrics.<name>]`` is).  The old ``[isp]
+    pocs_iterations`` is ``[demosaics.pocs] iterations``."""
+    from ..isp import list_demosaics
+    from ..isp.demosaic import demosaic_parameters
+    from .metric_options import function_options
+
+    known = [n for n, _ in list_demosaics()]
+    if isinstance(value, dict):
+        ck.table(value, "demosaics", {n: None for n in known})
+        if not value:
+            ck.fail("demosaics", "names no demosaicing method")
+        names = tuple(value)
+        options = {n: function_options(ck, o, f"demosaics.{n}", demosaic_parameters(n)) for n, o in value.items()}
+    else:
+        names = ck.string_list(value, "demosaics")
+        for i, d in enumerate(names):
+            if d not in known:
+                ck.fail(f"demosaics[{i}]", f"unknown demosaicing method {d!r} (known: {', '.join(known)})")
+        options = {}
+    if "pocs_iterations" in isp_cfg:
+        if "iterations" in options.get("pocs", {}):
+            ck.fail("isp.pocs_iterations", "give [demosaics.pocs] iterations only (pocs_iterations is its old name)")
+        its = ck.integer(isp_cfg["pocs_iterations"], "isp.pocs_iterations", 1)
+        options.setdefault("pocs", {})["iterations"] = its
+    return names, {n: o for n, o in options.items() if o}
+
+
+def _isp(ck: _Checker, isp_cfg) -> dict:
+    """``[isp]``: white balance, the colour fit and the processing switches."""
+    from .. import isp
+
+    ck.table(isp_cfg, "isp", {"white_balance": None, "white_preserving": None, "pocs_iterations": None,
+                              "colour_fit": None, "regularise": None, "clip_highlights": None})
+    out = {}
+    if "white_balance" in isp_cfg:
+        out["white_balance"] = ck.string(isp_cfg["white_balance"], "isp.white_balance", ("illuminant", "gray-world"))
+    for flag in ("white_preserving", "regularise", "clip_highlights"):  # isp.process's switches (docs/isp.md)
+        if flag in isp_cfg:
+            out[flag] = ck.boolean(isp_cfg[flag], f"isp.{flag}")
+    if "colour_fit" in isp_cfg:
+        out["colour_fit"] = ck.string(isp_cfg["colour_fit"], "isp.colour_fit", isp.COLOUR_FITS)
+    return out
+
+
+def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, dict, dict]:
+    """(optics, sensor, capture): ``[optics]``, ``[sensor]`` (a preset and
+    its overrides) and the capture settings kept in ``[sensor]`` (noise,
+    exposure and its policy, spectra-set replacements)."""
+    from ..optics import OpticsParams
+    from ..sensor.params import NOISE_MODES, SensorParams
+
     optics = _dataclass_table(ck, data.get("optics", {}), "optics", OpticsParams, {})
     capture_extra = {
         "noise": lambda v, k: ck.string(v, k, NOISE_MODES),
@@ -360,33 +290,14 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
     if policy == "each" and "reference_luminance_cd_m2" in capture:
         ck.fail("sensor.reference_luminance_cd_m2", "exposure_policy 'each' chooses the exposure at each "
                                                    "luminance: a reference luminance does not apply")
-    from .physical import check_physical, check_realisations  # issue 27: luminances no camera meets, refused by key
+    return optics, sensor_all, capture
 
-    check_physical(ck.fail, luminances, sweeps, capture)
-    check_realisations(ck.fail, seeds, capture.get("noise", "all"))
-    isp_cfg = data.get("isp", {})
-    ck.table(isp_cfg, "isp", {"white_balance": None, "white_preserving": None, "pocs_iterations": None,
-                              "colour_fit": None, "regularise": None, "clip_highlights": None})
-    isp_opts = {}
-    if "white_balance" in isp_cfg:
-        isp_opts["white_balance"] = ck.string(isp_cfg["white_balance"], "isp.white_balance",
-                                              ("illuminant", "gray-world"))
-    if "white_preserving" in isp_cfg:
-        isp_opts["white_preserving"] = ck.boolean(isp_cfg["white_preserving"], "isp.white_preserving")
-    for flag in ("regularise", "clip_highlights"):  # isp.process's switches (docs/isp.md)
-        if flag in isp_cfg:
-            isp_opts[flag] = ck.boolean(isp_cfg[flag], f"isp.{flag}")
-    if "colour_fit" in isp_cfg:
-        isp_opts["colour_fit"] = ck.string(isp_cfg["colour_fit"], "isp.colour_fit", isp.COLOUR_FITS)
-    if "pocs_iterations" in isp_cfg:
-        isp_opts["pocs_iterations"] = ck.integer(isp_cfg["pocs_iterations"], "isp.pocs_iterations", 1)
-    mean_match = ck.boolean(data.get("mean_match", True), "mean_match")
-    from .metric_options import metric_options
 
-    options = metric_options(ck, data.get("metrics", {}))
+def _normalisation(ck: _Checker, norm) -> tuple[bool, str, dict]:
+    """``[normalisation]``: (clip, range policy, {metric: (worst, best)})."""
+    from .ranking import DEFAULT_POLICY, POLICIES
+    from .scoring import DEFAULT_RANGES
 
-    # --- normalisation --------------------------------------------------
-    norm = data.get("normalisation", {})
     ck.table(norm, "normalisation", {"clip": None, "ranges": None, "policy": None})
     clip = ck.boolean(norm.get("clip", True), "normalisation.clip")
     policy = ck.string(norm.get("policy", DEFAULT_POLICY), "normalisation.policy", POLICIES)
@@ -401,25 +312,63 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         if worst == best:
             ck.fail(key, "worst and best must differ")
         ranges[m] = (worst, best)
-    # --- output ---------------------------------------------------------
-    out_cfg = data.get("output", {})
+    return clip, policy, ranges
+
+
+def _output(ck: _Checker, out_cfg) -> dict:
+    """``[output]``: figure formats, thumbnails, the report."""
     ck.table(out_cfg, "output", {"figures": None, "thumbnails": None, "report": None})
     figures = ck.string_list(out_cfg.get("figures", ["png", "svg"]), "output.figures", allow_empty=True)
     for i, f in enumerate(figures):
         if f not in ("png", "svg"):
             ck.fail(f"output.figures[{i}]", f"must be png or svg (got {f!r})")
-    output = {
-        "figures": figures,
-        "thumbnails": ck.boolean(out_cfg.get("thumbnails", True), "output.thumbnails"),
-        "report": ck.boolean(out_cfg.get("report", True), "output.report"),
-    }
+    return {"figures": figures, "thumbnails": ck.boolean(out_cfg.get("thumbnails", True), "output.thumbnails"),
+            "report": ck.boolean(out_cfg.get("report", True), "output.report")}
 
+
+_TOP_KEYS = ("name", "description", "seed", "scenes", "custom_scenes", "cfas", "demosaics", "luminances", "sweep",
+             "render", "optics", "sensor", "isp", "mean_match", "normalisation", "output", "workers", "seeds",
+             "metrics")
+
+
+def parse_config(data: dict, *, where: str = "config", base: Path | None = None) -> StudyConfig:
+    """Validate a config already parsed from TOML; see :func:`load_config`.
+    Each table is checked by its own step, in the order the file reads."""
+    from .. import render
+    from .metric_options import metric_options
+
+    ck = _Checker(where)
+    base = base or Path(".")
+    ck.table(data, "", dict.fromkeys(_TOP_KEYS))
+    for required in ("scenes", "cfas", "demosaics"):
+        if required not in data and not (required == "scenes" and "custom_scenes" in data):
+            ck.fail(required, "missing (required)")
+    name, description, seed, workers = ck.header(data)
+    seeds = ck.integer(data.get("seeds", DEFAULT_SEEDS), "seeds", 1)
+    render_cfg = data.get("render", {})
+    render_common = render_common_of(ck, render_cfg, [n for n, _ in render.list_scenes()])
+    scenes = parse_scenes(ck, data, render_cfg, render_common, base)
+    cfas = _cfas(ck, data["cfas"], base)
+    isp_cfg = data.get("isp", {})
+    isp_opts = _isp(ck, isp_cfg)
+    demosaics, demosaic_options = _demosaics(ck, data["demosaics"], isp_cfg)
+    luminances = ck.number_list(data.get("luminances", [100.0]), "luminances")
+    sweeps = tuple(_sweeps(ck, data.get("sweep", []), scenes))
+    optics, sensor_all, capture = _optics_sensor(ck, data, cfas, base)
+    from .physical import check_physical, check_realisations  # issue 27: values no camera meets, by key
+
+    check_physical(ck.fail, luminances, sweeps, capture)
+    check_realisations(ck.fail, seeds, capture.get("noise", "all"))
+    mean_match = ck.boolean(data.get("mean_match", True), "mean_match")
+    options = metric_options(ck, data.get("metrics", {}))
+    clip, policy, ranges = _normalisation(ck, data.get("normalisation", {}))
+    output = _output(ck, data.get("output", {}))
     return StudyConfig(
         name=name, description=description, path=None, seed=seed, scenes=tuple(scenes), cfas=tuple(cfas),
-        demosaics=demosaics, luminances=luminances, sweeps=tuple(sweeps), render=render_common,
+        demosaics=demosaics, luminances=luminances, sweeps=sweeps, render=render_common,
         optics=optics, sensor=sensor_all, capture=capture, isp=isp_opts, mean_match=mean_match,
         ranges=ranges, clip_scores=clip, output=output, workers=workers, seeds=seeds, range_policy=policy,
-        metric_options=options,
+        metric_options=options, demosaic_options=demosaic_options,
     )
 
 

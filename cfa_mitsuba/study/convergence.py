@@ -134,24 +134,24 @@ def _band_names(wl) -> list[str]:
 
 
 
-def run_convergence(plan: ConvergencePlan, *, log=None) -> ConvergenceResult:
-    """Measure error against run time for ``plan`` (module docstring).
-    ``log``: a callable for progress lines (default: stderr)."""
+class _Rows:
+    """The convergence table as it grows, with each quantity's unit."""
+
+    def __init__(self, name: str):
+        self.name, self.rows, self.units = name, [], {}
+
+    def add(self, stage, quality, wall_s, quantity, error, unit, value=None):
+        self.rows.append({"scene": self.name, "stage": stage, "quality": quality, "wall_s": wall_s,
+                          "quantity": quantity, "error": float(error), "unit": unit,
+                          "value": None if value is None else float(value)})
+
+
+def _reference_step(p, chain, out: _Rows, log):
+    """Two independent renders at the reference spp, their mean and their own
+    error (half their difference): (reference, region, exact error, times,
+    metric values, metric floor)."""
     from ..values import SpectralImage
-    from .tasks import task_seed
 
-    log = log or (lambda msg: print(msg, file=sys.stderr, flush=True))
-    p = plan
-    chain = _Chain(p)
-    rows: list[dict] = []
-    units: dict[str, str] = {}
-    t_start = time.perf_counter()
-
-    def row(stage, quality, wall_s, quantity, error, unit, value=None):
-        rows.append({"scene": p.name, "stage": stage, "quality": quality, "wall_s": wall_s, "quantity": quantity,
-                     "error": float(error), "unit": unit, "value": None if value is None else float(value)})
-
-    # 1. The reference: two independent renders.
     log(f"convergence {p.name}: {p.width} x {p.height}, spp {', '.join(map(str, p.spp_levels))}; "
         f"reference 2 x {p.reference_spp} spp")
     refs, ref_times = [], []
@@ -170,22 +170,24 @@ def run_convergence(plan: ConvergencePlan, *, log=None) -> ConvergenceResult:
     own_img = 0.5 * relative_rms_per_band(r1.data, r2.data) * _mean_ratio(r2.data, ref.data)
     own_reg = 0.5 * relative_rms_per_band(r1.data, r2.data, region) * _mean_ratio(r2.data, ref.data, region)
     for b, e_i, e_r in zip(bands, own_img, own_reg):
-        row("reference", p.reference_spp, sum(ref_times), f"radiance:{b}", e_i, "relative")
-        row("reference", p.reference_spp, sum(ref_times), f"uniform:{b}", e_r, "relative")
+        out.add("reference", p.reference_spp, sum(ref_times), f"radiance:{b}", e_i, "relative")
+        out.add("reference", p.reference_spp, sum(ref_times), f"uniform:{b}", e_r, "relative")
     exact = _exact_error(p, ref)
-
     log("  metrics of the reference ...")
     ref_vals, u, _ = chain.evaluate(ref, p.cfa, p.demosaic, p.render_noise, p.seed)
-    units.update(u)
+    out.units.update(u)
     half = [chain.evaluate(r, p.cfa, p.demosaic, p.render_noise, p.seed)[0] for r in (r1, r2)]
     metric_floor = {k: 0.5 * abs(half[0][k] - half[1][k]) for k in ref_vals}
     for k, v in ref_vals.items():
-        row("reference", p.reference_spp, sum(ref_times), k, metric_floor[k], units[k], v)
-    del refs, r1, r2, half
+        out.add("reference", p.reference_spp, sum(ref_times), k, metric_floor[k], out.units[k], v)
+    return ref, region, exact, ref_times, ref_vals, metric_floor
 
-    # 2. The levels.
-    level_times = {}
-    default_imgs = []  # the default spp's renders, for the CFA differences below
+
+def _levels_step(p, chain, out: _Rows, log, ref, region, ref_vals):
+    """Each spp level (and the default spp with other seeds) against the
+    reference: (per-level times, the default spp's renders)."""
+    bands = _band_names(np.asarray(ref.wavelengths, dtype=np.float64))
+    level_times, default_imgs = {}, []
     for n, spp in enumerate(p.spp_levels, 1):
         img, dt, times = _timed_render(p, spp, p.seed, p.repeat)
         level_times[spp] = times
@@ -194,52 +196,52 @@ def run_convergence(plan: ConvergencePlan, *, log=None) -> ConvergenceResult:
         e_img = relative_rms_per_band(img.data, ref.data)
         e_reg = relative_rms_per_band(img.data, ref.data, region)
         for b, a, c in zip(bands, e_img, e_reg):
-            row("render", spp, dt, f"radiance:{b}", a, "relative")
-            row("render", spp, dt, f"uniform:{b}", c, "relative")
+            out.add("render", spp, dt, f"radiance:{b}", a, "relative")
+            out.add("render", spp, dt, f"uniform:{b}", c, "relative")
         vals, _, _ = chain.evaluate(img, p.cfa, p.demosaic, p.render_noise, p.seed)
         for k, v in vals.items():
-            row("render", spp, dt, k, abs(v - ref_vals[k]), units[k], v)
+            out.add("render", spp, dt, k, abs(v - ref_vals[k]), out.units[k], v)
         log(f"  render {n}/{len(p.spp_levels)}: {spp} spp, {dt:.2f} s"
             + (f" (runs {', '.join(f'{t:.2f}' for t in times)})" if len(times) > 1 else "")
             + f"; radiance error median band {100 * np.nanmedian(e_img):.3g} %")
+    for i in range(p.default_seeds or 0):  # the default spp again with other seeds: its deviation's spread
+        s_i = p.seed + 3 + i
+        log(f"  default {p.default_spp} spp, seed {s_i} ({i + 1}/{p.default_seeds}) ...")
+        img, dt, _ = _timed_render(p, p.default_spp, s_i, 1)
+        default_imgs.append(img)
+        vals, _, _ = chain.evaluate(img, p.cfa, p.demosaic, p.render_noise, p.seed)
+        for k, v in vals.items():
+            out.add("render-seeds", p.default_spp, dt, k, abs(v - ref_vals[k]), out.units[k], v)
+    return level_times, default_imgs
 
-    # The default spp again with other seeds: the spread of its deviation.
-    if p.default_seeds:
-        for i in range(p.default_seeds):
-            s_i = p.seed + 3 + i
-            log(f"  default {p.default_spp} spp, seed {s_i} ({i + 1}/{p.default_seeds}) ...")
-            img, dt, _ = _timed_render(p, p.default_spp, s_i, 1)
-            default_imgs.append(img)
-            vals, _, _ = chain.evaluate(img, p.cfa, p.demosaic, p.render_noise, p.seed)
-            for k, v in vals.items():
-                row("render-seeds", p.default_spp, dt, k, abs(v - ref_vals[k]), units[k], v)
-    del img
 
-    # 3. POCS on the reference's noisy capture (the study's seed).
-    study_seed = task_seed(p.seed, p.name, p.cfa, p.luminance_cd_m2)
-    oi = chain.optical(ref)
-    ideal = chain.ideal(oi)
-    raw = chain.capture(oi, p.cfa, "all", study_seed)
+def _pocs_step(p, chain, out: _Rows, log, ideal, raw) -> dict:
+    """POCS iterations on the reference's noisy capture against a converged
+    POCS; returns what the default iteration count gives."""
     log(f"  POCS: converged reference ({p.pocs_reference_iterations} iterations) ...")
     pocs_ref, _, pocs_ref_s = chain.metrics(ideal, raw, "pocs", iterations=p.pocs_reference_iterations,
                                             tolerance=0.0)
     for k, v in pocs_ref.items():
-        row("reference-pocs", p.pocs_reference_iterations, pocs_ref_s, k, 0.0, units[k], v)
+        out.add("reference-pocs", p.pocs_reference_iterations, pocs_ref_s, k, 0.0, out.units[k], v)
     for it in p.pocs_iterations:
         times, vals = [], None
         for _ in range(max(p.repeat, 3)):  # cheap, and timing on a shared machine is noisy
             vals, _, dt = chain.metrics(ideal, raw, "pocs", iterations=it, tolerance=0.0)
             times.append(dt)
         for k, v in vals.items():
-            row("pocs", it, min(times), k, abs(v - pocs_ref[k]), units[k], v)
+            out.add("pocs", it, min(times), k, abs(v - pocs_ref[k]), out.units[k], v)
         log(f"  POCS {it} iterations: {min(times):.2f} s")
     info: dict = {}
     default_vals, _, default_s = chain.metrics(ideal, raw, "pocs", info=info)
-    pocs_default = {"iterations_done": info.get("iterations"), "wall_s": default_s,
-                    "deviation": {k: abs(v - pocs_ref[k]) for k, v in default_vals.items()},
-                    "value": default_vals}
+    return {"iterations_done": info.get("iterations"), "wall_s": default_s,
+            "deviation": {k: abs(v - pocs_ref[k]) for k, v in default_vals.items()}, "value": default_vals}
 
-    # 4. Context: sensor-noise spread and the spread between CFAs.
+
+def _context_step(p, chain, out: _Rows, log, oi, ideal, study_seed, ref, ref_vals, default_imgs):
+    """Sensor-noise spread and the spread between CFAs (the scale a render
+    error is read against): (noise std per metric, CFA values)."""
+    from .tasks import task_seed
+
     noise_std = {}
     if p.noise_seeds:
         log(f"  sensor noise: {p.noise_seeds} seeds ...")
@@ -247,34 +249,57 @@ def run_convergence(plan: ConvergencePlan, *, log=None) -> ConvergenceResult:
                     for i in range(p.noise_seeds)]
         for k in ref_vals:
             noise_std[k] = float(np.std([s[k] for s in per_seed], ddof=1))
-            row("sensor-noise", p.noise_seeds, None, k, noise_std[k], units[k],
-                float(np.mean([s[k] for s in per_seed])))
+            out.add("sensor-noise", p.noise_seeds, None, k, noise_std[k], out.units[k],
+                    float(np.mean([s[k] for s in per_seed])))
     cfa_values: dict[str, dict] = {}
-    if p.compare_cfas:
-        methods = list(dict.fromkeys([p.demosaic, "pocs"]))
-        log(f"  CFA spread: {', '.join(p.compare_cfas)} ({', '.join(methods)}) ...")
-        for c in p.compare_cfas:
-            raw_c = chain.capture(oi, c, "all", task_seed(p.seed, p.name, c, p.luminance_cd_m2))
-            for method in methods:
-                cfa_values.setdefault(method, {})[c] = chain.metrics(ideal, raw_c, method)[0]
+    if not p.compare_cfas:
+        return noise_std, cfa_values
+    methods = list(dict.fromkeys([p.demosaic, "pocs"]))
+    log(f"  CFA spread: {', '.join(p.compare_cfas)} ({', '.join(methods)}) ...")
+    for c in p.compare_cfas:
+        raw_c = chain.capture(oi, c, "all", task_seed(p.seed, p.name, c, p.luminance_cd_m2))
         for method in methods:
-            prefix = "" if method == p.demosaic else "pocs-"
-            for k in ref_vals:
-                v = sorted(cfa_values[method][c][k] for c in p.compare_cfas)
-                gap = min((b - a for a, b in zip(v, v[1:])), default=float("nan"))
-                row(f"{prefix}cfa-spread", len(v), None, k, v[-1] - v[0], units[k])
-                row(f"{prefix}cfa-gap", len(v), None, k, gap, units[k])
-        if len(p.compare_cfas) >= 2 and default_imgs:
-            log(f"  CFA differences at {p.default_spp} spp ({len(default_imgs)} render(s)) vs the reference ...")
-            pair, common = _difference_deviation(chain, p, ref, default_imgs, list(ref_vals))
-            for k in ref_vals:
-                row("cfa-pairs", p.default_spp, None, k, pair[k], units[k])
-                row("cfa-common", p.default_spp, None, k, common[k], units[k])
-    del default_imgs
+            cfa_values.setdefault(method, {})[c] = chain.metrics(ideal, raw_c, method)[0]
+    for method in methods:
+        prefix = "" if method == p.demosaic else "pocs-"
+        for k in ref_vals:
+            v = sorted(cfa_values[method][c][k] for c in p.compare_cfas)
+            gap = min((b - a for a, b in zip(v, v[1:])), default=float("nan"))
+            out.add(f"{prefix}cfa-spread", len(v), None, k, v[-1] - v[0], out.units[k])
+            out.add(f"{prefix}cfa-gap", len(v), None, k, gap, out.units[k])
+    if len(p.compare_cfas) >= 2 and default_imgs:
+        log(f"  CFA differences at {p.default_spp} spp ({len(default_imgs)} render(s)) vs the reference ...")
+        pair, common = _difference_deviation(chain, p, ref, default_imgs, list(ref_vals))
+        for k in ref_vals:
+            out.add("cfa-pairs", p.default_spp, None, k, pair[k], out.units[k])
+            out.add("cfa-common", p.default_spp, None, k, common[k], out.units[k])
+    return noise_std, cfa_values
 
-    summary = summarise(p, rows, units, ref_vals, metric_floor, region, exact, ref_times, level_times,
-                         pocs_default, noise_std, cfa_values, time.perf_counter() - t_start)
-    return ConvergenceResult(p, rows, summary)
+
+def run_convergence(plan: ConvergencePlan, *, log=None) -> ConvergenceResult:
+    """Measure error against run time for ``plan`` (module docstring), in
+    four steps: the reference, the spp levels, POCS iterations, and the
+    context (sensor noise, CFA spread).  ``log``: a callable for progress
+    lines (default: stderr)."""
+    from .tasks import task_seed
+
+    log = log or (lambda msg: print(msg, file=sys.stderr, flush=True))
+    p = plan
+    chain = _Chain(p)
+    out = _Rows(p.name)
+    t_start = time.perf_counter()
+    ref, region, exact, ref_times, ref_vals, metric_floor = _reference_step(p, chain, out, log)
+    level_times, default_imgs = _levels_step(p, chain, out, log, ref, region, ref_vals)
+    study_seed = task_seed(p.seed, p.name, p.cfa, p.luminance_cd_m2)
+    oi = chain.optical(ref)
+    ideal = chain.ideal(oi)
+    raw = chain.capture(oi, p.cfa, "all", study_seed)
+    pocs_default = _pocs_step(p, chain, out, log, ideal, raw)
+    noise_std, cfa_values = _context_step(p, chain, out, log, oi, ideal, study_seed, ref, ref_vals, default_imgs)
+    del default_imgs
+    summary = summarise(p, out.rows, out.units, ref_vals, metric_floor, region, exact, ref_times, level_times,
+                        pocs_default, noise_std, cfa_values, time.perf_counter() - t_start)
+    return ConvergenceResult(p, out.rows, summary)
 
 
 def _difference_deviation(chain, p, ref, renders, metrics) -> tuple[dict, dict]:

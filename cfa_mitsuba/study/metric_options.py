@@ -6,17 +6,12 @@ function's own signature before any work starts."""
 
 from __future__ import annotations
 
-__all__ = ["metric_options", "GEOMETRY_KEYWORDS"]
+__all__ = ["metric_options", "function_options"]
 
 import inspect
 
 from ..errors import CfaMitsubaError
 from .checker import _Checker, _typename
-
-#: Keywords the chain fills from the scene (patches, edge ROI, chirp row and
-#: frequencies, grey steps): a config cannot set them.
-GEOMETRY_KEYWORDS = frozenset({"patches", "grey_patches", "roi", "row", "steps", "frequency_cy_per_deg",
-                               "reference", "pixel_pitch_um"})
 
 
 def _option(ck: _Checker, param: inspect.Parameter, value, key: str):
@@ -34,24 +29,28 @@ def _option(ck: _Checker, param: inspect.Parameter, value, key: str):
     return ck.fail(key, f"must be a string, number or boolean, got {_typename(value)}")
 
 
+def function_options(ck: _Checker, opts, key: str, params: dict) -> dict:
+    """``opts`` (a config table) checked against ``params`` ({name:
+    inspect.Parameter}: the options a function takes), each value of the
+    parameter's type; an unknown key names the ones allowed."""
+    ck.table(opts, key, params)
+    return {k: _option(ck, params[k], v, f"{key}.{k}") for k, v in opts.items()}
+
+
 def metric_options(ck: _Checker, data) -> dict:
     """{metric: {keyword: value}} from the ``[metrics]`` table: each key a
     computable metric, each option a keyword-only parameter of its function
     that the scene geometry does not supply, of the parameter's type."""
-    from ..metrics import get_metric, metric_names
+    from ..metrics import metric_names, metric_parameters
 
     ck.table(data, "metrics", {m: None for m in metric_names()})
-    out = {}
-    for name, opts in data.items():
-        fn = get_metric(name).function
-        params = {p.name: p for p in inspect.signature(fn).parameters.values()
-                  if p.kind is inspect.Parameter.KEYWORD_ONLY and p.name not in GEOMETRY_KEYWORDS}
-        ck.table(opts, f"metrics.{name}", params)
-        out[name] = {k: _option(ck, params[k], v, f"metrics.{name}.{k}") for k, v in opts.items()}
-        try:  # issue 27: the values too, by the metric itself, before any work (metrics.dry)
-            from ..metrics.dry import check_options
+    out = {name: function_options(ck, opts, f"metrics.{name}", metric_parameters(name))
+           for name, opts in data.items()}
+    from ..metrics.dry import check_options  # issue 27: the values too, by the metric itself, before any work
 
-            check_options(name, out[name])
+    for name, opts in out.items():
+        try:
+            check_options(name, opts)
         except CfaMitsubaError as exc:
             ck.fail(f"metrics.{name}", str(exc))
     return out

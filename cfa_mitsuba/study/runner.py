@@ -38,8 +38,9 @@ from ..errors import CfaMitsubaError
 from ..io import atomic_output, check_writable_dir
 from ..metrics import scored_metrics
 from .config import StudyConfig
+from .cfa_facts import write_cfa_facts
 from .tables import mean_table, order_rows, write_tables
-from .tasks import evaluate_task, render_task
+from .tasks import EvaluationTask, evaluate_task, render_task
 
 #: Metrics that enter the scores (the paper's eight); other rows in
 #: metrics.csv (delta-l, delta-e76, scielab-interior) are reported only.
@@ -129,17 +130,15 @@ def plan_study(config: StudyConfig, details_dir: str | None) -> tuple[list[dict]
                 sources.append(src)
             tag = cond.label(config.base_condition(cond.luminance))
             for i, (cfa, label) in enumerate(zip(config.cfas, labels)):
-                tasks.append({
-                    "source": src, "scene": scene.name, "condition": cond, "base": base, "cfa": cfa,
-                    "cfa_label": label, "demosaics": list(config.demosaics), "metrics": metrics, "chain": chain,
-                    "details_dir": details_dir, "details_tag": tag, "realisations": config.seeds,
-                    "ideal_rows": i == 0,
-                })
+                tasks.append(EvaluationTask(
+                    source=src, scene=scene.name, condition=cond, base=base, cfa=cfa, cfa_label=label,
+                    demosaics=tuple(config.demosaics), metrics=tuple(metrics), chain=chain, details_dir=details_dir,
+                    details_tag=tag, realisations=config.seeds, ideal_rows=i == 0))
     return sources, tasks
 
 
-def _task_id(task: dict) -> str:
-    ident = {k: v for k, v in task.items() if k != "details_dir"}
+def _task_id(task) -> str:
+    ident = EvaluationTask.of(task).identity()
     ident["code"] = __version__
     text = json.dumps(ident, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
@@ -275,6 +274,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     metrics, scores, ranges, constant = write_tables(
         out, realisations, ideal, paper_ranges=_paper_ranges(config, render_info), overrides=dict(config.ranges),
         policy=config.range_policy, clip=config.clip_scores, builtin_scenes=builtin)
+    write_cfa_facts(out, config.cfas, order["cfa"], config.chain_settings(), config.base_condition())
     with atomic_output(out / "ranges.json") as tmp:
         tmp.write_text(json.dumps({**{k: _range_pair(v) for k, v in ranges.items()},
                                    "_policy": config.range_policy, "_constant": constant}, indent=1))
@@ -356,6 +356,7 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
     """
     from .. import io
     from .chain import ChainSettings
+    from ..metrics import metrics_for_scene
     from .config import IMAGE_METRICS
     from .executors import make_executor
 
@@ -373,16 +374,15 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
         img = io.read_spectral_exr(exr)
         meta = img.meta
         scene = str(meta.get("scene") or exr.stem)
-        metrics = list(meta.get("metrics") or IMAGE_METRICS)
+        # the metrics its kind feeds (an EXR written before sidecars named the kind lists them)
+        metrics = list(metrics_for_scene(meta["kind"]) if meta.get("kind") else meta.get("metrics") or IMAGE_METRICS)
         for lum in luminances:
             level = float(lum) if lum is not None else float(meta.get("luminance_cd_m2") or 100.0)
             for cfa in cfas:
-                tasks.append({
-                    "source": {"kind": "exr", "path": str(exr.resolve())}, "scene": scene,
-                    "condition": chain.base_condition(luminance=level, seed=seed), "cfa": cfa,
-                    "cfa_label": _cfa_label(cfa), "demosaics": list(demosaics), "metrics": metrics, "chain": chain,
-                    "details_dir": None,
-                })
+                tasks.append(EvaluationTask(
+                    source={"kind": "exr", "path": str(exr.resolve())}, scene=scene,
+                    condition=chain.base_condition(luminance=level, seed=seed), cfa=cfa, cfa_label=_cfa_label(cfa),
+                    demosaics=tuple(demosaics), metrics=tuple(metrics), chain=chain))
     rows, failures = [], []
 
     def got(task, result):
@@ -397,6 +397,7 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
              "metric": list(SCORED_METRICS)}
     realisations = order_rows(rows, order)
     metrics = mean_table(realisations)
+    write_cfa_facts(out, cfas, order["cfa"], chain, chain.base_condition())
     with atomic_output(out / "metrics.csv") as tmp:
         metrics.to_csv(tmp, index=False, float_format="%.10g")
     _write_failures(out, failures, log)

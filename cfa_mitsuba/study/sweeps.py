@@ -1,5 +1,5 @@
 """``[[sweep]]`` tables of a study config: extra conditions on any axis
-(:data:`~.conditions.AXES`), crossed."""
+(:data:`~.axes.AXES`), crossed."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from .checker import _Checker, _typename
 @dataclass(frozen=True)
 class SweepSpec:
     """Extra conditions for some metrics of some scenes: one list of values
-    per swept axis (:data:`~.conditions.AXES`), crossed (paper: S-CIELAB
+    per swept axis (:data:`~.axes.AXES`), crossed (paper: S-CIELAB
     and SSIM on PUPPY at 3 ... 400 cd/m^2).  ``metrics`` empty: every
     metric each scene feeds."""
 
@@ -21,50 +21,24 @@ class SweepSpec:
     metrics: tuple[str, ...]
     values: dict
 
-    @property
-    def scene(self) -> str:
-        return self.scenes[0]
-
-    @property
-    def luminances(self) -> tuple:
-        return tuple(self.values.get("luminance", ()))
-
 
 def _axis_values(ck: _Checker, axis: str, value, key: str) -> tuple:
-    """A sweep's list of values for one axis, each checked as the axis needs."""
+    """A sweep's list of values for one axis, each checked by the axis's record."""
+    from .axes import AXES
+
     if not isinstance(value, list) or not value:
         ck.fail(key, f"must be a non-empty list of values, got {_typename(value)}")
-    out = []
-    for i, v in enumerate(value):
-        k = f"{key}[{i}]"
-        if axis == "seed":
-            out.append(ck.integer(v, k, 0))
-        elif axis == "spectra":
-            from ..sensor import list_spectra_sets
-
-            out.append(ck.string(v, k, tuple(list_spectra_sets())))
-        elif axis == "readout":
-            from ..sensor.params import READOUT_MODES
-
-            out.append(ck.string(v, k, READOUT_MODES))
-        elif axis == "exposure":
-            out.append(v if v == "auto" else ck.number(v, k, positive=True))
-        elif axis == "read_noise_e":
-            out.append(ck.number(v, k, nonneg=True))
-        elif axis == "f_number":
-            out.append(ck.number(v, k, positive=True, maximum=1000.0))
-        else:
-            out.append(ck.number(v, k, positive=True))
+    out = tuple(AXES[axis].check(ck, v, f"{key}[{i}]") for i, v in enumerate(value))
     if len(set(out)) != len(out):
         ck.fail(key, "lists a value twice")
-    return tuple(out)
+    return out
 
 
 def _sweeps(ck: _Checker, sweep_data, scenes) -> list[SweepSpec]:
     """``[[sweep]]`` tables: ``scene`` or ``scenes``, ``metrics`` (default:
     all each scene feeds) and one list per axis (``luminances`` is the old
     name of ``luminance``); several axes in one table are crossed."""
-    from .conditions import AXES
+    from .axes import AXES
 
     if not isinstance(sweep_data, list):
         ck.fail("sweep", "must be an array of tables ([[sweep]])")

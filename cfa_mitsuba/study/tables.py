@@ -13,16 +13,19 @@
 
 from __future__ import annotations
 
-__all__ = ["metric_columns", "order_rows", "scored_rows", "write_tables", "KEY_COLUMNS"]
+__all__ = ["metric_columns", "order_rows", "scored_rows", "write_tables", "key_columns"]
 
 from pathlib import Path
 
 from ..io import atomic_output
 from ..metrics import scored_metrics
-from .conditions import AXES
+from .axes import AXES
 
 #: The columns that identify a value (one per condition axis included).
-KEY_COLUMNS = ["scene", "cfa", "demosaic", *AXES, "base", "metric"]
+def key_columns() -> list[str]:
+    """The columns that identify a value: scene, CFA, demosaic, one per
+    registered axis, ``base``, the metric."""
+    return ["scene", "cfa", "demosaic", *AXES, "base", "metric"]
 
 
 def metric_columns(*, realisations: bool = False) -> list[str]:
@@ -31,9 +34,10 @@ def metric_columns(*, realisations: bool = False) -> list[str]:
     ``unit`` and ``censored`` (the value is a bound: True when any
     realisation's is); per realisation: ``realisation``, ``value``, ``unit``,
     ``censored``."""
+    keys = key_columns()
     if realisations:
-        return [*KEY_COLUMNS[:-1], "realisation", "metric", "value", "unit", "censored"]
-    return [*KEY_COLUMNS, "value", "ci_low", "ci_high", "n", "unit", "censored"]
+        return [*keys[:-1], "realisation", "metric", "value", "unit", "censored"]
+    return [*keys, "value", "ci_low", "ci_high", "n", "unit", "censored"]
 
 
 def order_rows(rows, config_order: dict, columns: list[str] | None = None):
@@ -63,7 +67,7 @@ def order_rows(rows, config_order: dict, columns: list[str] | None = None):
 
 
 def _condition_keys(df) -> list[tuple]:
-    return [tuple(str(v) for v in row) for row in df[list(AXES[1:])].itertuples(index=False)]
+    return [tuple(str(v) for v in row) for row in df[list(AXES)[1:]].itertuples(index=False)]
 
 
 def mean_table(realisations):
@@ -76,12 +80,13 @@ def mean_table(realisations):
         return pd.DataFrame(columns=metric_columns())
     keyed = realisations.assign(exposure=realisations["exposure"].astype(str),
                                 f_number=realisations["f_number"].astype(float))
-    agg = aggregate(keyed, KEY_COLUMNS, "value").drop(columns=["std"])
-    unit = keyed.drop_duplicates(KEY_COLUMNS)[KEY_COLUMNS + ["unit"]]
-    out = agg.merge(unit, on=KEY_COLUMNS, how="left")
+    keys = key_columns()
+    agg = aggregate(keyed, keys, "value").drop(columns=["std"])
+    unit = keyed.drop_duplicates(keys)[keys + ["unit"]]
+    out = agg.merge(unit, on=keys, how="left")
     bound = keyed.assign(censored=keyed["censored"].fillna(False).astype(bool)).groupby(
-        KEY_COLUMNS, sort=False, dropna=False)["censored"].any().reset_index()
-    out = out.merge(bound, on=KEY_COLUMNS, how="left")
+        keys, sort=False, dropna=False)["censored"].any().reset_index()
+    out = out.merge(bound, on=keys, how="left")
     return out[metric_columns()]
 
 

@@ -21,17 +21,73 @@ many, or on a Dask cluster, and after an interruption.
 
 from __future__ import annotations
 
-__all__ = ["render_task", "evaluate_task", "task_seed", "load_scene_image", "condition_columns", "safe_label"]
+__all__ = ["EvaluationTask", "render_task", "evaluate_task", "task_seed", "load_scene_image", "condition_columns",
+           "safe_label"]
 
+import dataclasses
 import hashlib
 import json
 import threading
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..io.sidecar import json_default
+
+
+@dataclass(frozen=True)
+class EvaluationTask:
+    """One (scene, condition, CFA) of a study: what :func:`evaluate_task` runs.
+
+    Attributes
+    ----------
+    source : the render it evaluates (:func:`load_scene_image`: a cached
+        render's scene and settings, or an EXR path).
+    scene : the scene's name (metrics.csv's ``scene``).
+    condition : the :class:`~.conditions.Condition`; its ``seed`` is the
+        study seed, from which every realisation's noise seed is derived
+        (:func:`realisation_seeds`: the one seed path).
+    cfa, cfa_label : the CFA (a name or TOML path) and its label in tables.
+    demosaics, metrics : what to process and measure.
+    chain : the :class:`~.chain.ChainSettings`.
+    details_dir, details_tag : where the first realisation's curves and
+        thumbnails go (None: nowhere) and their file stem.
+    realisations : noise realisations of the capture (rows carry
+        ``realisation`` 0, 1, ...).
+    ideal_rows : also measure the ideal sensor against itself.
+    base : the condition is one of the study's own (scored), not a sweep's.
+    """
+
+    source: dict[str, object]
+    scene: str
+    condition: object
+    cfa: str
+    demosaics: tuple[str, ...]
+    metrics: tuple[str, ...]
+    chain: object = None
+    cfa_label: str | None = None
+    details_dir: str | None = None
+    details_tag: str | None = None
+    realisations: int = 1
+    ideal_rows: bool = False
+    base: bool = True
+
+    @classmethod
+    def of(cls, task) -> "EvaluationTask":
+        """A task from an :class:`EvaluationTask` or a dict of its fields."""
+        if isinstance(task, cls):
+            return task
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = set(task) - names
+        if unknown:
+            raise TypeError(f"EvaluationTask has no field(s) {sorted(unknown)}")
+        return cls(**{**task, "demosaics": tuple(task["demosaics"]), "metrics": tuple(task["metrics"])})
+
+    def identity(self) -> dict:
+        """Everything that determines the task's rows (not where its details go)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "details_dir"}
 
 
 def task_seed(study_seed: int, *parts) -> int:
@@ -155,87 +211,85 @@ def _save_details(folder: Path, stem: str, results: dict, rendered, extra: dict)
         _thumbnail(rendered.srgb, folder / f"{stem}.png")
 
 
-def evaluate_task(task: dict) -> dict:
+def _details_extra(ev, raw, seed) -> dict:
+    """What the report reads beside a camera output's curves."""
+    isp_meta = ev.processed.meta.get("isp", {})
+    return {
+        "mean_match_scale": ev.mean_match_scale, "condition_number": isp_meta.get("condition_number"),
+        "noise_gain_xyz": isp_meta.get("noise_gain_xyz"), "fit_rank": isp_meta.get("fit_rank"),
+        "exposure_s": float(raw.exposure_s), "saturated_fraction": raw.meta.get("saturated_fraction"), "seed": seed,
+    }
+
+
+def evaluate_task(task) -> dict:
     """Capture one CFA of one scene under one condition and evaluate every demosaic.
 
-    ``task`` keys: ``source`` (see :func:`load_scene_image`), ``scene``,
-    ``condition`` (:class:`~.conditions.Condition`), ``cfa``, ``cfa_label``,
-    ``demosaics``, ``metrics``, ``chain`` (:class:`~.chain.ChainSettings`),
-    ``details_dir`` (or None), ``details_tag`` (the file stem of its details),
-    ``realisations`` (noise realisations of each capture, default 1; rows
-    carry ``realisation`` 0, 1, ...; details are kept of the first).
-
-    Returns ``{"rows": [...], "timing": {...}, "failures": [...]}``: a
-    metric that could not be measured on one camera output is a failure
-    record (scene, cfa, demosaic, condition, metric, error), not a row.
+    ``task``: an :class:`EvaluationTask` (or a dict of its fields).  Returns
+    ``{"rows": [...], "timing": {...}, "failures": [...], "ideal_rows":
+    [...]}``: a metric that could not be measured on one camera output is a
+    failure record (scene, cfa, demosaic, condition, metric, error), not a row.
     """
     from .chain import CameraChain
 
-    cond = task["condition"]
-    chain = CameraChain(task["chain"])
-    scene_key = json.dumps(task["source"], sort_keys=True)
-    cfa_label = task.get("cfa_label", task["cfa"])
-    details_dir = Path(task["details_dir"]) if task.get("details_dir") else None
-    tag = task.get("details_tag") or f"L{cond.luminance:g}"
+    t = EvaluationTask.of(task)
+    cond = t.condition
+    chain = CameraChain(t.chain)
+    scene_key = json.dumps(t.source, sort_keys=True)
+    cfa_label = t.cfa_label or t.cfa
+    details_dir = Path(t.details_dir) if t.details_dir else None
+    tag = t.details_tag or f"L{cond.luminance:g}"
     rows, failures = [], []
     raw = ideal = None
 
     def image():
-        return load_scene_image(task["source"])
+        return load_scene_image(t.source)
 
-    spectra_used = _spectra_in_effect(task["cfa"], cond, chain.settings)
-    applies = _readout_applies(task["cfa"], cond)
-    if not applies and (task.get("ideal_rows") or details_dir is not None):
+    spectra_used = _spectra_in_effect(t.cfa, cond, chain.settings)
+    applies = _readout_applies(t.cfa, cond)
+    if not applies and (t.ideal_rows or details_dir is not None):
         ideal = chain.ideal(chain.optical(image, cond, scene_key), cond, scene_key)
-    seeds = realisation_seeds(cond.seed, task["scene"], task["cfa"], cond.luminance,
-                              int(task.get("realisations", 1))) if applies else []
+    seeds = realisation_seeds(cond.seed, t.scene, t.cfa, cond.luminance, t.realisations) if applies else []
     for i, seed in enumerate(seeds):
-        for raw, ideal, method, ev in chain.evaluate(image, task["cfa"], task["demosaics"], task["metrics"], cond,
-                                                     seed, scene_key):
-            base = {"scene": task["scene"], "cfa": cfa_label, "demosaic": method,
-                    **condition_columns(cond, ideal.meta), "spectra": spectra_used,
-                    "base": bool(task.get("base", True)), "realisation": i}
+        for raw, ideal, method, ev in chain.evaluate(image, t.cfa, t.demosaics, t.metrics, cond, seed, scene_key):
+            base = {"scene": t.scene, "cfa": cfa_label, "demosaic": method, **condition_columns(cond, ideal.meta),
+                    "spectra": spectra_used, "base": bool(t.base), "realisation": i}
             if not hasattr(ev, "results"):
                 # No output to measure (a channel the scene white leaves dark) or
                 # no scale for it (a black ideal interior): every metric of this
                 # output is unmeasurable.
-                failures.extend({**base, "metric": name, "error": str(ev)} for name in task["metrics"])
+                failures.extend({**base, "metric": name, "error": str(ev)} for name in t.metrics)
                 continue
             rows.extend({**base, **r} for r in _result_rows(ev.results))
             failures.extend({**base, **f} for f in ev.failures)
             if details_dir is not None and i == 0:  # curves and thumbnails of the first realisation
-                isp_meta = ev.processed.meta.get("isp", {})
-                extra = {
-                    "mean_match_scale": ev.mean_match_scale,
-                    "condition_number": isp_meta.get("condition_number"),
-                    "noise_gain_xyz": isp_meta.get("noise_gain_xyz"),
-                    "fit_rank": isp_meta.get("fit_rank"),
-                    "exposure_s": float(raw.exposure_s),
-                    "saturated_fraction": raw.meta.get("saturated_fraction"),
-                    "seed": seed,
-                }
-                _save_details(details_dir / task["scene"] / safe_label(cfa_label) / method, tag, ev.results,
-                              ev.processed, extra)
-    ideal_rows = []
-    if task.get("ideal_rows") and ideal is not None:
-        # the ideal sensor against itself: the anchor of the 'ideal' range policy
-        from .. import metrics as m
+                _save_details(details_dir / t.scene / safe_label(cfa_label) / method, tag, ev.results,
+                              ev.processed, _details_extra(ev, raw, seed))
+    return {"rows": rows, "timing": chain.timing, "failures": failures,
+            "ideal_rows": _ideal_rows(t, chain, ideal, details_dir, tag)}
 
-        got = m.evaluate_many(task["metrics"], chain.inputs(ideal, ideal.xyz, cond), [],
-                              options=chain.settings.options_of_metrics())
-        base = {"scene": task["scene"], "cfa": "ideal", "demosaic": "none", **condition_columns(cond, ideal.meta),
-                "base": bool(task.get("base", True)), "realisation": 0}
-        ideal_rows = [{**base, **r} for r in _result_rows(got)]
-    if details_dir is not None and ideal is not None:
-        ideal_dir = details_dir / task["scene"] / "ideal"
+
+def _ideal_rows(t: EvaluationTask, chain, ideal, details_dir, tag) -> list[dict]:
+    """The ideal sensor against itself (the anchor of the 'ideal' range
+    policy), and the ideal's curves for the metrics whose records keep them."""
+    from .. import metrics as m
+
+    if ideal is None:
+        return []
+    cond, rows = t.condition, []
+    if t.ideal_rows:
+        got = m.evaluate_many(t.metrics, chain.inputs(ideal, ideal.xyz, cond), [],
+                              options=chain.settings.metric_options_for(cond))
+        base = {"scene": t.scene, "cfa": "ideal", "demosaic": "none", **condition_columns(cond, ideal.meta),
+                "base": bool(t.base), "realisation": 0}
+        rows = [{**base, **r} for r in _result_rows(got)]
+    if details_dir is not None:
+        ideal_dir = details_dir / t.scene / "ideal"
         if not (ideal_dir / f"{tag}.png").exists():
-            from .. import metrics as m
-
-            mtf_only = [n for n in task["metrics"] if n in ("mtf",)]
-            ideal_results = m.evaluate_many(mtf_only, chain.inputs(ideal, ideal.xyz, cond),
-                                            options=chain.settings.options_of_metrics())
+            kept = [n for n in t.metrics if m.get_metric(n).ideal_details]
+            ideal_results = m.evaluate_many(kept, chain.inputs(ideal, ideal.xyz, cond),
+                                            options=chain.settings.metric_options_for(cond))
             _save_details(ideal_dir, tag, ideal_results, ideal, {"white_xyz": list(map(float, ideal.white_xyz))})
-    return {"rows": rows, "timing": chain.timing, "failures": failures, "ideal_rows": ideal_rows}
+    return rows
 
 
 def _result_rows(results: dict) -> list[dict]:

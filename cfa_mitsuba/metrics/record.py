@@ -1,0 +1,105 @@
+"""What a metric is, as the study, the command line and the report see it.
+
+Each metric module defines its pure function and, beside it, its
+:class:`MetricRecord` (``RECORDS``); :mod:`.registry` collects them.  The
+pattern is colour-science's ``DELTA_E_METHODS`` + ``filter_kwargs``: a
+record names the function, one generic adapter
+(:func:`.registry.evaluate`) fills its arguments by name.
+"""
+
+from __future__ import annotations
+
+__all__ = ["MetricRecord", "NATURAL", "INPUT_KINDS"]
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from ..render.types import NATURAL  # the kind of a natural scene (puppy, user XML, measured image)
+
+#: What a metric function takes positionally, by the record's ``inputs``:
+#: 'xyz' (reference XYZ, test XYZ, white XYZ), 'srgb8' (reference and test
+#: 8-bit sRGB code values), 'linear' (the test image in linear sRGB with the
+#: white at 1; a ``reference`` keyword, when the function has one, gets the
+#: ideal's).
+INPUT_KINDS = ("xyz", "srgb8", "linear")
+
+
+@dataclass(frozen=True, kw_only=True)
+class MetricRecord:
+    """A metric, as the study, the command line and the report see it.
+
+    Attributes
+    ----------
+    name : the command-line name (``'delta-e'``).
+    function : the pure metric function (``metrics.delta_e``), or None for a
+        value read from another metric's details (``parent``, ``detail_key``).
+    scenes : the scene kinds that feed it (:attr:`cfa_mitsuba.render.Scene.kind`):
+        a chart's kind (``'macbeth'``, ``'slanted-edge'``, ...) or
+        :data:`NATURAL` for any natural scene.  This is the one place that
+        says which scenes feed which metric.
+    inputs : one of :data:`INPUT_KINDS`.
+    unit : unit of the headline value ('' for unitless indices).
+    higher_is_better : direction of "better".
+    scored : whether it enters the normalised scores (the paper's eight).
+    label, description, decimals, paper : how tables and plots show it.
+    order : position in tables (the paper's section order; secondary values
+        after the scored ones).
+    score_range : eq. 8's default (worst, best), the paper's printed range;
+        None for unscored metrics.
+    range_units : the units the range applies to (default: ``unit``).
+    range_scaling : how the default range follows the study's geometry:
+        None (as printed); ``'pixel_pitch'`` (printed at 2.2 um, moved so the
+        same cycles per pixel score the same); ``'chirp_cy_px'`` (the range
+        is in cycles per camera pixel, times the chirp's samples per degree).
+    parent, detail_key : for a secondary value (``delta-l``): the metric
+        whose details hold it and the key.
+    censored_key : the details key (a bool) that says the headline is a
+        bound, not a measurement; None for metrics always measured.
+    ideal_details : whether the study keeps this metric's curves of the
+        ideal sensor too (the MTF: the report draws camera against ideal).
+    reference_cache : optional ``(keyword, function)``: ``function(reference,
+        white, **options)`` computes what depends on the reference image alone
+        (S-CIELAB's filtered reference, ``('reference_lab',
+        scielab_reference_lab)``); the adapter calls it once per ideal image
+        and option set (the options it takes) and passes the result to the
+        metric as ``keyword``.
+    """
+
+    name: str
+    function: Callable | None
+    scenes: tuple[str, ...]
+    inputs: str
+    unit: str
+    higher_is_better: bool
+    scored: bool
+    label: str
+    description: str
+    order: int = 1000
+    decimals: int = 3
+    paper: str = "—"
+    score_range: tuple[float, float] | None = None
+    range_scaling: str | None = None
+    range_units: tuple[str, ...] | None = None
+    parent: str | None = None
+    detail_key: str | None = None
+    censored_key: str | None = None
+    ideal_details: bool = False
+    reference_cache: tuple[str, Callable[..., Any]] | None = None
+
+    def __post_init__(self):
+        if self.inputs not in INPUT_KINDS:
+            raise ValueError(f"metric {self.name!r}: inputs must be one of {INPUT_KINDS}, got {self.inputs!r}")
+        if (self.function is None) == (self.parent is None):
+            raise ValueError(f"metric {self.name!r}: give a function, or a parent and detail_key (not both)")
+
+    @property
+    def secondary(self) -> bool:
+        return self.parent is not None
+
+    def detail(self, detail_key: str, **fields) -> "MetricRecord":
+        """A value read from this metric's details (``detail_key``), reported
+        but not scored: a record with this one's scenes and inputs, the
+        ``fields`` given (name, unit, label, description, ...)."""
+        base = {"function": None, "scenes": self.scenes, "inputs": self.inputs, "scored": False,
+                "higher_is_better": False, "parent": self.name, "detail_key": detail_key}
+        return MetricRecord(**{**base, **fields})

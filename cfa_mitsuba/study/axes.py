@@ -1,0 +1,203 @@
+"""The study axes: one record per named value a study can sweep.
+
+An :class:`Axis` says everything the program needs to know about one axis:
+its name (the metrics.csv column and the ``[[sweep]]`` key), how a value is
+checked, where it applies in the camera chain, its label and unit in tables
+and figures, the short prefix it gets in file names, and where its default
+comes from (the stage's own parameters: never a second copy of a default).
+
+Where an axis applies (``applies_to``):
+
+============  ================================================================
+``optics``    a field of :class:`~cfa_mitsuba.optics.OpticsParams` (``field``)
+``sensor``    a field of :class:`~cfa_mitsuba.sensor.params.SensorParams`
+``isp``       a keyword of :func:`cfa_mitsuba.isp.process` (``field``)
+``metric``    an option of one metric's function (``field`` = ``'metric.option'``)
+``capture``   an argument of the capture itself: the scene luminance, the
+              exposure, the noise seed, the CFA's spectra set (the chain
+              passes each where it belongs)
+============  ================================================================
+
+Adding an axis is one record in :data:`AXES` (and its test); the config
+check, the sweep, the chain, the tables and the report follow.  Sweeping a
+sensor field, for instance::
+
+    Axis(name="well_capacity_e", applies_to="sensor", field="well_capacity_e",
+         label="well capacity", unit="e⁻", short="wc", check=positive)
+"""
+
+from __future__ import annotations
+
+__all__ = ["Axis", "AXES", "axis_unit", "axis_label", "register_axis", "unregister_axis", "get_axis"]
+
+import dataclasses
+import inspect
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from ..errors import CfaMitsubaError
+
+APPLIES_TO = ("optics", "sensor", "isp", "metric", "capture")
+
+
+def positive(ck, v, key):
+    return ck.number(v, key, positive=True)
+
+
+def non_negative(ck, v, key):
+    return ck.number(v, key, nonneg=True)
+
+
+def _f_number(ck, v, key):
+    return ck.number(v, key, positive=True, maximum=1000.0)
+
+
+def _exposure(ck, v, key):
+    return v if v == "auto" else ck.number(v, key, positive=True)
+
+
+def _seed(ck, v, key):
+    return ck.integer(v, key, 0)
+
+
+def _spectra(ck, v, key):
+    from ..sensor import list_spectra_sets
+
+    return ck.string(v, key, tuple(list_spectra_sets()))
+
+
+def _readout(ck, v, key):
+    from ..sensor.params import READOUT_MODES
+
+    return ck.string(v, key, READOUT_MODES)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Axis:
+    """One study axis.
+
+    Attributes
+    ----------
+    name : the metrics.csv column and the ``[[sweep]]`` key.
+    applies_to : one of ``optics``, ``sensor``, ``isp``, ``metric``,
+        ``capture`` (the module docstring says what each means).
+    field : the parameter it sets: an OpticsParams or SensorParams field, an
+        :func:`~cfa_mitsuba.isp.process` keyword, ``'metric.option'``; for a
+        ``capture`` axis, the name the chain knows it by (its own name).
+    label, unit : how tables and figures name it.
+    short : its prefix in condition labels (file names: ``L100_f8``).
+    check : ``check(checker, value, key) -> value``: one value of a
+        ``[[sweep]]`` list checked (the config's one-line errors).
+    default : the default for a ``capture`` axis (the others read theirs
+        from the stage's parameters, :meth:`default_value`).
+    """
+
+    name: str
+    applies_to: str
+    label: str
+    unit: str
+    short: str
+    check: Callable[[Any, Any, str], Any]
+    field: str = ""
+    default: Any = None
+
+    def __post_init__(self):
+        if self.applies_to not in APPLIES_TO:
+            raise ValueError(f"axis {self.name!r}: applies_to must be one of {APPLIES_TO}")
+        if not self.field:
+            object.__setattr__(self, "field", self.name)
+
+    def default_value(self):
+        """The value the stage uses when nothing sets the axis: the
+        parameter's own default (OpticsParams, SensorParams, the ISP's or the
+        metric function's keyword), or the record's ``default`` for a capture
+        axis."""
+        if self.applies_to == "optics":
+            from ..optics import OpticsParams
+
+            return _dataclass_default(OpticsParams, self.field)
+        if self.applies_to == "sensor":
+            from ..sensor.params import SensorParams
+
+            return _dataclass_default(SensorParams, self.field)
+        if self.applies_to == "isp":
+            from ..isp import process
+
+            return inspect.signature(process).parameters[self.field].default
+        if self.applies_to == "metric":
+            from ..metrics import metric_parameters
+
+            metric, option = self.field.split(".", 1)
+            return metric_parameters(metric)[option].default
+        return self.default
+
+    def value_in(self, settings) -> Any:
+        """The axis's value in a study's :class:`~.chain.ChainSettings` (the
+        config's base value: its ``[optics]``, ``[sensor]``, ``[isp]`` or
+        ``[metrics.<name>]`` entry, else the stage default)."""
+        if self.applies_to == "optics":
+            return getattr(settings.optics, self.field)
+        if self.applies_to == "sensor":
+            return getattr(settings.sensor, self.field)
+        if self.applies_to == "isp":
+            return dict(settings.isp).get(self.field, self.default_value())
+        if self.applies_to == "metric":
+            metric, option = self.field.split(".", 1)
+            return settings.options_of_metrics().get(metric, {}).get(option, self.default_value())
+        return self.default
+
+
+def _dataclass_default(cls, name: str):
+    for f in dataclasses.fields(cls):
+        if f.name == name:
+            if f.default is not dataclasses.MISSING:
+                return f.default
+            return f.default_factory()  # type: ignore[misc]
+    raise CfaMitsubaError(f"{cls.__name__} has no field {name!r}")
+
+
+#: The axes, in metrics.csv column order (luminance first: the paper's sweep).
+AXES: dict[str, Axis] = {a.name: a for a in (
+    Axis(name="luminance", applies_to="capture", label="luminance", unit="cd/m²", short="L", check=positive,
+         default=100.0),
+    Axis(name="f_number", applies_to="optics", label="f-number", unit="", short="f", check=_f_number),
+    Axis(name="pixel_pitch_um", applies_to="sensor", label="pixel pitch", unit="µm", short="p", check=positive),
+    Axis(name="exposure", applies_to="capture", label="exposure", unit="s", short="t", check=_exposure,
+         default="auto"),
+    Axis(name="read_noise_e", applies_to="sensor", label="read noise", unit="e⁻", short="rn", check=non_negative),
+    Axis(name="seed", applies_to="capture", label="noise seed", unit="", short="seed", check=_seed, default=0),
+    Axis(name="spectra", applies_to="capture", label="spectra set", unit="", short="s-", check=_spectra),
+    Axis(name="readout", applies_to="sensor", label="read-out", unit="", short="ro-", check=_readout),
+)}
+
+
+def register_axis(axis: Axis) -> Axis:
+    """Add an axis (a plug-in's or a test's); it becomes a column of every
+    later study's tables.  The name must be new."""
+    if axis.name in AXES:
+        raise CfaMitsubaError(f"an axis named {axis.name!r} is already registered")
+    AXES[axis.name] = axis
+    return axis
+
+
+def unregister_axis(name: str) -> None:
+    """Remove a registered axis (tests that register a toy one)."""
+    AXES.pop(name, None)
+
+
+def get_axis(name: str) -> Axis:
+    try:
+        return AXES[name]
+    except KeyError:
+        raise CfaMitsubaError(f"unknown axis {name!r} (known: {', '.join(AXES)})") from None
+
+
+def axis_unit(name: str) -> str:
+    """An axis's unit for labels ('' for unknown or unitless axes)."""
+    a = AXES.get(name)
+    return a.unit if a else ""
+
+
+def axis_label(name: str) -> str:
+    a = AXES.get(name)
+    return a.label if a else name
