@@ -23,7 +23,7 @@ _WHITE = (95.05, 100.0, 108.9)
 
 
 def _inputs():
-    from .records import MetricInputs
+    from .inputs import MetricInputs
 
     h, w = 48, 64
     yy, xx = np.mgrid[0:h, 0:w]
@@ -37,7 +37,7 @@ def _inputs():
 def check_options(name: str, options: dict) -> None:
     """Raise :class:`CfaMitsubaError` with the metric's own message when
     ``options`` make metric ``name`` fail on an input it otherwise measures."""
-    from .records import evaluate
+    from .registry import evaluate
 
     if not options:
         return
