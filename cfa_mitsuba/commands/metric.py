@@ -99,10 +99,8 @@ def _load(path, forced, metric_inputs):
     from ..errors import CfaMitsubaError
     from ..io import read_image
 
-    from ..metrics._common import check_values
-
     f = read_image(path)
-    data = check_values(f.data, str(path))  # before any conversion: sRGB encoding would clip an infinity to white
+    data = f.data
     if f.format == "png":
         data = data / float((1 << f.bit_depth) - 1)  # 0..1 as stored
         if forced == "xyz":
@@ -213,6 +211,10 @@ def run(args) -> int:
     require(len(args.images) == need,
             f"{args.name} takes {'one image (the edge)' if single else 'two images: REF TEST'}, got {len(args.images)}")
     imgs = [_load(p, args.input, info.inputs) for p in args.images]
+    from ..metrics._common import check_values
+
+    for im, role in zip(imgs, ("edge image",) if single else ("reference image", "test image")):
+        check_values(im.data, f"{role} {im.path}")  # before any conversion: sRGB would clip an infinity to white
     stored = next((w for w in map(_stored_white, args.images) if w is not None), None)
     if args.white:
         white = np.array(_floats(args.white, 3, "--white"), dtype=np.float64)
