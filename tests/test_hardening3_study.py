@@ -334,3 +334,15 @@ def test_force_starts_what_the_limits_refuse():
     said = []
     size = check_study_size(config, 2, force=True, log=said.append)
     assert size.captures == 6_000_000 and len(said) == 1 and said[0].endswith("(--force)")
+
+
+def test_a_sweep_listing_a_million_values_is_refused_before_parsing(tmp_path):
+    from cfa_mitsuba.errors import CfaMitsubaError
+    from cfa_mitsuba.study.config import load_config
+
+    config = tmp_path / "long.toml"
+    config.write_text(SMALL + '\n[[sweep]]\nscene = "macbeth"\nseed = [' + ", ".join(map(str, range(10**6))) + "]\n")
+    t0 = time.perf_counter()
+    with pytest.raises(CfaMitsubaError, match=r"long.toml: 7,\d{3},\d{3} bytes, more than a config file holds"):
+        load_config(config)
+    assert time.perf_counter() - t0 < 2.0  # parsing it alone took 7 s
