@@ -211,6 +211,10 @@ def run(args) -> int:
     require(len(args.images) == need,
             f"{args.name} takes {'one image (the edge)' if single else 'two images: REF TEST'}, got {len(args.images)}")
     imgs = [_load(p, args.input, info.inputs) for p in args.images]
+    from ..metrics._common import check_values
+
+    for im, role in zip(imgs, ("edge image",) if single else ("reference image", "test image")):
+        check_values(im.data, f"{role} {im.path}")  # before any conversion: sRGB would clip an infinity to white
     stored = next((w for w in map(_stored_white, args.images) if w is not None), None)
     if args.white:
         white = np.array(_floats(args.white, 3, "--white"), dtype=np.float64)

@@ -31,6 +31,8 @@ def add_arguments(parser) -> None:
                         help="run on a Dask cluster, e.g. tcp://HOST:8786 (needs the 'dask' extra)")
     parser.add_argument("--no-report", action="store_true", help="write the tables only, no HTML report")
     parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    parser.add_argument("--force", action="store_true",
+                        help="start a study above the size limits (estimated time over 24 h, over 100,000 tasks)")
 
 
 def run(args) -> int:
@@ -47,7 +49,8 @@ def run(args) -> int:
 
     # the config's name is a label, never a path: '../../x' must not leave results/
     out = Path(args.out) if args.out else Path("results") / safe_name(config.name)
-    result = run_study(config, out, workers=args.workers, scheduler=args.scheduler, progress=not args.quiet)
+    result = run_study(config, out, workers=args.workers, scheduler=args.scheduler, progress=not args.quiet,
+                       force=args.force)
     report = not args.no_report and config.output.get("report", True)
     if report:
         t = time.perf_counter()

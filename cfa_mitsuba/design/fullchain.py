@@ -107,8 +107,9 @@ def run_fullchain(config, chosen, out_dir: Path, *, workers=None, scheduler=None
     named = list(config.study.cfas)
     study = dataclasses.replace(config.study, name=f"{config.name}-fullchain",
                                 cfas=tuple(named) + tuple(p for _, p in names.values()),
-                                output={**config.study.output, "report": False})
-    result = run_study(study, out_dir / "study", workers=workers or config.workers, scheduler=scheduler,
+                                output={**config.study.output, "report": False},
+                                workers=config.workers)  # a config's workers are capped at the cores
+    result = run_study(study, out_dir / "study", workers=workers, scheduler=scheduler,
                        progress=progress, log=log)
     labels = [get_cfa(c).name for c in named] + [n for n, _ in names.values()]
     return objective_table(result.metrics, labels, config.objectives + config.constraints), names, result

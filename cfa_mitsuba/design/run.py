@@ -79,14 +79,19 @@ def _fullchain_table(config, search, values, names, named_proxies):
     return table
 
 
-def run_design(config, out_dir, *, workers=None, scheduler=None, progress=True, log=print) -> DesignResult:
-    """Run a design (a :class:`~.config.DesignConfig`) into ``out_dir``."""
+def run_design(config, out_dir, *, workers=None, scheduler=None, progress=True, log=print,
+               force: bool = False) -> DesignResult:
+    """Run a design (a :class:`~.config.DesignConfig`) into ``out_dir``;
+    ``force`` starts a search above the size limits (design.sizing)."""
     from ..sensor import get_cfa
     from . import front
     from .fullchain import run_fullchain
     from .report import build_design_report
     from .search import cfa_proxies, proxy_settings, run_search, used_proxies
 
+    from .sizing import check_design_size
+
+    check_design_size(config, force=force, log=log)  # issue 27: sized before anything is written
     out = check_writable_dir(out_dir)
     t0 = time.perf_counter()
     timing = {}

@@ -57,6 +57,8 @@ class SourceCube:
         distance (m) where the file says them, else None.
     illuminant : the scene's light where the file says it, else None.
     notices : how the file was read, one line each (printed by the caller).
+    illuminant_unreadable : what the file says of its light when that cannot
+        be read (an EXR's unparseable 'illuminant' attribute), else ''.
     """
 
     data: np.ndarray
@@ -68,6 +70,7 @@ class SourceCube:
     distance_m: float | None = None
     illuminant: Illuminant | None = None
     notices: list[str] = field(default_factory=list)
+    illuminant_unreadable: str = ""
 
 
 def check_wavelengths(wavelengths, n_bands: int, where: str, hint: str = "pass --wavelengths") -> np.ndarray:
@@ -171,7 +174,9 @@ def choose_illuminant(cube: SourceCube, illuminant: Illuminant | None, source: s
     elif cube.illuminant is not None:
         light, said = cube.illuminant, f"illuminant from the file: {cube.illuminant.label}"
     else:
-        light, said = default_illuminant(), "illuminant D65 assumed (the file names none; pass --illuminant)"
+        why = (f"the file's {cube.illuminant_unreadable} is unparseable" if cube.illuminant_unreadable
+               else "the file names none")
+        light, said = default_illuminant(), f"illuminant D65 assumed ({why}; pass --illuminant)"
     return light, said + (" lights the reflectance" if cube.quantity == "reflectance" else " sets the white reference")
 
 

@@ -119,10 +119,14 @@ def read_exr_cube(path) -> tuple[SourceCube, dict]:
     if np.any(np.diff(wl) <= 0):
         raise CfaMitsubaError(f"{where}: two spectral channels have the same wavelength")
     data = np.stack([b[1] for b in bands], axis=-1)
-    light = None
-    if isinstance(header.get("illuminant"), str):
-        light = illuminant_from_attribute(header["illuminant"], where)
-    cube = SourceCube(data, wl, quantity, f"spectral EXR {where}", scale=scale, illuminant=light, notices=notices)
+    light, unreadable = None, ""
+    if "illuminant" in header:
+        text = header["illuminant"]
+        light = illuminant_from_attribute(text, where) if isinstance(text, str) else None
+        if light is None:  # issue 27: say so, not "the file names none"
+            unreadable = f"'illuminant' attribute ({str(text)[:40]!r})"
+    cube = SourceCube(data, wl, quantity, f"spectral EXR {where}", scale=scale, illuminant=light, notices=notices,
+                      illuminant_unreadable=unreadable)
     ours = our_meta(p, header)
     cube.fov_deg, cube.distance_m = _number(ours.get("fov_deg")), _number(ours.get("scene_distance_m"))
     return cube, header

@@ -97,6 +97,7 @@ def save_raw_npz(path, raw: RawImage, *, compress: bool = True) -> Path:
 
 def load_raw_npz(path) -> RawImage:
     """Read a raw file written by :func:`save_raw_npz`."""
+    from .raw_content import check_raw_content
     from .validate import check_raw_arrays, load_json_text, numpy_arrays
 
     p = Path(path)
@@ -126,6 +127,7 @@ def load_raw_npz(path) -> RawImage:
     if not isinstance(settings, dict) or not isinstance(meta, dict):
         raise CfaMitsubaError(f"{str(p)!r}: settings_json and meta_json must be JSON objects")
     check_raw_arrays(d, settings, repr(str(p)))  # QE in 0..1, positive exposure, tile = pattern
+    check_raw_content(d, settings, repr(str(p)))  # the pixels against the tile and the recorded settings
     seed = int(d["seed"])
     raw = RawImage(
         raw=d["raw"], pattern=d["pattern"], channels=tuple(str(c) for c in d["channels"]), spectra=d["spectra"],

@@ -6,10 +6,32 @@ import numpy as np
 
 from ..errors import CfaMitsubaError, require, require_finite
 
+#: The largest magnitude a metric accepts in any input (XYZ in cd/m^2, linear
+#: RGB, 8-bit codes): far above any scene (the sun's disc is about 1.6e9
+#: cd/m^2) and far below where the colour formulas overflow (CIEDE2000 raises
+#: chroma, about 500 (X/Xw)^(1/3), to the 7th power: inf above ~1e120 x
+#: white), so a finite but absurd value is refused instead of turning into
+#: NaN that a mean then skips.
+MAX_ABS_INPUT = 1e20
+
+
+def check_values(arr, what: str) -> np.ndarray:
+    """``arr`` as float64, refused (one line naming ``what``) when it holds
+    NaN, an infinity or a value beyond :data:`MAX_ABS_INPUT` in magnitude.
+    The one input check of every metric (``as_image``, ``as_white``) and of
+    the ``metric`` command's loaded files, before any conversion (which would
+    clip an infinity to the sRGB white)."""
+    a = require_finite(arr, what)
+    big = int(np.count_nonzero(np.abs(a) > MAX_ABS_INPUT))
+    require(big == 0, f"{what} has {big} value(s) beyond +-{MAX_ABS_INPUT:g} (largest magnitude "
+                      f"{float(np.max(np.abs(a))):g}): not a physical image value")
+    return a
+
 
 def as_image(arr, what: str, *, channels=(3,), allow_gray: bool = False, min_size: int = 1) -> np.ndarray:
-    """``arr`` as a finite float64 (H, W, C) (or (H, W) if ``allow_gray``) array."""
-    a = require_finite(arr, what)
+    """``arr`` as a finite float64 (H, W, C) (or (H, W) if ``allow_gray``)
+    array within :data:`MAX_ABS_INPUT` (:func:`check_values`)."""
+    a = check_values(arr, what)
     if a.ndim == 3 and a.shape[2] == 1 and allow_gray:
         a = a[..., 0]
     if a.ndim == 2:
@@ -35,7 +57,7 @@ def as_pair(reference, test, *, channels=(3,), allow_gray=False, min_size=1):
 
 def as_white(white_xyz) -> np.ndarray:
     """A white point (Xw, Yw, Zw), finite and positive."""
-    w = require_finite(white_xyz, "white point").reshape(-1)
+    w = check_values(white_xyz, "white point").reshape(-1)
     require(w.size == 3, f"white point must have 3 values (X, Y, Z), got {w.size}")
     require(bool(np.all(w > 0)), f"white point must be positive, got {w.tolist()}")
     return w

@@ -103,6 +103,11 @@ def _typename(v) -> str:
             dict: "table"}.get(type(v), type(v).__name__)
 
 
+#: The largest config file read (bytes): a paper-sized study is a few kB, a
+#: sweep of 10,000 values about 60 kB.
+MAX_CONFIG_BYTES = 1 << 20
+
+
 def read_toml(path, what: str) -> tuple[Path, dict]:
     """(path, the parsed TOML) of a config file; a missing, unreadable or
     malformed file is one :class:`CfaMitsubaError` naming it (``what``: 'config
@@ -110,6 +115,10 @@ def read_toml(path, what: str) -> tuple[Path, dict]:
     p = Path(path)
     if not p.is_file():
         raise CfaMitsubaError(f"no such {what}: {str(p)!r}")
+    size = p.stat().st_size
+    if size > MAX_CONFIG_BYTES:  # issue 27: parsing a 8 MB sweep list alone took 7 s; refused at once
+        raise CfaMitsubaError(f"{p.name}: {size:,} bytes, more than a {what} holds (at most "
+                              f"{MAX_CONFIG_BYTES:,}: a sweep this long would be refused for its size anyway)")
     try:
         return p, tomllib.loads(p.read_text())
     except tomllib.TOMLDecodeError as exc:

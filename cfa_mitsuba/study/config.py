@@ -358,6 +358,10 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
     luminances = ck.number_list(data.get("luminances", [100.0]), "luminances")
     sweeps = tuple(_sweeps(ck, data.get("sweep", []), scenes))
     optics, sensor_all, capture = _optics_sensor(ck, data, cfas, base)
+    from .physical import check_physical, check_realisations  # issue 27: values no camera meets, by key
+
+    check_physical(ck.fail, luminances, sweeps, capture)
+    check_realisations(ck.fail, seeds, capture.get("noise", "all"))
     mean_match = ck.boolean(data.get("mean_match", True), "mean_match")
     options = metric_options(ck, data.get("metrics", {}))
     clip, policy, ranges = _normalisation(ck, data.get("normalisation", {}))

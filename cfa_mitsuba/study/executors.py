@@ -25,6 +25,7 @@ __all__ = ["LocalExecutor", "DaskExecutor", "make_executor", "thread_budget"]
 import concurrent.futures as cf
 import multiprocessing
 import os
+import threading
 from typing import Callable, Iterable, Iterator
 
 from ..errors import CfaMitsubaError
@@ -46,8 +47,12 @@ def thread_budget(workers_on_node: int) -> int:
     return max(1, _cpu_count() // max(1, int(workers_on_node)))
 
 
-def _init_worker(threads: int) -> None:
+def _init_worker(threads: int, parent_pid: int | None = None, death_signal: bool = False) -> None:
     os.environ["CFA_MITSUBA_THREADS"] = str(threads)
+    if parent_pid is not None:  # issue 27: a worker ends when the study does, even on SIGKILL (study.shutdown)
+        from .shutdown import watch_parent
+
+        watch_parent(parent_pid, death_signal=death_signal)
 
 
 class LocalExecutor:
@@ -73,7 +78,8 @@ class LocalExecutor:
                 os.environ[var] = str(self.threads)
             self._pool = cf.ProcessPoolExecutor(
                 max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
-                initializer=_init_worker, initargs=(self.threads,),
+                initializer=_init_worker,
+                initargs=(self.threads, os.getpid(), threading.current_thread() is threading.main_thread()),
             )
         else:
             self._saved_env["CFA_MITSUBA_THREADS"] = os.environ.get("CFA_MITSUBA_THREADS")
@@ -82,8 +88,14 @@ class LocalExecutor:
 
     def __exit__(self, exc_type, exc, tb):
         if self._pool is not None:
-            # On Ctrl-C, do not wait for queued work: what finished is saved.
-            self._pool.shutdown(wait=exc_type is None, cancel_futures=exc_type is not None)
+            if exc_type is None:
+                self._pool.shutdown(wait=True)
+            else:
+                # Ctrl-C, SIGTERM, an error: stop the workers now, running tasks
+                # included (what finished is saved; a rerun does the rest).
+                from .shutdown import stop_pool
+
+                stop_pool(self._pool)
             self._pool = None
         for var, val in self._saved_env.items():
             if val is None:

@@ -10,6 +10,7 @@ __all__ = ["metric_options", "function_options"]
 
 import inspect
 
+from ..errors import CfaMitsubaError
 from .checker import _Checker, _typename
 
 
@@ -43,5 +44,13 @@ def metric_options(ck: _Checker, data) -> dict:
     from ..metrics import metric_names, metric_parameters
 
     ck.table(data, "metrics", {m: None for m in metric_names()})
-    return {name: function_options(ck, opts, f"metrics.{name}", metric_parameters(name))
-            for name, opts in data.items()}
+    out = {name: function_options(ck, opts, f"metrics.{name}", metric_parameters(name))
+           for name, opts in data.items()}
+    from ..metrics.dry import check_options  # issue 27: the values too, by the metric itself, before any work
+
+    for name, opts in out.items():
+        try:
+            check_options(name, opts)
+        except CfaMitsubaError as exc:
+            ck.fail(f"metrics.{name}", str(exc))
+    return out

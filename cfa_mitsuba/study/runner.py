@@ -186,17 +186,22 @@ def _run_tasks(executor, fn, items, desc, progress, on_result):
 
 
 def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, scheduler: str | None = None,
-              progress: bool = True, log=None) -> StudyResult:
+              progress: bool = True, log=None, force: bool = False) -> StudyResult:
     """Run a study's renders and evaluations and write its tables (see the
     module docstring for the outputs); ``timing_summary(result)`` is the
     line to print at the end.
 
-    ``workers``: local processes (default: the config's, else 2);
-    ``scheduler``: a Dask scheduler address instead.
+    ``workers``: local processes (default: the config's, capped at the
+    cores, else 2); ``scheduler``: a Dask scheduler address instead;
+    ``force``: start a study above the size limits (study.sizing).
     """
     from .executors import make_executor, thread_budget
+    from .sizing import check_study_size, resolve_workers
 
     log = log or (lambda msg: print(msg, file=sys.stderr))
+    # issue 27: the study's size stated and checked before anything is written
+    workers = None if scheduler else resolve_workers(workers, config.workers, log)
+    check_study_size(config, workers, scheduler=scheduler, force=force, log=log)
     out = check_writable_dir(out_dir)
     work = out / ".work"
     details = out / "details"
@@ -205,21 +210,17 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     timing: dict = {"phases": {}, "tasks": {"optics_s": 0.0, "capture_s": 0.0, "process_s": 0.0, "metrics_s": 0.0}}
     t_start = time.perf_counter()
 
-    done: dict[str, dict] = {}
-    for task in tasks:
-        tid = _task_id(task)
-        f = work / f"{tid}.json"
-        if f.exists():
-            try:
-                done[tid] = json.loads(f.read_text())
-            except ValueError:  # pragma: no cover - atomic writes make this unlikely
-                f.unlink()
+    from .resume import load_finished  # issue 27: untrusted resume files are recomputed, one notice
+
+    done: dict[str, dict] = load_finished(work, [_task_id(t) for t in tasks], log) if work.is_dir() else {}
     todo = [t for t in tasks if _task_id(t) not in done]
     reused = len(tasks) - len(todo)
 
-    executor = make_executor(workers=workers or config.workers, scheduler=scheduler)
+    from .shutdown import terminate_cleanly
+
+    executor = make_executor(workers=workers, scheduler=scheduler)
     render_info: dict = {}
-    with executor:
+    with terminate_cleanly(log), executor:  # issue 27: SIGTERM stops the workers too
         # Written once the executor is up (a Dask scheduler that cannot be
         # reached leaves nothing behind).
         work.mkdir(exist_ok=True)

@@ -1,0 +1,348 @@
+"""Hardening, round three (issue 27), the study's items: a stopped study
+stops every process it started and resumes (1); untrusted resume files are
+recomputed with one notice (8).
+
+A small study (one Macbeth render, six CFAs, two workers) runs once
+uninterrupted; every stopped or damaged run must end, when run again, with
+byte-identical tables.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from conftest import REPO
+
+SMALL = """\
+name = "small"
+seed = 1
+seeds = 2
+scenes = ["macbeth"]
+cfas = ["bayer", "rgb4", "cmy1", "rgbw1", "rgb1", "rgb2"]
+demosaics = ["bilinear", "pocs"]
+luminances = [100]
+[render.macbeth]
+width = 120
+height = 106
+[output]
+report = false
+"""
+
+
+def _cmd(config: Path, out: Path, *extra) -> list[str]:
+    return [sys.executable, "-m", "cfa_mitsuba", "study", str(config), "--out", str(out), "--quiet", *map(str, extra)]
+
+
+def _study(config: Path, out: Path, *extra, **kw) -> subprocess.CompletedProcess:
+    return subprocess.run(_cmd(config, out, *extra), cwd=REPO, capture_output=True, text=True, **kw)
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory):
+    config = tmp_path_factory.mktemp("small") / "small.toml"
+    config.write_text(SMALL)
+    proc = _study(config, config.parent / "reference", "--workers", 2)
+    assert proc.returncode == 0, proc.stderr
+    return config, config.parent / "reference"
+
+
+def _parents() -> dict[int, int]:
+    """{pid: parent pid} of every process, from /proc (Linux)."""
+    out = {}
+    for name in os.listdir("/proc"):
+        if name.isdigit():
+            try:
+                stat = Path(f"/proc/{name}/stat").read_text()
+            except OSError:
+                continue
+            out[int(name)] = int(stat.rsplit(")", 1)[1].split()[1])
+    return out
+
+
+def _descendants(root: int) -> set[int]:
+    parents, found, frontier = _parents(), set(), {root}
+    while frontier:
+        frontier = {pid for pid, ppid in parents.items() if ppid in frontier} - found
+        found |= frontier
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"  # a zombie has ended; only its parent's bookkeeping is left
+
+
+def _tables(out: Path) -> dict[str, bytes]:
+    return {n: (out / n).read_bytes() for n in ("metrics.csv", "scores.csv", "metrics_realisations.csv")}
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "SIGKILL"])
+def test_a_stopped_study_leaves_no_process_and_resumes(small, tmp_path, sig):
+    config, reference = small
+    out = tmp_path / "stopped"
+    log = open(tmp_path / "stderr.txt", "w")  # not a pipe: a leaked worker would hold it open forever
+    proc = subprocess.Popen(_cmd(config, out, "--workers", 2), cwd=REPO, stdout=subprocess.DEVNULL, stderr=log)
+    children: set[int] = set()
+    try:
+        t0 = time.time()
+        while not (out / ".work").is_dir() or not any((out / ".work").glob("*.json")):  # evaluating
+            assert proc.poll() is None, (tmp_path / "stderr.txt").read_text()
+            assert time.time() - t0 < 240, "no task finished"
+            time.sleep(0.05)
+        children = _descendants(proc.pid)
+        assert len(children) >= 3, children  # two pool workers and multiprocessing's resource tracker
+        proc.send_signal(sig)  # the main process only, as a CI timeout or the OOM killer does
+        proc.wait(timeout=60)
+        time.sleep(5.0)
+        left = sorted(pid for pid in children if _alive(pid))
+        assert not left, f"alive 5 s after {sig.name}: " + "; ".join(
+            Path(f"/proc/{p}/cmdline").read_text().replace("\0", " ")[:100] for p in left)
+    finally:
+        log.close()
+        for pid in children:  # never leave a leaked worker behind a failed test
+            if _alive(pid):
+                os.kill(pid, signal.SIGKILL)
+    assert proc.returncode == -sig
+    assert not (out / "metrics.csv").exists()
+    finished = len(list((out / ".work").glob("*.json")))
+    again = _study(config, out, "--workers", 2)
+    assert again.returncode == 0, again.stderr
+    m = re.search(r"(\d+) task\(s\) run, (\d+) reused", again.stderr)
+    assert m and int(m.group(2)) == finished and int(m.group(1)) == 6 - finished, again.stderr
+    assert _tables(out) == _tables(reference)
+
+
+DAMAGE = {
+    "a string": json.dumps("not a result"),
+    "a list": json.dumps([1, 2, 3]),
+    "NaN": "NaN",
+    "100,000-deep array": "[" * 100_000 + "]" * 100_000,
+    "rows of strings": json.dumps({"rows": ["x"], "timing": {}}),
+    "not JSON": "{\"rows\": [",
+}
+
+
+def test_untrusted_resume_files_are_recomputed_with_one_notice(small, tmp_path):
+    config, reference = small
+    out = tmp_path / "damaged"
+    first = _study(config, out, "--workers", 1)
+    assert first.returncode == 0, first.stderr
+    files = sorted((out / ".work").glob("*.json"))
+    assert len(files) == 6
+    for f, text in zip(files, DAMAGE.values()):
+        f.write_text(text)
+    again = _study(config, out, "--workers", 1)
+    assert again.returncode == 0, again.stderr
+    assert "Traceback" not in again.stderr
+    notices = [line for line in again.stderr.splitlines() if "could not be trusted" in line]
+    assert len(notices) == 1 and "6 saved task result(s)" in notices[0], again.stderr
+    assert "6 task(s) run, 0 reused" in again.stderr
+    assert _tables(out) == _tables(reference)
+    # and the rewritten files are trusted by the next run
+    third = _study(config, out, "--workers", 1)
+    assert third.returncode == 0 and "0 task(s) run, 6 reused" in third.stderr, third.stderr
+
+
+# ------------------------------------------------------------------ item 4: sized before it starts
+
+def _sweep_of_a_million() -> str:
+    values = ", ".join(f"{1 + i / 100:g}" for i in range(100))
+    seeds = ", ".join(str(i) for i in range(100))
+    return SMALL + f'\n[[sweep]]\nscene = "macbeth"\nread_noise_e = [{values}]\npixel_pitch_um = [{values}]\nseed = [{seeds}]\n'
+
+
+@pytest.mark.parametrize("case", ["seeds", "sweep"])
+def test_runaway_studies_are_refused_fast_with_the_estimate(tmp_path, case):
+    text = SMALL.replace("seeds = 2", "seeds = 1000000") if case == "seeds" else _sweep_of_a_million()
+    config = tmp_path / f"{case}.toml"
+    config.write_text(text)
+    out = tmp_path / "out"
+    t0 = time.perf_counter()
+    proc = _study(config, out)
+    wall = time.perf_counter() - t0
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert f"{case}.toml" in lines[0] and "--force" in lines[0]
+    if case == "seeds":
+        assert "6,000,000 capture(s)" in lines[0] and "24 h limit" in lines[0]
+    else:  # counted, not built: 100 x 100 x 100 crossed plus the base condition
+        assert "1,000,001 condition(s)" in lines[0] and "100,000-task limit" in lines[0]
+    assert re.search(r"about [\d.,]+ (h|days)", lines[0])
+    assert not out.exists()
+    assert wall < 5.0, wall  # the whole command, interpreter start included (1.3 s unloaded)
+    # the refusal itself, from reading the config to the message: under 2 s
+    from cfa_mitsuba.errors import CfaMitsubaError
+    from cfa_mitsuba.study.config import load_config
+    from cfa_mitsuba.study.sizing import check_study_size
+
+    t0 = time.perf_counter()
+    with pytest.raises(CfaMitsubaError, match="--force"):
+        check_study_size(load_config(config), None)
+    assert time.perf_counter() - t0 < 2.0
+
+
+def test_the_count_never_builds_the_conditions():
+    from cfa_mitsuba.study.config import parse_config
+    from cfa_mitsuba.study.sizing import study_size
+
+    import tomllib
+
+    config = parse_config(tomllib.loads(_sweep_of_a_million()), where="sweep.toml")
+    t0 = time.perf_counter()
+    size = study_size(config, 2)
+    assert time.perf_counter() - t0 < 0.5
+    assert (size.conditions, size.tasks, size.captures, size.outputs) == (1_000_001, 6_000_006, 12_000_012,
+                                                                          24_000_024)
+
+
+def test_config_workers_are_capped_at_the_cores_unless_the_command_insists():
+    from cfa_mitsuba.study.executors import _cpu_count
+    from cfa_mitsuba.study.sizing import resolve_workers
+
+    said = []
+    assert resolve_workers(None, 1000, said.append) == _cpu_count()
+    assert len(said) == 1 and "capped" in said[0] and "--workers 1000" in said[0]
+    said.clear()
+    assert resolve_workers(1000, 1, said.append) == 1000 and not said
+    assert resolve_workers(None, None, said.append) is None and not said
+
+
+def test_the_memory_check_covers_every_worker(tmp_path):
+    config = tmp_path / "small.toml"
+    config.write_text(SMALL)
+    proc = _study(config, tmp_path / "out", "--workers", 1000)
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 2 and len(lines) == 1, proc.stderr
+    assert "1000 worker(s) need more than" in lines[0] and "fewer --workers" in lines[0]
+    assert not (tmp_path / "out").exists()
+
+
+DESIGN_CASES = {
+    "population": ('engine = "exhaustive"', 'engine = "nsga2"\npopulation = 100000000', "lower search.population"),
+    "max_exhaustive": ('engine = "exhaustive"', "max_exhaustive = 1000000000000", "8.47e+11 raw layouts"),
+    "generations": ('engine = "exhaustive"', 'engine = "nsga2"\ngenerations = 1000000000', "24 h limit"),
+}
+
+
+@pytest.mark.parametrize("case", list(DESIGN_CASES))
+def test_runaway_designs_are_refused_with_the_estimate(tmp_path, case):
+    old, new, needle = DESIGN_CASES[case]
+    text = (REPO / "configs" / "design-quick.toml").read_text().replace(old, new)
+    if case == "max_exhaustive":
+        text = text.replace('tiles = ["2x2", "2x3", "3x2", "3x3", "2x4", "4x2"]', 'tiles = ["5x5"]')
+    config = tmp_path / f"{case}.toml"
+    config.write_text(text)
+    out = tmp_path / "out"
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "cfa_mitsuba", "design", str(config), "--out", str(out), "--quiet"],
+                          cwd=REPO, capture_output=True, text=True)
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert f"{case}.toml" in lines[0] and "candidate evaluation(s)" in lines[0] and needle in lines[0]
+    assert "peak memory about" in lines[0] and re.search(r"about [\d.,]+ (h|days)", lines[0])
+    assert time.perf_counter() - t0 < 10
+    assert not out.exists()
+
+
+# ------------------------------------------------------------------ item 10: checked before any work
+
+LATE = {
+    "version": ('\n[metrics.delta-e]\nversion = "1999"\n', "metrics.delta-e", "unknown dE version '1999'"),
+    "matrix": ('\n[metrics.scielab]\nmatrix = "xyz3"\n', "metrics.scielab", "unknown value 'xyz3'"),
+    "luminance": (None, "luminances[0]", "at most 1e+10 cd/m^2"),
+    "sweep_luminance": ('\n[[sweep]]\nscene = "macbeth"\nluminance = [10, 1e300]\n', "sweep[0].luminance[1]",
+                        "got 1e+300"),
+    "seeds": (None, "seeds", "at least 2 noise realisations"),
+}
+
+
+@pytest.mark.parametrize("case", list(LATE))
+def test_values_are_checked_with_the_config_and_nothing_is_written(tmp_path, case):
+    extra, key, needle = LATE[case]
+    text = SMALL + (extra or "")
+    if case == "luminance":
+        text = text.replace("luminances = [100]", "luminances = [1e308]")
+    if case == "seeds":
+        text = text.replace("seeds = 2", "seeds = 1")
+    config = tmp_path / f"{case}.toml"
+    config.write_text(text)
+    out = tmp_path / "out"
+    proc = _study(config, out, timeout=120)
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert f"{case}.toml: {key}:" in lines[0] and needle in lines[0], lines[0]
+    assert not out.exists()  # no config.json, no .work
+
+
+def test_good_metric_options_and_noiseless_single_realisations_pass():
+    import tomllib
+
+    from cfa_mitsuba.study.config import parse_config
+
+    text = SMALL.replace("seeds = 2", "seeds = 1") + '[sensor]\nnoise = "off"\n[metrics.delta-e]\nversion = "1976"\n' \
+        '[metrics.scielab]\nmatrix = "xyz10"\n[[sweep]]\nscene = "macbeth"\nluminance = [1e9]\n'
+    config = parse_config(tomllib.loads(text), where="ok.toml")
+    assert config.seeds == 1 and config.metric_options["delta-e"] == {"version": "1976"}
+
+
+def test_an_unparseable_exr_illuminant_is_called_unparseable(tmp_path):
+    import OpenEXR
+    import numpy as np
+
+    from cfa_mitsuba import spectra
+    from cfa_mitsuba.io import read_spectral_exr
+    from cfa_mitsuba.io.exr import spectral_channel_name
+
+    channels = {spectral_channel_name(w): np.full((4, 5), 0.01, np.float32) for w in spectra.DEFAULT_WAVELENGTHS}
+    notes = {}
+    for name, attribute in (("garbled", "300nm:0.1;garbage"), ("plain", None)):
+        header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
+                  "spectralLayoutVersion": "1.0", "emissiveUnits": "W.m^-2.sr^-1.nm^-1"}
+        if attribute:
+            header["illuminant"] = attribute
+        with OpenEXR.File(header, channels) as f:
+            f.write(str(tmp_path / f"{name}.exr"))
+        with pytest.warns(UserWarning):
+            notes[name] = " ".join(read_spectral_exr(tmp_path / f"{name}.exr").meta["read_notices"])
+    assert "'illuminant' attribute" in notes["garbled"] and "unparseable" in notes["garbled"]
+    assert "names none" not in notes["garbled"]
+    assert "the file names none" in notes["plain"]
+
+
+def test_force_starts_what_the_limits_refuse():
+    import tomllib
+
+    from cfa_mitsuba.errors import CfaMitsubaError
+    from cfa_mitsuba.study.config import parse_config
+    from cfa_mitsuba.study.sizing import check_study_size
+
+    config = parse_config(tomllib.loads(SMALL.replace("seeds = 2", "seeds = 1000000")), where="big.toml")
+    with pytest.raises(CfaMitsubaError, match="24 h limit"):
+        check_study_size(config, 2)
+    said = []
+    size = check_study_size(config, 2, force=True, log=said.append)
+    assert size.captures == 6_000_000 and len(said) == 1 and said[0].endswith("(--force)")
+
+
+def test_a_sweep_listing_a_million_values_is_refused_before_parsing(tmp_path):
+    from cfa_mitsuba.errors import CfaMitsubaError
+    from cfa_mitsuba.study.config import load_config
+
+    config = tmp_path / "long.toml"
+    config.write_text(SMALL + '\n[[sweep]]\nscene = "macbeth"\nseed = [' + ", ".join(map(str, range(10**6))) + "]\n")
+    t0 = time.perf_counter()
+    with pytest.raises(CfaMitsubaError, match=r"long.toml: 7,\d{3},\d{3} bytes, more than a config file holds"):
+        load_config(config)
+    assert time.perf_counter() - t0 < 2.0  # parsing it alone took 7 s
