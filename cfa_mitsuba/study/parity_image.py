@@ -25,7 +25,10 @@ ISETCam's mechanisms where they differ (docs/isetcam-parity.md):
    without white balance or colour correction (ISETCam's 'sensor space');
 5. metric: ISETCam's ISO 12233 conventions (``mtf(convention='isetcam')``)
    on ISETCam's region (``roi_rect_um`` or ``roi_rect_px``, ISETCam's
-   ``[x y width height]`` rectangle, 1-based, inclusive).
+   ``[x y width height]`` rectangle, 1-based, inclusive), with its
+   luminance weights (``luminance_weights``: 0.3, 0.6, 0.1 until ISETCam's
+   sfrmat4 update, whose ISO12233 defaults to Rec. 709's 0.213, 0.715,
+   0.072 when given none).
 """
 
 from __future__ import annotations
@@ -43,6 +46,7 @@ from ..errors import CfaMitsubaError
 ISETCAM_DEFAULTS = {
     "scene_size_px": 512, "edge_slope": 7.0 / 3.0, "scene_fov_deg": 5.0, "scene_distance_m": 1.0,
     "sensor_size_um": 512.0, "sensor_fov_deg": None, "roi_rect_um": None, "roi_rect_px": None,
+    "luminance_weights": [0.3, 0.6, 0.1],
 }
 #: ISETCam's default sensor size, sensorFormats('qqcif') (rows, cols).
 ISETCAM_QQCIF = (72, 88)
@@ -191,12 +195,14 @@ def _run_isetcam(case, sensor, cfa_name, spectra_name):
         order = [cfa.channels.index(c) for c in ("R", "G", "B")]
         image = image[..., order]
     roi = _roi(geo, p, image.shape)
-    result = metrics.mtf(image, roi=roi, pixel_pitch_um=p, convention="isetcam")
+    weights = tuple(float(w) for w in geo["luminance_weights"])
+    result = metrics.mtf(image, roi=roi, pixel_pitch_um=p, convention="isetcam", weights=weights)
     details = {"oi_sample_spacing_um": spacing, "oi_shape": list(oi.irradiance_w_m2_nm.shape[:2]),
                "sensor_shape": [rows, cols], "regrid_kernel_samples": math.ceil(p / spacing - 1e-9),
                "roi": list(result.details["roi"]), "edge_angle_deg": result.details["edge_angle_deg"],
                "nyquist_cy_mm": result.details["nyquist_cy_mm"],
-               "mtf50_sfrmat3_cy_mm": float(metrics.mtf(image, roi=roi, pixel_pitch_um=p))}
+               "mtf50_sfrmat3_cy_mm": float(metrics.mtf(image, roi=roi, pixel_pitch_um=p, weights=weights)),
+               "luminance_weights": list(weights)}
     return float(result), result.unit, details
 
 
