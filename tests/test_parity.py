@@ -29,9 +29,15 @@ def results():
 
 
 def test_every_isetcam_mode_case_agrees(results):
+    """... except a case that names its measured cause (known_difference):
+    that one must still differ (remove the note when it is fixed) and stay
+    within 10 %."""
     isetcam = [r for r in results.values() if r["mode"] == "isetcam"]
-    assert len(isetcam) >= 5
+    assert len(isetcam) >= 8
     for r in isetcam:
+        if r["known_difference"]:
+            assert r["verdict"] == "differs" and abs(r["relative_difference"]) < 0.10, r
+            continue
         assert r["verdict"] == "agrees", r
         assert abs(r["value"] - r["expected"]) <= r["tolerance"] * abs(r["expected"]) + 1e-12
 

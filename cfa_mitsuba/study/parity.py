@@ -21,7 +21,8 @@ Kinds of case (``kind``, default ``"image"``):
   (:mod:`.parity_image`).
 
 The verdict is ``agrees`` when |value - expected| <= tolerance x |expected|,
-else ``differs``.
+else ``differs``.  A case may carry ``known_difference``: the measured
+cause of a difference not yet removed (docs/isetcam-parity.md).
 """
 
 from __future__ import annotations
@@ -37,11 +38,11 @@ from .checker import _Checker, read_toml
 
 MODES = ("isetcam", "default")
 KINDS = ("image", "snr", "colour")
-_COMMON = {"name", "source", "mode", "kind", "expected", "tolerance", "notes", "optics", "sensor"}
+_COMMON = {"name", "source", "mode", "kind", "expected", "tolerance", "notes", "optics", "sensor", "known_difference"}
 _BY_KIND = {
     "image": {"scene", "luminance", "demosaic", "metric", "isetcam", "noise", "seed", "render"},
     "snr": {"statistic", "levels", "exposure_s", "samples"},
-    "colour": {"scene", "luminance", "demosaic", "metric", "isetcam", "noise", "seed", "render"},
+    "colour": {"scene", "luminance", "demosaic", "metric", "noise", "seed", "render", "isp", "metric_options"},
 }
 
 
@@ -60,6 +61,7 @@ class ParityCase:
     settings: dict = field(default_factory=dict)
     optics: dict = field(default_factory=dict)
     sensor: dict = field(default_factory=dict)
+    known_difference: str = ""
 
 
 def load_case(path) -> ParityCase:
@@ -90,7 +92,9 @@ def load_case(path) -> ParityCase:
     return ParityCase(path=str(p), name=ck.string(data["name"], "name"), source=ck.string(data["source"], "source"),
                       mode=ck.string(data["mode"], "mode", MODES), kind=kind, expected=expected,
                       tolerance=ck.number(data["tolerance"], "tolerance", nonneg=True), settings=settings,
-                      optics=dict(data.get("optics", {})), sensor=dict(data.get("sensor", {})))
+                      optics=dict(data.get("optics", {})), sensor=dict(data.get("sensor", {})),
+                      known_difference=ck.string(data["known_difference"], "known_difference")
+                      if "known_difference" in data else "")
 
 
 def find_cases(paths) -> list[Path]:
@@ -128,7 +132,7 @@ def run_case(case: ParityCase) -> dict:
     return {"name": case.name, "expected": case.expected, "value": float(value), "tolerance": case.tolerance,
             "verdict": "agrees" if agrees else "differs", "mode": case.mode, "kind": case.kind,
             "unit": unit, "relative_difference": float(rel), "source": case.source,
-            "file": case.path, "details": details}
+            "file": case.path, "known_difference": case.known_difference, "details": details}
 
 
 def run_parity(paths) -> list[dict]:

@@ -206,7 +206,12 @@ def _run_isetcam(case, sensor, cfa_name, spectra_name):
     return float(result), result.unit, details
 
 
-def _run_default(case, sensor, cfa_name, spectra_name):
+#: ISETCam's image processing for colour (ipCreate: 'MCC optimized' sensor -> XYZ
+#: by plain least squares, no illuminant correction; configs/paper-isetcam.toml).
+ISETCAM_ISP = {"white_balance": "illuminant", "white_preserving": False, "colour_fit": "mcc", "regularise": False}
+
+
+def _run_default(case, sensor, cfa_name, spectra_name, isp=None):
     from .. import render
     from ..sensor import get_cfa
     from .chain import CameraChain, ChainSettings
@@ -214,8 +219,10 @@ def _run_default(case, sensor, cfa_name, spectra_name):
     metric = case.settings["metric"]
     optics, _ = optics_for_case(case)
     own = get_cfa(cfa_name).spectra
+    isp = {**(isp or {}), **dict(case.settings.get("isp", {}))}
     settings = ChainSettings(optics=optics, sensor=sensor, noise=case.settings.get("noise", "off"),
-                             spectra_sets={own: spectra_name} if spectra_name and spectra_name != own else {})
+                             spectra_sets={own: spectra_name} if spectra_name and spectra_name != own else {},
+                             isp=isp, metric_options={metric: dict(case.settings.get("metric_options", {}))})
     scene = render.render_cached(case.settings["scene"], **dict(case.settings.get("render", {})))
     cond = settings.base_condition(luminance=case.settings["luminance"])
     chain = CameraChain(settings)
@@ -227,7 +234,7 @@ def _run_default(case, sensor, cfa_name, spectra_name):
     if metric not in ev.results:
         raise CfaMitsubaError(f"{case.path}: {metric} failed: {ev.failures}")
     result = ev.results[metric]
-    details = {"scene_shape": list(scene.data.shape[:2]), "oversample": scene.meta.get("oversample")}
+    details = {"scene_shape": list(scene.data.shape[:2]), "oversample": scene.meta.get("oversample"), "isp": isp}
     if metric == "mtf":
         details.update(edge_angle_deg=result.details["edge_angle_deg"], roi=list(result.details["roi"]))
     return float(result), result.unit, details
@@ -236,6 +243,8 @@ def _run_default(case, sensor, cfa_name, spectra_name):
 def run_image_case(case):
     """(value, unit, details) of an image or colour case (module doc)."""
     sensor, cfa_name, spectra_name = sensor_for_case(case)
+    if case.kind == "colour":
+        return _run_default(case, sensor, cfa_name, spectra_name, ISETCAM_ISP if case.mode == "isetcam" else None)
     if case.mode == "isetcam":
         if case.settings["metric"] != "mtf":
             raise CfaMitsubaError(f"{case.path}: mode 'isetcam' supports metric 'mtf' (got {case.settings['metric']!r})")
