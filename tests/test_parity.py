@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -67,19 +66,16 @@ def test_default_mode_pixel_mtf_is_the_box_aperture_physics(results):
     assert two["value"] == pytest.approx(predicted, rel=0.05)
 
 
-def test_the_mechanism_is_not_a_fitted_constant():
+def test_the_mechanism_is_not_a_fitted_constant(tmp_path):
     """Another pitch and f-number, written as a new case, agree with what
     ISETCam gives there (Octave run of v_icam_pixelMTF's steps, noise off,
     horizon-research/isetcam ad56275: 107.4 cy/mm at 4 um f/2.8)."""
     text = (CASES / "pixel-mtf-2um.toml").read_text()
     text = text.replace('name = "pixel-mtf-2um"', 'name = "other"').replace("pixel_pitch_um = 2.0", "pixel_pitch_um = 4.0")
     text = text.replace("f_number = 4", "f_number = 2.8").replace("expected = 129.2", "expected = 107.4")
-    path = Path(__file__).parent / "_parity_tmp_other.toml"
-    try:
-        path.write_text(text)
-        (r,) = run_parity([path])
-    finally:
-        path.unlink(missing_ok=True)
+    path = tmp_path / "other.toml"
+    path.write_text(text)
+    (r,) = run_parity([path])
     assert r["verdict"] == "agrees", r
 
 
@@ -157,3 +153,30 @@ def test_bad_cases_are_one_line_errors(tmp_path):
     empty = tmp_path / "empty"
     empty.mkdir()
     assert_one_line_error(run_cli("parity", empty), "no parity cases")
+
+
+def test_committed_results_match_the_cases():
+    """docs/data/isetcam-parity.json (the page's source) was made from the
+    cases as they stand: same names, modes and expected values."""
+    committed = json.loads((REPO / "docs" / "data" / "isetcam-parity.json").read_text())
+    cases = {c.name: c for c in (load_case(p) for p in sorted(CASES.glob("*.toml")))}
+    assert {r["name"] for r in committed} == set(cases)
+    for r in committed:
+        assert (r["mode"], r["expected"], r["tolerance"]) == (cases[r["name"]].mode, cases[r["name"]].expected,
+                                                              cases[r["name"]].tolerance)
+
+
+def test_parity_page_renders_every_case():
+    from cfa_mitsuba.report.parity_doc import parity_markdown
+
+    results = json.loads((REPO / "docs" / "data" / "isetcam-parity.json").read_text())
+    isetcam = json.loads((REPO / "docs" / "data" / "isetcam-octave.json").read_text())
+    read = {"sfrmat3": 100.0, "isetcam": 90.0}
+    stage = {"isetcam_read_out": read, "box_ff0.75": read, "box_ff1": read, "cos_edge_angle": 0.92}
+    stages = {"oi_sample_spacing_um": 0.66, "oi_mtf50_sfrmat3_cy_mm": 181.0, "2um": stage, "9um": stage}
+    page = parity_markdown(results, isetcam, stages, [{"f_number": 4.0, "pixel_pitch_um": 2.0, "mtf50_cy_mm": 129.6,
+                                                       "ours": 129.8}])
+    for r in results:
+        if r["mode"] == "isetcam":
+            assert f"| {r['name']} |" in page
+    assert " nan " not in page and "(nan" not in page

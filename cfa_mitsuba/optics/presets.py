@@ -42,17 +42,16 @@ def _definitions() -> dict:
 
 
 def list_optics_presets() -> list[str]:
-    """Names of the shipped optics presets."""
-    return list(_definitions())
+    """Names of the shipped optics presets (the tables of optics.toml)."""
+    return sorted(_definitions())
 
 
 @functools.lru_cache(maxsize=None)
 def get_optics_preset(name: str) -> OpticsPreset:
-    """A preset by name, or a one-line error listing the known ones."""
-    defs = _definitions()
-    if name not in defs:
-        raise CfaMitsubaError(f"unknown optics preset {name!r} (known: {', '.join(defs)})")
-    entry = dict(defs[name])
+    """A preset by name; an unknown name is a one-line error listing them."""
+    entry = dict(_definitions().get(name) or {})
+    if not entry:
+        raise CfaMitsubaError(f"unknown optics preset {name!r} (known: {', '.join(list_optics_presets())})")
     meta = {k: entry.pop(k, "") for k in ("description", "source")}
     focal = entry.pop("focal_length_mm", None)
     if not isinstance(focal, (int, float)) or isinstance(focal, bool) or not focal > 0:
