@@ -33,9 +33,10 @@ ISETCam's mechanisms where they differ (docs/isetcam-parity.md):
 
 from __future__ import annotations
 
-__all__ = ["run_image_case", "sensor_for_case", "optics_for_case"]
+__all__ = ["run_image_case", "sensor_for_case", "optics_for_case", "isetcam_slanted_bar", "isetcam_optical_image"]
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -85,8 +86,6 @@ def sensor_for_case(case):
 def optics_for_case(case):
     """(OpticsParams, focal length in mm) from the case's ``[optics]`` table:
     ``preset`` (default ``isetcam-default``) and any OpticsParams field."""
-    from dataclasses import replace
-
     from ..optics import get_optics_preset
 
     table = dict(case.optics)
@@ -114,7 +113,7 @@ def isetcam_slanted_bar(size_px: int, slope: float) -> np.ndarray:
     return np.where(y > slope * x, 1.0, 1e-6)
 
 
-def _isetcam_oi(case, refl: np.ndarray, geo: dict, optics, focal_mm: float):
+def isetcam_optical_image(refl: np.ndarray, geo: dict, optics, focal_mm: float):
     """The optical image of an achromatic equal-energy target, padded and
     sampled as ISETCam's ``oiCompute``; returns (OpticalImage, spacing um)."""
     from .. import spectra
@@ -131,8 +130,6 @@ def _isetcam_oi(case, refl: np.ndarray, geo: dict, optics, focal_mm: float):
     white = np.ones(wl.size)  # equal energy, W/(m^2 sr nm) at reflectance 1
     scene = SpectralImage(padded[:, :, None] * white[None, None, :], wl,
                           {"white_radiance": white.tolist(), "oversample": 1})
-    from dataclasses import replace
-
     params = replace(optics, fov_deg=fov, scene_distance_m=geo["scene_distance_m"])
     oi = compute_optics(scene, params, pixel_pitch_um=spacing, oversample=1, fill_factor=1.0)
     lum_white = float(spectra.luminance_cd_m2(white, wl))
@@ -178,7 +175,7 @@ def _run_isetcam(case, sensor, cfa_name, spectra_name):
     if case.settings["scene"] != "slanted-edge":
         raise CfaMitsubaError(f"{case.path}: mode 'isetcam' has ISETCam's slanted bar only (scene 'slanted-edge')")
     refl = isetcam_slanted_bar(int(geo["scene_size_px"]), float(geo["edge_slope"]))
-    oi, spacing = _isetcam_oi(case, refl, geo, optics, focal_mm)
+    oi, spacing = isetcam_optical_image(refl, geo, optics, focal_mm)
     cfa = get_cfa(cfa_name, spectra=spectra_name) if spectra_name else get_cfa(cfa_name)
     p = sensor.pixel_pitch_um
     rows, cols = _sensor_size(geo, p, focal_mm, cfa.tile_shape)
