@@ -180,3 +180,40 @@ def test_parity_page_renders_every_case():
         if r["mode"] == "isetcam":
             assert f"| {r['name']} |" in page
     assert " nan " not in page and "(nan" not in page
+
+
+def test_delta_e_white_patch_is_isetcams_white():
+    """ISETCam's macbethColorError scales the camera to the ideal white
+    patch and takes that patch as CIELAB's white: a camera off by a uniform
+    gain has dE 0 that way, not with the scene white."""
+    rng = np.random.default_rng(3)
+    ref = np.zeros((4, 24, 3))
+    for i in range(24):
+        ref[:, i] = rng.uniform(5, 80, 3)
+    ref[:, 18] = [90.0, 95.0, 100.0]
+    patches = [(0, i, 4, i + 1) for i in range(24)]
+    white = [95.05, 100.0, 108.9]
+    off = cm.metrics.delta_e(ref, 1.3 * ref, white, patches=patches)
+    assert float(off) > 1.0
+    r = cm.metrics.delta_e(ref, 1.3 * ref, white, patches=patches, white="white-patch")
+    assert float(r) == pytest.approx(0.0, abs=1e-9)
+    assert r.details["lab_reference"][18][0] == pytest.approx(100.0)
+    with pytest.raises(CfaMitsubaError, match="patches"):
+        cm.metrics.delta_e(ref, ref, white, white="white-patch")
+
+
+def test_isetcam_colorchecker_is_the_same_chart_measured_elsewhere():
+    """ISETCam's table, in reading order: the same 24 colours as
+    colour-science's N Ohta (each patch nearest its namesake but orange
+    yellow, nearest orange), the grey row descending, white about 0.82 at
+    550 nm."""
+    from cfa_mitsuba.isp.colour_matrix import isetcam_colorchecker
+
+    wl = np.arange(400.0, 701.0, 10.0)
+    iset = isetcam_colorchecker(wl)
+    ohta = cm.spectra.colorchecker(wl)[1]
+    assert iset.shape == (24, 31)
+    dist = np.abs(iset[:, None, :] - ohta[None, :, :]).mean(axis=2)
+    assert (dist.argmin(axis=1) == np.arange(24)).sum() >= 23
+    assert (np.diff(iset[18:, 15]) < 0).all()
+    assert iset[18, 15] == pytest.approx(0.82, abs=0.03)

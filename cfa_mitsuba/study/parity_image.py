@@ -204,11 +204,39 @@ def _run_isetcam(case, sensor, cfa_name, spectra_name):
 
 
 #: ISETCam's image processing for colour (ipCreate: 'MCC optimized' sensor -> XYZ
-#: by plain least squares, no illuminant correction; configs/paper-isetcam.toml).
-ISETCAM_ISP = {"white_balance": "illuminant", "white_preserving": False, "colour_fit": "mcc", "regularise": False}
+#: by plain least squares on its own ColorChecker table, no illuminant
+#: correction; configs/paper-isetcam.toml) and its colour error
+#: (macbethColorError: the camera scaled to the ideal white patch, which is
+#: CIELAB's white).
+ISETCAM_ISP = {"white_balance": "illuminant", "white_preserving": False, "colour_fit": "mcc-isetcam",
+               "regularise": False}
+ISETCAM_DELTA_E = {"white": "white-patch"}
 
 
-def _run_default(case, sensor, cfa_name, spectra_name, isp=None):
+def isetcam_chart(scene):
+    """Our rendered ``macbeth`` chart with ISETCam's ColorChecker table
+    (``data/reflectances/isetcam_macbethChart.csv``) in place of
+    colour-science's: each patch (a uniform rectangle of the flat chart)
+    re-emits the band means of D65 x ISETCam's reflectance, on the render's
+    white scale."""
+    from .. import spectra
+    from ..isp.colour_matrix import ISETCAM_MACBETH_CSV
+    from ..values import SpectralImage
+
+    wl = np.asarray(scene.wavelengths, dtype=np.float64)
+    table = np.loadtxt(ISETCAM_MACBETH_CSV, delimiter=",", skiprows=1)
+    scale = np.asarray(scene.meta["white_radiance"], dtype=np.float64) / spectra.illuminant("D65", wl)
+    d65 = spectra.illuminant_table("D65")
+    data = np.array(scene.data, dtype=np.float64)
+    patches = scene.meta["geometry"]["patches"]
+    for p in patches:
+        y0, x0, y1, x1 = p["rect"]
+        data[y0:y1, x0:x1] = scale * spectra.band_average_product([d65, (table[:, 0], table[:, 1 + p["index"]])], wl)
+    meta = {**scene.meta, "geometry": {**scene.meta["geometry"], "reflectance_set": "ISETCam macbethChart.mat"}}
+    return SpectralImage(data, wl, meta)
+
+
+def _run_default(case, sensor, cfa_name, spectra_name, isp=None, metric_options=None, isetcam_chart_data=False):
     from .. import render
     from ..sensor import get_cfa
     from .chain import CameraChain, ChainSettings
@@ -217,10 +245,15 @@ def _run_default(case, sensor, cfa_name, spectra_name, isp=None):
     optics, _ = optics_for_case(case)
     own = get_cfa(cfa_name).spectra
     isp = {**(isp or {}), **dict(case.settings.get("isp", {}))}
+    options = {**(metric_options or {}), **dict(case.settings.get("metric_options", {}))}
     settings = ChainSettings(optics=optics, sensor=sensor, noise=case.settings.get("noise", "off"),
                              spectra_sets={own: spectra_name} if spectra_name and spectra_name != own else {},
-                             isp=isp, metric_options={metric: dict(case.settings.get("metric_options", {}))})
+                             isp=isp, metric_options={metric: options})
     scene = render.render_cached(case.settings["scene"], **dict(case.settings.get("render", {})))
+    if isetcam_chart_data:
+        if case.settings["scene"] != "macbeth":
+            raise CfaMitsubaError(f"{case.path}: a colour case in mode 'isetcam' needs scene 'macbeth'")
+        scene = isetcam_chart(scene)
     cond = settings.base_condition(luminance=case.settings["luminance"])
     chain = CameraChain(settings)
     out = next(iter(chain.evaluate(scene, cfa_name, [case.settings.get("demosaic", "bilinear")], [metric], cond,
@@ -231,7 +264,8 @@ def _run_default(case, sensor, cfa_name, spectra_name, isp=None):
     if metric not in ev.results:
         raise CfaMitsubaError(f"{case.path}: {metric} failed: {ev.failures}")
     result = ev.results[metric]
-    details = {"scene_shape": list(scene.data.shape[:2]), "oversample": scene.meta.get("oversample"), "isp": isp}
+    details = {"scene_shape": list(scene.data.shape[:2]), "oversample": scene.meta.get("oversample"), "isp": isp,
+               "metric_options": options}
     if metric == "mtf":
         details.update(edge_angle_deg=result.details["edge_angle_deg"], roi=list(result.details["roi"]))
     return float(result), result.unit, details
@@ -241,7 +275,9 @@ def run_image_case(case):
     """(value, unit, details) of an image or colour case (module doc)."""
     sensor, cfa_name, spectra_name = sensor_for_case(case)
     if case.kind == "colour":
-        return _run_default(case, sensor, cfa_name, spectra_name, ISETCAM_ISP if case.mode == "isetcam" else None)
+        if case.mode == "isetcam":
+            return _run_default(case, sensor, cfa_name, spectra_name, ISETCAM_ISP, ISETCAM_DELTA_E, True)
+        return _run_default(case, sensor, cfa_name, spectra_name)
     if case.mode == "isetcam":
         if case.settings["metric"] != "mtf":
             raise CfaMitsubaError(f"{case.path}: mode 'isetcam' supports metric 'mtf' (got {case.settings['metric']!r})")
