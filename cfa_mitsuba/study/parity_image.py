@@ -35,6 +35,7 @@ from __future__ import annotations
 
 __all__ = ["run_image_case", "sensor_for_case", "optics_for_case", "isetcam_slanted_bar", "isetcam_optical_image"]
 
+import functools
 import math
 from dataclasses import replace
 
@@ -137,6 +138,15 @@ def isetcam_optical_image(refl: np.ndarray, geo: dict, optics, focal_mm: float):
     return oi, spacing
 
 
+@functools.lru_cache(maxsize=2)
+def _slanted_bar_oi(size_px: int, slope: float, fov_deg: float, distance_m: float, optics, focal_mm: float):
+    """ISETCam's slanted bar through the optics, kept for the next case with
+    the same scene and lens (the optical image does not depend on the pixel;
+    callers do not modify it)."""
+    geo = {"scene_fov_deg": fov_deg, "scene_distance_m": distance_m}
+    return isetcam_optical_image(isetcam_slanted_bar(size_px, slope), geo, optics, focal_mm)
+
+
 def _sensor_size(geo: dict, pitch_um: float, focal_mm: float, tile) -> tuple[int, int]:
     """ISETCam's sensor size: a square die of ``sensor_size_um`` (v_icam_pixelMTF),
     or ``sensorSetSizeToFOV`` from the qqcif format to ``sensor_fov_deg``."""
@@ -174,8 +184,8 @@ def _run_isetcam(case, sensor, cfa_name, spectra_name):
     optics, focal_mm = optics_for_case(case)
     if case.settings["scene"] != "slanted-edge":
         raise CfaMitsubaError(f"{case.path}: mode 'isetcam' has ISETCam's slanted bar only (scene 'slanted-edge')")
-    refl = isetcam_slanted_bar(int(geo["scene_size_px"]), float(geo["edge_slope"]))
-    oi, spacing = isetcam_optical_image(refl, geo, optics, focal_mm)
+    oi, spacing = _slanted_bar_oi(int(geo["scene_size_px"]), float(geo["edge_slope"]), float(geo["scene_fov_deg"]),
+                                  float(geo["scene_distance_m"]), optics, focal_mm)
     cfa = get_cfa(cfa_name, spectra=spectra_name) if spectra_name else get_cfa(cfa_name)
     p = sensor.pixel_pitch_um
     rows, cols = _sensor_size(geo, p, focal_mm, cfa.tile_shape)
