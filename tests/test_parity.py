@@ -174,8 +174,10 @@ def test_parity_page_renders_every_case():
     read = {"sfrmat3": 100.0, "isetcam": 90.0}
     stage = {"isetcam_read_out": read, "box_ff0.75": read, "box_ff1": read, "cos_edge_angle": 0.92}
     stages = {"oi_sample_spacing_um": 0.66, "oi_mtf50_sfrmat3_cy_mm": 181.0, "2um": stage, "9um": stage}
-    page = parity_markdown(results, isetcam, stages, [{"f_number": 4.0, "pixel_pitch_um": 2.0, "mtf50_cy_mm": 129.6,
-                                                       "ours": 129.8}])
+    sweep = [{"f_number": 4.0, "pixel_pitch_um": 2.0, "mtf50_cy_mm": 129.6, "ours": 129.8}]
+    preset = {"pixel_pitch_um": 2.8, "fill_factor": 0.75, "well_capacity_e": 1e4, "read_noise_e": 10.0,
+              "dark_current_e_s": 10.0}
+    page = parity_markdown(results, isetcam, {"stages": stages, "sweep": sweep, "isetcam_default_preset": preset})
     for r in results:
         if r["mode"] == "isetcam":
             assert f"| {r['name']} |" in page

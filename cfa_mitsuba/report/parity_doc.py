@@ -1,21 +1,22 @@
 """docs/isetcam-parity.md: our chain against ISETCam's published values.
 
     cfa-mitsuba parity tests/parity/isetcam --json > docs/data/isetcam-parity.json
-    python -m cfa_mitsuba.report.parity_doc \\
-        --results docs/data/isetcam-parity.json --isetcam docs/data/isetcam-octave.json \\
+    python -m cfa_mitsuba.study.parity_stages --isetcam docs/data/isetcam-octave.json \\
+        --out docs/data/isetcam-parity-stages.json
+    python -m cfa_mitsuba.report.parity_doc --results docs/data/isetcam-parity.json \\
+        --isetcam docs/data/isetcam-octave.json --stages docs/data/isetcam-parity-stages.json \\
         --out docs/isetcam-parity.md
 
 ``--results`` is the parity command's output; ``--isetcam`` holds the values
 ISETCam itself gave when run in GNU Octave (its scripts' steps, stage by
-stage; the file names the commit and the procedure).  Our own stage values
-(the optical image of ISETCam's scene, ISETCam's read-out and our pixel
-aperture on it, the pixel-pitch and f-number sweep in mode ``isetcam``) are
-computed here, so no number on the page is typed by hand.
+stage; the file names the commit and the procedure); ``--stages`` our own
+stage values (:mod:`cfa_mitsuba.study.parity_stages`).  The page reads
+results only, so no number on it is typed by hand.
 """
 
 from __future__ import annotations
 
-__all__ = ["parity_markdown", "our_stage_values", "main"]
+__all__ = ["parity_markdown", "main"]
 
 import argparse
 import json
@@ -23,75 +24,7 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from ..errors import CfaMitsubaError
-
-_STAGE_ROI_OI = (200, 240, 440, 400)  # the edge's middle on v_icam_pixelMTF's 641 x 641 OI
-
-
-def _box_read_out(irradiance: np.ndarray, spacing_um: float, pitch_um: float, fill_factor: float, n: int):
-    """Our pixel: the mean over a centred square photodiode of side
-    sqrt(FF) x pitch (exact in Fourier), at the pixel centres."""
-    from ..optics.isetcam import _centres, _linear_weights
-
-    side = math.sqrt(fill_factor) * pitch_um
-    h, w = irradiance.shape
-    spec = np.fft.fft2(irradiance)
-    spec *= np.sinc(side * np.fft.fftfreq(h, d=spacing_um))[:, None] * np.sinc(side * np.fft.fftfreq(w, d=spacing_um))[None]
-    blurred = np.real(np.fft.ifft2(spec))
-    wy = _linear_weights(_centres(n, pitch_um), h, spacing_um)
-    wx = _linear_weights(_centres(n, pitch_um), w, spacing_um)
-    return wy @ blurred @ wx.T
-
-
-def our_stage_values(isetcam: dict) -> dict:
-    """Our chain's numbers at each stage of v_icam_pixelMTF (f/4), on
-    ISETCam's scene: the optical image's MTF50, then each pixel read-out
-    (ISETCam's Gaussian + bilinear; our photodiode box at FF 0.75 and 1) in
-    both ISO 12233 conventions."""
-    from .. import metrics
-    from ..optics import OpticsParams, get_optics_preset
-    from ..optics.isetcam import regrid_isetcam
-    from ..study.parity_image import ISETCAM_DEFAULTS, isetcam_optical_image, isetcam_slanted_bar
-
-    refl = isetcam_slanted_bar(ISETCAM_DEFAULTS["scene_size_px"], ISETCAM_DEFAULTS["edge_slope"])
-    focal_mm = get_optics_preset("isetcam-default").focal_length_mm
-    oi, spacing = isetcam_optical_image(refl, ISETCAM_DEFAULTS, OpticsParams(f_number=4.0), focal_mm)
-    signal = (oi.irradiance_w_m2_nm * oi.wavelengths).sum(-1)  # photons on a flat QE
-    out = {"oi_sample_spacing_um": spacing,
-           "oi_mtf50_sfrmat3_cy_mm": float(metrics.mtf(signal, roi=_STAGE_ROI_OI, pixel_pitch_um=spacing))}
-    for key in ("2um", "9um"):
-        p = float(key[:-2])
-        roi = tuple(isetcam["pixel_mtf_stages"][key]["roi_y0_x0_y1_x1"])
-        n = int(round(512 / p))
-        reads = {"isetcam_read_out": regrid_isetcam(signal[:, :, None], spacing, p, n, n)[..., 0],
-                 "box_ff0.75": _box_read_out(signal, spacing, p, 0.75, n),
-                 "box_ff1": _box_read_out(signal, spacing, p, 1.0, n)}
-        out[key] = {name: {conv: float(metrics.mtf(img, roi=roi, pixel_pitch_um=p, convention=conv))
-                           for conv in ("sfrmat3", "isetcam")} for name, img in reads.items()}
-        out[key]["cos_edge_angle"] = math.cos(math.atan(1.0 / ISETCAM_DEFAULTS["edge_slope"]))
-    return out
-
-
-def our_sweep(isetcam: dict, template: Path) -> list[dict]:
-    """Mode ``isetcam`` at every (f-number, pitch) ISETCam was run at: the
-    2 um case file with only those two values changed."""
-    from ..study.parity import load_case, run_case
-
-    import tempfile
-
-    text = template.read_text()
-    rows = []
-    with tempfile.TemporaryDirectory() as folder:  # never beside the committed cases
-        for r in isetcam["pixel_mtf_sweep_noise_free"]:
-            t = text.replace("f_number = 4\n", f"f_number = {r['f_number']}\n")
-            t = t.replace("pixel_pitch_um = 2.0", f"pixel_pitch_um = {r['pixel_pitch_um']}")
-            tmp = Path(folder) / f"sweep_{r['f_number']}_{r['pixel_pitch_um']}.toml"
-            tmp.write_text(t)
-            rows.append({**r, "ours": run_case(load_case(tmp))["value"]})
-    return rows
-
 
 def _fmt(v, digits=4) -> str:
     if v is None:
@@ -115,28 +48,23 @@ def _case_table(results: list[dict]) -> list[str]:
     return lines
 
 
-def parity_markdown(results: list[dict], isetcam: dict, stages: dict, sweep: list[dict]) -> str:
-    """The page (module doc)."""
+def parity_markdown(results: list[dict], isetcam: dict, ours: dict) -> str:
+    """The page (module doc); ``ours`` is :mod:`cfa_mitsuba.study.parity_stages`' output."""
     by = {r["name"]: r for r in results}
-    st = isetcam["pixel_mtf_stages"]
-    iso = isetcam["iso12233_default_camera_2021"]
-    mcc = isetcam["mcc_colour"]
-    two, nine = stages["2um"], stages["9um"]
-    prov = isetcam["provenance"]
-    angle = math.degrees(math.acos(two["cos_edge_angle"]))
-    metric_step = 100 * (st["2um"]["iso12233_mtf50_cy_mm"] / st["2um"]["volts_mtf50_sfrmat3_cy_mm"] - 1)
-    sensor_step = 100 * (two["isetcam_read_out"]["sfrmat3"] / two["box_ff0.75"]["sfrmat3"] - 1)
-    y0, x0, y1, x1 = st["9um"]["roi_y0_x0_y1_x1"]
-    df = 1.0 / ((x1 - x0) * 9e-3)  # ISO12233's frequency step (cy/mm): 1 / (columns x pitch)
-    nyq9 = 0.5 / 9e-3
-    last = math.floor(nyq9 / df - 1e-9) * df
-    from ..sensor import get_sensor_preset
+    L = _intro(results, isetcam)
+    L += _pixel_mtf(by, isetcam, ours["stages"], ours["sweep"])
+    L += _iso_and_snr(by, isetcam)
+    L += _colour_and_settings(isetcam, ours["isetcam_default_preset"])
+    return "\n".join(L)
 
-    pre = get_sensor_preset("isetcam-default").params
+
+def _intro(results: list[dict], isetcam: dict) -> list[str]:
+    prov = isetcam["provenance"]
     L = ["# Agreement with ISETCam", "",
          "Generated by `python -m cfa_mitsuba.report.parity_doc` from `docs/data/isetcam-parity.json` (the output of "
-         "`cfa-mitsuba parity tests/parity/isetcam --json`) and `docs/data/isetcam-octave.json` (what ISETCam itself "
-         "gave, run in GNU Octave); do not edit by hand.", "",
+         "`cfa-mitsuba parity tests/parity/isetcam --json`), `docs/data/isetcam-octave.json` (what ISETCam itself "
+         "gave, run in GNU Octave) and `docs/data/isetcam-parity-stages.json` (our stage values, "
+         "`python -m cfa_mitsuba.study.parity_stages`); do not edit by hand.", "",
          "Each case is a TOML file under `tests/parity/isetcam/` (the format: `cfa_mitsuba/study/parity.py`); the test "
          "suite runs them all (`tests/test_parity.py`). *Expected* is always ISETCam's number (the script's assert, or "
          "ISETCam run by us where the script asserts nothing), never ours. `mode = \"isetcam\"` runs ISETCam's "
@@ -145,7 +73,19 @@ def parity_markdown(results: list[dict], isetcam: dict, stages: dict, sweep: lis
     L += _case_table(results)
     L += ["", f"ISETCam runs: {prov['isetcam']}; {prov['interpreter']}. {prov['procedure']}.", ""]
 
-    L += ["## The pixel MTF: where the two chains part", "",
+    return L
+
+
+def _pixel_mtf(by: dict, isetcam: dict, stages: dict, sweep: list[dict]) -> list[str]:
+    st = isetcam["pixel_mtf_stages"]
+    two, nine = stages["2um"], stages["9um"]
+    angle = math.degrees(math.acos(two["cos_edge_angle"]))
+    metric_step = 100 * (st["2um"]["iso12233_mtf50_cy_mm"] / st["2um"]["volts_mtf50_sfrmat3_cy_mm"] - 1)
+    sensor_step = 100 * (two["isetcam_read_out"]["sfrmat3"] / two["box_ff0.75"]["sfrmat3"] - 1)
+    y0, x0, y1, x1 = st["9um"]["roi_y0_x0_y1_x1"]
+    df = 1.0 / ((x1 - x0) * 9e-3)  # ISO12233's frequency step (cy/mm): 1 / (columns x pitch)
+    last = math.floor(0.5 / 9e-3 / df - 1e-9) * df
+    L = ["## The pixel MTF: where the two chains part", "",
           "v_icam_pixelMTF (monochrome sensor, f/4, slanted bar, die 512 um, fill factor 0.75 at every pitch). "
           "Numbers are MTF50 in cy/mm; *sfrmat3* is our ISO 12233 analysis (frequencies normal to the edge, "
           "derivative corrected), *isetcam* is ISETCam's ISO12233 (frequencies along the rows, no derivative "
@@ -181,7 +121,7 @@ def parity_markdown(results: list[dict], isetcam: dict, stages: dict, sweep: lis
           f"this {angle:.1f} deg edge they read cos({angle:.1f} deg) = {two['cos_edge_angle']:.3f} of the frequencies normal to the "
           f"edge; it also leaves the 3-tap derivative's sinc roll-off uncorrected. Together: "
           f"{st['2um']['volts_mtf50_sfrmat3_cy_mm']:.1f} -> {st['2um']['iso12233_mtf50_cy_mm']:.1f} cy/mm on ISETCam's "
-          f"own volts at 2 um. ISO 12233:2014 (and sfrmat3/4) define the frequency normal to the edge; ours is that.",
+          f"own volts at 2 um. Burns' sfrmat3 and sfrmat4 rescale the frequency to the edge normal (by cos(angle)) and correct the derivative; ours does both.",
           f"- **The 9 um value is an artefact.** ISETCam's MTF never falls to 0.5 below Nyquist "
           f"({by.get('pixel-mtf-9um', {}).get('details', {}).get('nyquist_cy_mm', float('nan')):.1f} cy/mm): sfrmat3 on "
           f"ISETCam's own volts gives {st['9um']['volts_mtf50_sfrmat3_cy_mm']:.1f}, above Nyquist. ISO12233 interpolates "
@@ -203,8 +143,14 @@ def parity_markdown(results: list[dict], isetcam: dict, stages: dict, sweep: lis
     L += ["", f"With ISETCam's default noise on, one realisation gave {noisy.get(2.0, float('nan')):.1f} at 2 um (the "
           f"script's 129.2 is another realisation, or an older ISETCam); the cases run noise off.", ""]
 
+    return L
+
+
+def _iso_and_snr(by: dict, isetcam: dict) -> list[str]:
+    iso = isetcam["iso12233_default_camera_2021"]
+    prov = isetcam["provenance"]
     nf, n2 = iso["noise_flag_-1"], iso["noise_flag_2"]
-    L += ["## ieTest_ISO12233: ISETCam moved", "",
+    L = ["## ieTest_ISO12233: ISETCam moved", "",
           f"The 2021 code gives {nf['iso12233_mtf50_cy_mm']:.1f} cy/mm (noise off; {n2['iso12233_mtf50_cy_mm']:.1f} "
           f"with noise) where the test now asserts "
           f"{by['iso12233-default-camera']['expected']:g}. The test passes `weight = []`, and ISO12233's default weight "
@@ -226,10 +172,15 @@ def parity_markdown(results: list[dict], isetcam: dict, stages: dict, sweep: lis
         top, formula = d2["details"]["snr_db"][1], d2["details"]["isetcam_formula_snr_db"][1]
         L += [f"At the 2 um pixel's full well our SNR is {top:.1f} dB against the formula's {formula:.1f} dB; spread "
               f"over the curve's 50 levels that is the {d2['value'] - d2['expected']:+.3f} dB of the mean."]
+    return L
+
+
+def _colour_and_settings(isetcam: dict, pre: dict) -> list[str]:
+    mcc = isetcam["mcc_colour"]
     sub = mcc["substitution_experiment"]
     ours_o, ours_i = sub["colour_science_n_ohta"], sub["isetcam_macbethChart_mat"]
     isc = mcc["isetcam_pipeline_noise_free"]
-    L += ["", "## ColorChecker colour accuracy", "",
+    L = ["", "## ColorChecker colour accuracy", "",
           "ISETCam's colour accuracy differs from ours by three conventions, all reproduced in mode `isetcam`: (1) "
           "the sensor -> XYZ matrix is fitted by plain least squares on the 24 ColorChecker patches under D65 ('MCC "
           "optimized'), not white-preserving and noise-weighted on 190 training reflectances; (2) the ColorChecker is "
@@ -251,8 +202,8 @@ def parity_markdown(results: list[dict], isetcam: dict, stages: dict, sweep: lis
           "camera is not calibrated on the chart it is tested on) and the scene white.", "",
           "## What to set to get ISETCam's numbers", "",
           "- Sensor: `--sensor isetcam-default` or `isetcam-monochrome` (`cfa-mitsuba capture`; `sensor = \"...\"` "
-          f"in a study config): ISETCam's {pre.pixel_pitch_um:g} um pixel, fill factor {pre.fill_factor:g}, "
-          f"{pre.well_capacity_e:.0f} e- well, {pre.read_noise_e:.0f} e- read noise, {pre.dark_current_e_s:.0f} e-/s "
+          f"in a study config): ISETCam's {pre['pixel_pitch_um']:g} um pixel, fill factor {pre['fill_factor']:g}, "
+          f"{pre['well_capacity_e']:.0f} e- well, {pre['read_noise_e']:.0f} e- read noise, {pre['dark_current_e_s']:.0f} e-/s "
           "dark current, flat photodiode, no IR cut, GRBG Bayer of RGB.mat (`cfa_mitsuba/data/sensors.toml`).",
           "- Optics: f/4 (our default); ISETCam's fixed focal length matters only to its sampling "
           "(`cfa_mitsuba/data/optics.toml`, `[optics] preset = \"isetcam-default\"` in a case).",
@@ -261,21 +212,20 @@ def parity_markdown(results: list[dict], isetcam: dict, stages: dict, sweep: lis
           "image is `cm.optics.isetcam.regrid_isetcam`. A parity case with `mode = \"isetcam\"` does all of it.",
           "- Colour: `[isp] colour_fit = \"mcc-isetcam\"`, `white_preserving = false`, `regularise = false` "
           "(configs/paper-isetcam.toml has the last two, with `mcc`), `[metrics.delta-e] white = \"white-patch\"`.", ""]
-    return "\n".join(L)
+    return L
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m cfa_mitsuba.report.parity_doc", description=__doc__.split("\n")[0])
     ap.add_argument("--results", required=True, help="cfa-mitsuba parity --json output")
     ap.add_argument("--isetcam", required=True, help="ISETCam's own values (docs/data/isetcam-octave.json)")
-    ap.add_argument("--template", default="tests/parity/isetcam/pixel-mtf-2um.toml",
-                    help="the case the f-number/pitch sweep varies")
+    ap.add_argument("--stages", required=True, help="our stage values (docs/data/isetcam-parity-stages.json)")
     ap.add_argument("--out", required=True, help="the Markdown page to write")
     args = ap.parse_args(argv)
     try:
         results = json.loads(Path(args.results).read_text())
         isetcam = json.loads(Path(args.isetcam).read_text())
-        page = parity_markdown(results, isetcam, our_stage_values(isetcam), our_sweep(isetcam, Path(args.template)))
+        page = parity_markdown(results, isetcam, json.loads(Path(args.stages).read_text()))
     except (OSError, ValueError, KeyError, CfaMitsubaError) as exc:
         print(f"parity_doc: error: {exc}", file=sys.stderr)
         return 2
