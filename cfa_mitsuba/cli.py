@@ -32,6 +32,7 @@ COMMANDS = (
     "convergence",
     "design",
     "sensor",
+    "parity",
 )
 
 

@@ -39,6 +39,7 @@ __all__ = [
     "GREY_REFLECTANCE",
     "COLOUR_FITS",
     "colour_fit_reflectances",
+    "isetcam_colorchecker",
     "luminance_weights",
     "cfa_luminance_weights",
     "electrons_per_radiance_of",
@@ -48,6 +49,7 @@ __all__ = [
 
 import functools
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -155,8 +157,10 @@ class ColourFit:
 #: The reflectances a colour matrix can be fitted on: ``training`` (the 190
 #: rawtoaces training patches, never the test chart: the default) or ``mcc``
 #: (the 24 ColorChecker patches, the Macbeth test chart itself: ISETCam's
-#: 'MCC optimized' sensor conversion, research/isetcam.md s. 4.4).
-COLOUR_FITS = ("training", "mcc")
+#: 'MCC optimized' sensor conversion, research/isetcam.md s. 4.4), or
+#: ``mcc-isetcam`` (the same fit on ISETCam's own ColorChecker table,
+#: ``data/reflectances/isetcam_macbethChart.csv``, as ISETCam does it).
+COLOUR_FITS = ("training", "mcc", "mcc-isetcam")
 
 
 def colour_fit_reflectances(name: str, wavelengths=spectra.DEFAULT_WAVELENGTHS) -> np.ndarray:
@@ -171,7 +175,22 @@ def colour_fit_reflectances(name: str, wavelengths=spectra.DEFAULT_WAVELENGTHS) 
         return spectra.training_reflectances(wavelengths)
     if name == "mcc":
         return spectra.colorchecker(wavelengths)[1]
+    if name == "mcc-isetcam":
+        return isetcam_colorchecker(wavelengths)
     raise CfaMitsubaError(f"unknown colour fit {name!r} (choose {', '.join(COLOUR_FITS)})")
+
+
+#: ISETCam's ColorChecker table (data/reflectances/README.md).
+ISETCAM_MACBETH_CSV = Path(__file__).resolve().parent.parent / "data" / "reflectances" / "isetcam_macbethChart.csv"
+
+
+def isetcam_colorchecker(wavelengths=spectra.DEFAULT_WAVELENGTHS) -> np.ndarray:
+    """(24, B) ISETCam's ColorChecker reflectances (``macbethChart.mat``,
+    shipped as ``data/reflectances/isetcam_macbethChart.csv``, reading
+    order), band-averaged onto ``wavelengths`` (nm) as every tabulated
+    spectrum is (DESIGN.md)."""
+    table = np.loadtxt(ISETCAM_MACBETH_CSV, delimiter=",", skiprows=1)
+    return spectra.band_average(table[:, 0], table[:, 1:], wavelengths).T
 
 
 def _balanced_responses(epr, white, reflectances):

@@ -16,6 +16,8 @@ from .record import MetricRecord
 _VERSIONS = ("2000", "1976")
 #: Grey patches of the 24-patch ColorChecker in reading order (last row).
 GREY_PATCHES = tuple(range(18, 24))
+#: The white patch of the 24-patch ColorChecker in reading order.
+WHITE_PATCH = 18
 
 
 def _stats(values: np.ndarray) -> dict:
@@ -24,7 +26,8 @@ def _stats(values: np.ndarray) -> dict:
 
 
 def delta_e(reference_xyz, test_xyz, white_xyz, *, patches=None, grey_patches=None,
-            version: str = "2000", lab_constants: str = "cie") -> MetricResult:
+            version: str = "2000", lab_constants: str = "cie", white: str = "scene",
+            white_patch: int = WHITE_PATCH) -> MetricResult:
     """Colour difference between an ideal and a camera XYZ image.
 
     Parameters
@@ -43,6 +46,12 @@ def delta_e(reference_xyz, test_xyz, white_xyz, *, patches=None, grey_patches=No
         ``'1976'`` (the paper's Euclidean dE*ab).  Both are always reported.
     lab_constants : ``'cie'`` (exact CIE constants, default) or ``'isetcam'``
         (ISETCam's rounded ones), see :func:`~cfa_mitsuba.metrics.colourspace.xyz_to_lab`.
+    white : CIELAB's white: ``'scene'`` (``white_xyz``, default) or
+        ``'white-patch'`` (ISETCam's ``macbethColorError``: the reference's
+        white patch is the white and the test is scaled so that its white
+        patch has the reference's Y; needs ``patches``).
+    white_patch : index of the white patch in ``patches`` (18, the
+        ColorChecker's in reading order).
 
     Returns
     -------
@@ -71,13 +80,16 @@ def delta_e(reference_xyz, test_xyz, white_xyz, *, patches=None, grey_patches=No
     (2.481, 'dE00')
     """
     require(version in _VERSIONS, f"unknown dE version {version!r} (expected '2000' or '1976')")
+    require(white in ("scene", "white-patch"), f"unknown white {white!r} (expected 'scene' or 'white-patch')")
+    require(white == "scene" or patches is not None, "white 'white-patch' needs the chart's patches")
     ref, test = as_pair(reference_xyz, test_xyz)
-    white = as_white(white_xyz)
+    lab_white = as_white(white_xyz)
     unit = "dE00" if version == "2000" else "dE76"
     key = "de2000" if version == "2000" else "de1976"
 
     if patches is None:
-        lab_r, lab_t = xyz_to_lab(ref, white, constants=lab_constants), xyz_to_lab(test, white, constants=lab_constants)
+        lab_r, lab_t = (xyz_to_lab(ref, lab_white, constants=lab_constants),
+                        xyz_to_lab(test, lab_white, constants=lab_constants))
         d00, d76 = delta_e_2000(lab_r, lab_t), delta_e_1976(lab_r, lab_t)
         details = {"de2000": d00, "de1976": d76, "stats2000": _stats(d00), "stats1976": _stats(d76),
                    "mode": "per-pixel"}
@@ -93,7 +105,13 @@ def delta_e(reference_xyz, test_xyz, white_xyz, *, patches=None, grey_patches=No
         mean_r.append(ref[y0:y1, x0:x1].reshape(-1, 3).mean(axis=0))
         mean_t.append(test[y0:y1, x0:x1].reshape(-1, 3).mean(axis=0))
     xyz_r, xyz_t = np.array(mean_r), np.array(mean_t)
-    lab_r, lab_t = xyz_to_lab(xyz_r, white, constants=lab_constants), xyz_to_lab(xyz_t, white, constants=lab_constants)
+    if white == "white-patch":
+        require(0 <= int(white_patch) < len(rects), f"white patch {white_patch} outside 0..{len(rects) - 1}")
+        lab_white = xyz_r[int(white_patch)]
+        require(lab_white[1] > 0 and xyz_t[int(white_patch), 1] > 0, "the white patch is black")
+        xyz_t = xyz_t * (lab_white[1] / xyz_t[int(white_patch), 1])
+    lab_r, lab_t = (xyz_to_lab(xyz_r, lab_white, constants=lab_constants),
+                    xyz_to_lab(xyz_t, lab_white, constants=lab_constants))
     d00, d76 = delta_e_2000(lab_r, lab_t), delta_e_1976(lab_r, lab_t)
     if grey_patches is None:
         grey_patches = GREY_PATCHES if len(rects) == 24 else ()

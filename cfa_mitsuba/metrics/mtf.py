@@ -18,6 +18,15 @@ sfrmat3's conventions.  Steps (P. D. Burns' sfrmat3, ISO 12233:2014):
 
 MTF50 is the first crossing of 0.5, linearly interpolated between the two
 samples around it (not snapped to a grid, unlike ISETCam's ISO12233).
+
+``convention="isetcam"`` reproduces ISETCam's ``metrics/ISO/ISO12233.m``
+(sfrmat v1/v2 lineage; docs/isetcam-parity.md): frequencies along the
+pixel rows (not divided by cos(angle), so a slanted edge reads cos(angle)
+lower), no correction for the derivative filter, and MTF50 the point of a
+0.2-unit grid from 0 to Nyquist whose MTF, linearly interpolated from the
+samples strictly below Nyquist, is closest to 0.5 (grid points past the last
+such sample are undefined, so an MTF above 0.5 there returns the last grid
+point below that sample, not Nyquist).
 MTF50P (Imatest's measure for sharpened images) is the first crossing of
 half the MTF's peak (the peak up to Nyquist) above the peak's frequency: a
 sharpening overshoot raises the peak above 1 and MTF50, not MTF50P.
@@ -110,7 +119,7 @@ def _esf(a: np.ndarray, slope: float, nbin: int) -> np.ndarray:
     return esf
 
 
-def _sfr(esf: np.ndarray, nbin: int, cos_angle: float, sign: float):
+def _sfr(esf: np.ndarray, nbin: int, cos_angle: float, sign: float, correct: bool = True):
     nn = esf.size
     lsf = np.empty(nn)
     lsf[1:-1] = 0.5 * (esf[2:] - esf[:-2])
@@ -132,7 +141,8 @@ def _sfr(esf: np.ndarray, nbin: int, cos_angle: float, sign: float):
     k = np.arange(nn2)
     xk = 2.0 * np.pi * k / nn  # the centred difference's response is sin(x)/x
     corr = np.ones(nn2)
-    corr[1:] = np.minimum(xk[1:] / np.sin(np.clip(xk[1:], 1e-12, np.pi - 1e-9)), 10.0)
+    if correct:
+        corr[1:] = np.minimum(xk[1:] / np.sin(np.clip(xk[1:], 1e-12, np.pi - 1e-9)), 10.0)
     freq = nbin * k / (nn * cos_angle)
     return freq, m * corr
 
@@ -144,6 +154,20 @@ def _mtf50(freq, m):
     i = below[0]
     f0, f1, m0, m1 = freq[i - 1], freq[i], m[i - 1], m[i]
     return float(f0 + (m0 - 0.5) * (f1 - f0) / (m0 - m1)), True
+
+
+def _mtf50_isetcam(freq, m, unit_per_cy_px: float, step: float = 0.2):
+    """ISETCam ISO12233's MTF50 (module doc): the 0.2-step grid point, in
+    the headline unit (``unit_per_cy_px`` of them per cy/px), whose
+    interpolated MTF is closest to 0.5."""
+    f = np.asarray(freq) * unit_per_cy_px
+    nyq = 0.5 * unit_per_cy_px
+    below = f < nyq
+    grid = np.arange(int(np.floor(nyq / step + 1e-9)) + 1) * step
+    inside = (grid >= f[below][0]) & (grid <= f[below][-1])
+    dist = np.full(grid.size, np.inf)
+    dist[inside] = np.abs(np.interp(grid[inside], f[below], np.asarray(m)[below]) - 0.5)
+    return float(grid[int(np.argmin(dist))]) / unit_per_cy_px
 
 
 def _mtf50p(freq, m, nyquist: float = 0.5):
@@ -251,7 +275,7 @@ def _reference_edge(reference, bounds, weights, transposed: bool, sign: float):
 
 
 def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEIGHTS,
-        nbin: int = NBIN, reference=None) -> MetricResult:
+        nbin: int = NBIN, reference=None, convention: str = "sfrmat3") -> MetricResult:
     """Slanted-edge MTF50, MTF at Nyquist and percent alias of a linear image.
 
     Parameters
@@ -274,6 +298,9 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
         ``'reference'`` instead of ``'image'``.  Not when the image's edge
         runs the other way or has the other polarity (noise or clipping
         decided them): that is an error.
+    convention : ``"sfrmat3"`` (default: frequencies normal to the edge,
+        derivative corrected, MTF50 the interpolated crossing) or
+        ``"isetcam"`` (ISETCam's ISO12233, module doc).
 
     Returns
     -------
@@ -314,6 +341,8 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
     0.187
     """
     a = as_image(image, "edge image", channels=(3,), allow_gray=True, min_size=8)
+    require(convention in ("sfrmat3", "isetcam"), f"unknown MTF convention {convention!r} (sfrmat3 or isetcam)")
+    isetcam = convention == "isetcam"
     require(int(nbin) == nbin and nbin >= 1, f"nbin must be a positive integer, got {nbin}")
     if pixel_pitch_um is not None:
         require(np.isfinite(pixel_pitch_um) and pixel_pitch_um > 0, f"pixel pitch must be positive, got {pixel_pitch_um}")
@@ -325,7 +354,7 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
     sign = _polarity(records[main])
     edge = _edge(records[main], sign, roi, reference, weights, transposed)
     per_mm = 1.0 / (pixel_pitch_um * 1e-3) if pixel_pitch_um else None
-    out = {name: _record_mtf(name, rec, main, edge, sign, int(nbin), per_mm) for name, rec in records.items()}
+    out = {name: _record_mtf(name, rec, main, edge, sign, int(nbin), per_mm, isetcam) for name, rec in records.items()}
     lum = out[main]
     band = lum["freq_cy_px"] <= 1.0
     above = band & (lum["freq_cy_px"] > 0.5)
@@ -343,7 +372,8 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
         "edge_angle_deg": edge["angle"], "orientation": "horizontal" if transposed else "vertical",
         "roi": list(roi), "rows_used": edge["rows"], "edge_fit_rms_px": edge["rms"], "edge_source": edge["source"],
         "contrast": float(contrast), "low_contrast": bool(contrast < 0.2),
-        "pixel_pitch_um": pixel_pitch_um, "weights": list(map(float, weights)) if a.ndim == 3 else None,
+        "pixel_pitch_um": pixel_pitch_um, "convention": convention,
+        "weights": list(map(float, weights)) if a.ndim == 3 else None,
     }
     if pixel_pitch_um:
         return MetricResult(lum["mtf50_cy_mm"], name="mtf", unit="cy/mm", details=details)
@@ -404,8 +434,9 @@ def _contrast(work) -> float:
     return (bright - dark) / (bright + dark) if bright > 0 else 0.0
 
 
-def _record_mtf(name, rec, main, edge, sign, nbin, per_mm) -> dict:
-    """One record's MTF curve with its MTF50, MTF50P, peak and value at Nyquist."""
+def _record_mtf(name, rec, main, edge, sign, nbin, per_mm, isetcam: bool = False) -> dict:
+    """One record's MTF curve with its MTF50, MTF50P, peak and value at
+    Nyquist (``isetcam``: ISETCam's ISO12233 conventions, module doc)."""
     s_r = edge["slope"]
     if name != main and edge["source"] == "image":  # each colour record gets its own edge fit (sfrmat3) ...
         try:
@@ -416,7 +447,7 @@ def _record_mtf(name, rec, main, edge, sign, nbin, per_mm) -> dict:
             pass
     try:
         esf = _esf(rec[:edge["rows"]], s_r, nbin)
-        freq, m = _sfr(esf, nbin, edge["cos"], sign)
+        freq, m = _sfr(esf, nbin, 1.0 if isetcam else edge["cos"], sign, correct=not isetcam)
     except CfaMitsubaError as exc:
         if name == main:
             raise
@@ -425,6 +456,8 @@ def _record_mtf(name, rec, main, edge, sign, nbin, per_mm) -> dict:
                 "mtf50p_found": False, "mtf_peak": None, "mtf_peak_cy_px": None,
                 "error": str(exc)}  # a channel without an edge
     m50, found = _mtf50(freq, m)
+    if isetcam:
+        m50 = _mtf50_isetcam(freq, m, per_mm or 1.0)
     m50p, peak, f_peak, found_p = _mtf50p(freq, m)
     return {
         "freq_cy_px": freq, "mtf": m,
