@@ -6,6 +6,7 @@ import json
 import numpy as np
 import pytest
 
+import cfa_mitsuba as cm
 from cfa_mitsuba import spectra
 from cfa_mitsuba.io import read_spectral_exr
 from conftest import assert_one_line_error, run_cli
@@ -13,7 +14,7 @@ from conftest import assert_one_line_error, run_cli
 SIDECAR_KEYS = {
     "scene", "width", "height", "fov_deg", "oversample", "wavelengths", "units", "luminance_cd_m2", "illuminant",
     "white_radiance", "white_luminance_cd_m2", "scene_distance_m", "spp", "variant", "seed", "render_time_s",
-    "cache_key", "metrics", "geometry",
+    "cache_key", "kind", "geometry",
 }
 
 
@@ -40,7 +41,8 @@ def test_render_writes_exr_and_sidecar_then_reuses_the_cache(tmp_path, monkeypat
     meta = json.loads(side.read_text())
     assert SIDECAR_KEYS <= set(meta)
     assert meta["width"] == 64 and meta["height"] == 48 and meta["oversample"] == 4
-    assert meta["luminance_cd_m2"] == 100.0 and meta["metrics"] == ["mtf"]
+    assert meta["luminance_cd_m2"] == 100.0 and meta["kind"] == "slanted-edge"
+    assert cm.metrics.metrics_for_scene(meta["kind"]) == ("mtf",)
     img = read_spectral_exr(exr)
     assert spectra.luminance_cd_m2(img.data).mean() == pytest.approx(100.0, rel=1e-4)
 
