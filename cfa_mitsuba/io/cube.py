@@ -108,14 +108,19 @@ def _available_bytes() -> int:
 
 
 def check_memory(shape, where: str, out_bands: int = 31) -> None:
-    """Refuse a cube whose conversion would not fit in half the available
-    memory: the source as float64 plus the result on the grid."""
+    """Refuse a cube whose conversion would not fit in the memory the
+    project may use (:func:`.limits.require_memory`: ``$CFA_MITSUBA_MEMORY_LIMIT``,
+    the cgroup, the machine) or in half the memory now available: the
+    source as float64 plus the result on the grid."""
+    from . import limits
+
     h, w, n = (int(s) for s in shape)
     need = h * w * (n + 2 * out_bands) * 8
     avail = _available_bytes()
     if need > avail // 2:
         raise CfaMitsubaError(f"{where}: a {h} x {w} x {n} cube needs about {need / 2**30:.3g} GiB to convert, "
                               f"too large for memory ({avail / 2**30:.3g} GiB available); crop or bin it first")
+    limits.require_memory(need, f"{where}: converting a {h} x {w} x {n} cube", "crop or bin it first")
 
 
 def check_values(data: np.ndarray, where: str) -> None:

@@ -76,11 +76,13 @@ from . import xmlscan
 from .loading import first_line, inspect_settings
 from .types import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene, focal_length_m
 
-#: BSDF plugins whose sampling is wavelength-independent (Mitsuba 3.9).
+#: BSDF plugins whose sampling is wavelength-independent (Mitsuba 3.9): a
+#: ``blendbsdf`` picks a child by a scalar weight (``eval_1``), ``plastic``
+#: and ``pplastic`` by a weight fixed when the plugin is built.
 SUPPORTED_BSDFS = frozenset({
     "diffuse", "twosided", "plastic", "roughplastic", "conductor", "roughconductor",
     "dielectric", "roughdielectric", "thindielectric", "null", "mask", "bumpmap", "normalmap",
-    "principled", "principledthin",
+    "principled", "principledthin", "blendbsdf", "pplastic",
 })
 #: BSDFs exact only without a tint (module docstring): the properties refused when set and not 0.
 TINTED_BSDFS = {"principled": ("spec_tint", "sheen_tint"), "principledthin": ("spec_tint", "sheen_tint")}
