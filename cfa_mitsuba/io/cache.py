@@ -71,6 +71,7 @@ class RenderCache:
 
     def __init__(self, root=None):
         self.root = Path(root) if root is not None else default_cache_dir()
+        self._noticed: set[tuple[str, str]] = set()  # (entry, why) already said once
 
     def path(self, key: str) -> Path:
         return self.root / "renders" / key[:2] / f"{key}.exr"
@@ -97,7 +98,9 @@ class RenderCache:
                 return True
             if actual is not None:
                 why = "does not match the checksum recorded when it was written (changed since)"
-        sys.stderr.write(f"cfa-mitsuba: cache entry {p} {why}: rendering it again\n")
+        if (str(p), why) not in self._noticed:  # get_or_create looks twice (before and under the lock)
+            self._noticed.add((str(p), why))
+            sys.stderr.write(f"cfa-mitsuba: cache entry {p} {why}: rendering it again\n")
         return False
 
     def _ensure(self, directory: Path) -> Path:

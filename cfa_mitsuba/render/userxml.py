@@ -78,11 +78,13 @@ from .types import FULL_REFERENCE_METRICS, Built, RenderConfig, Scene, focal_len
 
 #: BSDF plugins whose sampling is wavelength-independent (Mitsuba 3.9): a
 #: ``blendbsdf`` picks a child by a scalar weight (``eval_1``), ``plastic``
-#: and ``pplastic`` by a weight fixed when the plugin is built.
+#: and ``pplastic`` by a weight fixed when the plugin is built,
+#: ``measured_polarized`` by a fixed lobe weight and GGX width, ``polarizer``
+#: passes straight through.
 SUPPORTED_BSDFS = frozenset({
     "diffuse", "twosided", "plastic", "roughplastic", "conductor", "roughconductor",
     "dielectric", "roughdielectric", "thindielectric", "null", "mask", "bumpmap", "normalmap",
-    "principled", "principledthin", "blendbsdf", "pplastic",
+    "principled", "principledthin", "blendbsdf", "pplastic", "polarizer", "measured_polarized",
 })
 #: BSDFs exact only without a tint (module docstring): the properties refused when set and not 0.
 TINTED_BSDFS = {"principled": ("spec_tint", "sheen_tint"), "principledthin": ("spec_tint", "sheen_tint")}
@@ -186,6 +188,9 @@ def _read(path: Path, allow_outside_paths: bool, defines=(), asset_root=None) ->
     main = scan.main
     mi = _variant.load(_variant.choose_variant())
     config = mi.parser.ParserConfig(mi.variant())
+    # A --define the file does not use is not an error (the same --define
+    # spp=16 serves a folder of scenes); Mitsuba's parser refuses it by default.
+    config.unused_parameters = mi.LogLevel.Debug
     try:
         state = mi.parser.parse_file(config, str(main), **dict(defines))
         mi.parser.transform_upgrade(config, state)

@@ -106,6 +106,25 @@ class StudyConfig:
 
 
 # Render settings a config may override per scene, with their checks.
+def _scene_access(ck, c: dict, key: str, base: Path) -> dict:
+    """A custom scene's ``defines`` (a table of its ``$name`` parameters, as
+    ``render --define``) and ``asset_root`` (one shared folder its files may
+    be in, relative to the config, as ``render --asset-root``)."""
+    from ..render.xmlscan import check_asset_root, parse_defines
+
+    out = {}
+    try:
+        if "defines" in c:
+            if not isinstance(c["defines"], dict):
+                ck.fail(f"{key}.defines", "must be a table of NAME = value")
+            out["defines"] = dict(parse_defines(c["defines"]))
+        if "asset_root" in c:
+            out["asset_root"] = check_asset_root(base / ck.string(c["asset_root"], f"{key}.asset_root"))
+    except CfaMitsubaError as exc:
+        ck.fail(f"{key}.{'asset_root' if 'asset-root' in str(exc) else 'defines'}", str(exc))
+    return out
+
+
 _RENDER_KEYS = {
     "width": ("integer", 1), "height": ("integer", 1), "spp": ("integer", 1),
     "oversample": ("integer", 1), "seed": ("integer", 0), "fov": ("number", None), "max_depth": ("integer", 1),
@@ -289,7 +308,8 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
             iname, image, opts = image_scene_spec(ck, c, key, base, [*known_scenes, *(s.name for s in scenes)])
             scenes.append(SceneSpec(iname, image, opts, IMAGE_METRICS))
             continue
-        ck.table(c, key, {"name": None, "file": None, "allow_outside_paths": None, **_RENDER_KEYS})
+        ck.table(c, key, {"name": None, "file": None, "allow_outside_paths": None, "defines": None, "asset_root": None,
+                          **_RENDER_KEYS})
         cname = ck.string(c.get("name"), f"{key}.name")
         if safe_name(cname) != cname:  # it names folders under details/: a label, never a path
             ck.fail(f"{key}.name", f"must be a label of letters, digits, '-', '_' and inner '.' (got {cname!r})")
@@ -300,7 +320,9 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
             ck.fail(f"{key}.file", f"no such file {str(f)!r}")
         if cname in known_scenes or any(s.name == cname for s in scenes):
             ck.fail(f"{key}.name", f"{cname!r} is already a scene name")
-        over = _render_overrides(ck, {k: v for k, v in c.items() if k not in ("name", "file", "allow_outside_paths")}, key)
+        access = ("name", "file", "allow_outside_paths", "defines", "asset_root")
+        over = _render_overrides(ck, {k: v for k, v in c.items() if k not in access}, key)
+        over.update(_scene_access(ck, c, key, base))
         if "allow_outside_paths" in c:  # the scene may name files outside its folder
             if not isinstance(c["allow_outside_paths"], bool):
                 ck.fail(f"{key}.allow_outside_paths", "must be true or false")
