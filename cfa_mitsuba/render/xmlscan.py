@@ -45,6 +45,7 @@ from pathlib import Path
 from xml.parsers import expat
 
 from ..errors import CfaMitsubaError
+from ..io import guard as _guard
 
 #: Largest scene XML file read (bytes).
 MAX_XML_BYTES = 16 << 20
@@ -117,47 +118,20 @@ def _fail(main: Path, why: str):
 
 
 def _kind(mode: int) -> str:
-    for test, name in ((stat.S_ISFIFO, "a FIFO"), (stat.S_ISDIR, "a directory"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
-        if test(mode):
-            return name
-    return "not a regular file"
-
-
-def _open_regular(path: Path) -> int:
-    """A read-only descriptor of ``path``, refused unless it is a regular
-    file: checked by stat before opening (a FIFO would block the open) and
-    again on the open descriptor (the name could have changed between)."""
-    try:
-        st = os.stat(path)
-    except OSError as exc:
-        raise CfaMitsubaError(f"cannot read {str(path)!r}: {exc.strerror}") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise CfaMitsubaError(f"{str(path)!r} is {_kind(st.st_mode)}, not a regular file")
-    try:
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
-    except OSError as exc:
-        raise CfaMitsubaError(f"cannot read {str(path)!r}: {exc.strerror}") from None
-    if not stat.S_ISREG(os.fstat(fd).st_mode):
-        os.close(fd)
-        raise CfaMitsubaError(f"{str(path)!r} is not a regular file")
-    return fd
+    return _guard._kind(mode)
 
 
 def read_regular(path: Path, limit: int) -> bytes:
-    """The bytes of regular file ``path``, refused beyond ``limit`` bytes."""
-    fd = _open_regular(path)
-    with os.fdopen(fd, "rb") as fh:
-        data = fh.read(limit + 1)
-    if len(data) > limit:
-        raise CfaMitsubaError(f"{str(path)!r} is larger than {limit >> 20} MiB")
-    return data
+    """The bytes of regular file ``path``, refused beyond ``limit`` bytes
+    (:func:`cfa_mitsuba.io.guard.read_bytes`: checked by stat before
+    opening, a FIFO would block the open, and again on the descriptor)."""
+    return _guard.read_bytes(path, None, limit)
 
 
 def file_sha256(path: Path) -> str:
     """SHA-256 of a regular file's content (hex)."""
     h = hashlib.sha256()
-    with os.fdopen(_open_regular(path), "rb") as fh:
+    with _guard.open_regular(path) as fh:
         for chunk in iter(lambda: fh.read(1 << 20), b""):
             h.update(chunk)
     return h.hexdigest()
