@@ -110,8 +110,10 @@ def read_toml(path, what: str) -> tuple[Path, dict]:
     p = Path(path)
     if not p.is_file():
         raise CfaMitsubaError(f"no such {what}: {str(p)!r}")
-    try:
-        return p, tomllib.loads(p.read_text())
+    from ..io.guard import read_text
+
+    try:  # regular file, bounded, strict UTF-8 (io/guard.py)
+        return p, tomllib.loads(read_text(p, what))
     except tomllib.TOMLDecodeError as exc:
         raise CfaMitsubaError(f"{p.name}: invalid TOML: {exc}") from None
     except (OSError, UnicodeDecodeError) as exc:
