@@ -143,7 +143,7 @@ def test_corrupt_png_stream_is_one_line(tmp_path, good_png):
 
 def test_png_whose_header_lies_about_its_size_is_one_line(tmp_path, good_png):
     p = tmp_path / "liar.png"
-    p.write_bytes(_png(8, 8, zlib.compress(_grey_rows(4, 4))))  # IHDR says 8 x 8, the data holds 4 x 4
+    p.write_bytes(_png(8, 8, zlib.compress(_grey_rows(8, 4))))  # IHDR says 8 rows, the data holds 4 (was ValueError)
     assert_one_line_error(_cli("metric", "ssim", good_png, p), "liar.png")
 
 

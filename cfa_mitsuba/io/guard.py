@@ -93,8 +93,14 @@ def _size(n: int) -> str:
 
 
 def read_bytes(path, what: str | None = None, limit: int = MAX_BINARY_BYTES) -> bytes:
-    """The bytes of regular file ``path``, refused beyond ``limit`` bytes."""
+    """The bytes of regular file ``path``, refused beyond ``limit`` bytes or
+    beyond the memory available (its size, checked before it is read)."""
+    from . import limits
+
     with open_regular(path, what) as fh:
+        size = os.fstat(fh.fileno()).st_size
+        if limit >= size > 64 << 20:
+            limits.require_memory(size, f"reading {_label(path, what)} ({size} bytes)")
         data = fh.read(limit + 1)
     if len(data) > limit:
         raise CfaMitsubaError(f"{_label(path, what)} is larger than {_size(limit)}, the most read from such a file")
