@@ -3,7 +3,7 @@ test and docs scenes, issue 27 acceptance 4), each through ``cfa-mitsuba
 render`` at a small size, and check the field of view of each render.
 
     python benchmarks/probe_mitsuba_scenes.py FOLDER [--asset-root DIR]
-        [--define spp=16] [--width 32 --height 24 --spp 16] [--out DIR]
+        [--define spp=16] [--width 32 --height 24 --spp 16] [--out DIR] [--only LIST]
 
 FOLDER is searched recursively for ``*.xml``; files inside folders named
 ``include`` or ``fragments`` are pieces of other scenes, not scenes, and
@@ -81,9 +81,14 @@ def main(argv=None) -> int:
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds per scene")
     ap.add_argument("--fov-tolerance", type=float, default=1e-4)
     ap.add_argument("--out", type=Path, help="keep the renders here (default: a temporary folder)")
+    ap.add_argument("--only", type=Path, metavar="LIST",
+                    help="probe only the scene files named in LIST (one path relative to FOLDER per line)")
     args = ap.parse_args(argv)
     defines = args.define if args.define is not None else ["spp=16"]
     files = scene_files(args.folder)
+    if args.only is not None:
+        wanted = {ln.strip() for ln in args.only.read_text().splitlines() if ln.strip()}
+        files = [f for f in files if str(f.relative_to(args.folder)) in wanted]
     out = args.out or Path(tempfile.mkdtemp(prefix="probe-scenes-"))
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(_REPO), os.environ.get("PYTHONPATH", "")])}
     rendered, refused, failed = [], [], []

@@ -31,8 +31,10 @@ starts (docs/stability.md, section 11).
 A scene FILE.xml is read as Mitsuba reads it (includes, <path> folders,
 <default> parameters; --define NAME=VALUE sets one, as Mitsuba's -D); every
 file it names must lie inside its folder or the --asset-root folder, unless
---allow-outside-paths (which opens every path).  The sidecar's white_radiance is a perfect
-white in the scene (--white-from; docs/scenes.md has the rule).
+--allow-outside-paths (which opens every path).  The sidecar's field of view
+is the one Mitsuba renders at --width x --height (its fov_axis applied to
+that aspect ratio).  The sidecar's white_radiance is a perfect white in the
+scene (--white-from; docs/scenes.md has the rule).
 
 """ + render_measured.EPILOG
 
