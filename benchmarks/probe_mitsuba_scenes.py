@@ -54,8 +54,10 @@ def true_fov_deg(xml: Path, defines: list[str], width: int, height: int) -> floa
     if mi.variant() is None:
         mi.set_variant("scalar_spectral")
     params = dict(d.split("=", 1) for d in defines)
-    state = mi.parser.parse_file(mi.parser.ParserConfig(mi.variant()), str(xml), **params)
-    mi.parser.transform_upgrade(mi.parser.ParserConfig(mi.variant()), state)
+    config = mi.parser.ParserConfig(mi.variant())
+    config.unused_parameters = mi.LogLevel.Debug  # the same --define serves every scene
+    state = mi.parser.parse_file(config, str(xml), **params)
+    mi.parser.transform_upgrade(config, state)
     sensor = next(n for n in state.nodes if n.type == mi.ObjectType.Sensor)
     cam = {"type": "perspective", "film": {"type": "hdrfilm", "width": width, "height": height}}
     for key in _FOV_KEYS:
