@@ -66,7 +66,7 @@ def check_regular(path, what: str | None = None) -> os.stat_result:
     try:
         st = os.stat(path)
     except FileNotFoundError:
-        raise CfaMitsubaError(f"no such file: {_label(path, what)}") from None
+        raise CfaMitsubaError(f"cannot read {_label(path, what)}: no such file") from None
     except OSError as exc:
         raise CfaMitsubaError(f"cannot read {_label(path, what)}: {exc.strerror}") from None
     if not stat.S_ISREG(st.st_mode):
