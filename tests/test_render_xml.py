@@ -58,7 +58,8 @@ def test_cache_key_follows_the_file(tmp_path):
 @pytest.mark.parametrize("text,needle", [
     (SCENE.format(sensor="", body=LIGHT + BALL.format(bsdf="diffuse")), "no <sensor>"),
     (SCENE.format(sensor=SENSOR, body=BALL.format(bsdf="diffuse")), "no emitter"),
-    (SCENE.format(sensor=SENSOR, body=LIGHT + BALL.format(bsdf="principled")), "principled"),
+    (SCENE.format(sensor=SENSOR, body=LIGHT + '<shape type="sphere"><bsdf type="principled">'
+                  '<float name="spec_tint" value="0.5"/></bsdf></shape>'), "spec_tint"),
     (SCENE.format(sensor=SENSOR.replace("perspective", "orthographic"), body=LIGHT), "orthographic"),
     (SCENE.format(sensor=SENSOR, body=LIGHT + '<medium type="homogeneous" id="m"/>'), "media"),
     ("<scene version='3.0.0'><shape type='sphere'>", "well-formed"),

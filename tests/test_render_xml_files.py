@@ -40,8 +40,8 @@ def test_included_sensor_and_lights_render():
 
 
 @pytest.mark.parametrize("what,text,needles", [
-    ("bsdf", '<scene version="3.0.0"><shape type="sphere"><bsdf type="principled"/></shape></scene>',
-     ['<bsdf type="principled">', "parts/extra.xml (line 1"]),
+    ("bsdf", '<scene version="3.0.0"><shape type="sphere"><bsdf type="hair"/></shape></scene>',
+     ['<bsdf type="hair">', "parts/extra.xml (line 1"]),
     ("medium", '<scene version="3.0.0">\n<medium type="homogeneous" id="fog"/></scene>',
      ['<medium type="homogeneous">', "parts/extra.xml (line 2", "participating media"]),
 ])

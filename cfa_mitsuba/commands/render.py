@@ -29,9 +29,12 @@ the physical memory, whichever is smallest) is refused before Mitsuba
 starts (docs/stability.md, section 11).
 
 A scene FILE.xml is read as Mitsuba reads it (includes, <path> folders,
-<default> parameters); every file it names must lie inside its folder
-unless --allow-outside-paths.  The sidecar's white_radiance is a perfect
-white in the scene (--white-from; docs/scenes.md has the rule).
+<default> parameters; --define NAME=VALUE sets one, as Mitsuba's -D); every
+file it names must lie inside its folder or the --asset-root folder, unless
+--allow-outside-paths (which opens every path).  The sidecar's field of view
+is the one Mitsuba renders at --width x --height (its fov_axis applied to
+that aspect ratio).  The sidecar's white_radiance is a perfect white in the
+scene (--white-from; docs/scenes.md has the rule).
 
 """ + render_measured.EPILOG
 
@@ -62,6 +65,10 @@ def add_arguments(parser) -> None:
                              "X,Y,Z in cd/m^2")
     parser.add_argument("--allow-outside-paths", action="store_true",
                         help="let a scene FILE.xml name files outside its folder (refused by default)")
+    parser.add_argument("--asset-root", metavar="DIR",
+                        help="one shared folder a scene FILE.xml may also name files in (e.g. Mitsuba's common/)")
+    parser.add_argument("--define", action="append", metavar="NAME=VALUE",
+                        help="a scene FILE.xml's parameter $NAME (repeatable; as Mitsuba's -D)")
     parser.add_argument("--preview", action="store_true", help="also write DIR/<name>.png, an sRGB preview")
     parser.add_argument("--no-cache", action="store_true", help="render even if a cached render exists, and do not store it")
     render_measured.add_measured_arguments(parser)
@@ -77,7 +84,7 @@ def run(args) -> int:
     settings = dict(width=args.width, height=args.height, spp=args.spp, luminance=args.luminance,
                     variant=args.variant, seed=args.seed, bands=args.bands, oversample=args.oversample,
                     fov=args.fov, max_depth=args.max_depth, f_number=args.f_number, white_from=args.white_from,
-                    allow_outside_paths=args.allow_outside_paths)
+                    allow_outside_paths=args.allow_outside_paths, defines=args.define, asset_root=args.asset_root)
     out = Path(args.out)
     check_out_dir(out)
     sc, cfg = engine.resolve_settings(args.scene, **settings)

@@ -7,11 +7,19 @@ sees half a file and an interrupted render leaves nothing a later run would
 trust.  While one process renders a key it holds an exclusive ``fcntl`` lock
 on that key, so concurrent processes (Dask workers, parallel CLI calls) wait
 for it and then reuse its file instead of rendering the same thing twice.
+
+Every entry carries the SHA-256 of its bytes in a file beside it
+(``<key>.sha256``, written before the entry itself, so a reader that sees
+the entry sees its checksum), verified on every reuse: an entry changed
+after it was written (a flipped bit, an edited header, a truncated copy)
+is not trusted but rendered again, with one notice line on stderr.  An
+entry without a checksum (written by an older version) is rendered again
+the same way.
 """
 
 from __future__ import annotations
 
-__all__ = ["CACHE_ENV", "default_cache_dir", "hash_key", "RenderCache"]
+__all__ = ["CACHE_ENV", "default_cache_dir", "hash_key", "file_digest", "RenderCache"]
 
 import contextlib
 import fcntl
@@ -43,19 +51,57 @@ def hash_key(fields: dict) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:32]
 
 
+def file_digest(path) -> str:
+    """SHA-256 (hex) of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
 class RenderCache:
     """A directory of cached spectral renders.
 
     ``root`` defaults to :func:`default_cache_dir`.  Entries are
     ``root/renders/<key[:2]>/<key>.exr`` (our spectral EXR, metadata in its
-    header); locks are ``root/locks/<key>.lock``.
+    header) with its checksum ``<key>.sha256`` beside it; locks are
+    ``root/locks/<key>.lock``.
     """
 
     def __init__(self, root=None):
         self.root = Path(root) if root is not None else default_cache_dir()
+        self._noticed: set[tuple[str, str]] = set()  # (entry, why) already said once
 
     def path(self, key: str) -> Path:
         return self.root / "renders" / key[:2] / f"{key}.exr"
+
+    def checksum_path(self, key: str) -> Path:
+        return self.path(key).with_suffix(".sha256")
+
+    def _verified(self, key: str) -> bool:
+        """Whether the entry's bytes still have the checksum recorded when
+        it was written (a notice line when not)."""
+        p = self.path(key)
+        try:
+            recorded = self.checksum_path(key).read_text(encoding="ascii").strip()
+        except (OSError, UnicodeDecodeError):
+            recorded = None
+        if recorded is None:
+            why = "has no checksum (written by an older version, or interrupted)"
+        else:
+            try:
+                actual = file_digest(p)
+            except OSError as exc:
+                actual, why = None, f"cannot be read ({exc.strerror})"
+            if actual == recorded:
+                return True
+            if actual is not None:
+                why = "does not match the checksum recorded when it was written (changed since)"
+        if (str(p), why) not in self._noticed:  # get_or_create looks twice (before and under the lock)
+            self._noticed.add((str(p), why))
+            sys.stderr.write(f"cfa-mitsuba: cache entry {p} {why}: rendering it again\n")
+        return False
 
     def _ensure(self, directory: Path) -> Path:
         try:
@@ -74,11 +120,12 @@ class RenderCache:
 
     def load(self, key: str) -> SpectralImage | None:
         """The cached image for ``key``, or None if absent.  An unreadable
-        entry counts as absent (it will be rendered again and replaced)."""
+        entry, or one whose bytes fail their checksum, counts as absent (it
+        will be rendered again and replaced)."""
         from .exr import read_spectral_exr
 
         p = self.path(key)
-        if not p.is_file():
+        if not p.is_file() or not self._verified(key):
             return None
         try:
             return read_spectral_exr(p)
@@ -87,11 +134,18 @@ class RenderCache:
             return None
 
     def store(self, key: str, image: SpectralImage) -> Path:
+        """Write the entry and its checksum: the EXR to a temporary name,
+        its checksum (atomically), then the EXR renamed into place."""
+        from .atomic import atomic_output
         from .exr import write_spectral_exr
 
         p = self.path(key)
         self._ensure(p.parent)
-        return write_spectral_exr(p, image, preview=False)
+        with atomic_output(p) as tmp_exr:
+            write_spectral_exr(tmp_exr, image, preview=False)
+            with atomic_output(self.checksum_path(key)) as tmp_sum:
+                tmp_sum.write_text(file_digest(tmp_exr) + "\n", encoding="ascii")
+        return p
 
     @contextlib.contextmanager
     def lock(self, key: str):

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CfaMitsubaError
+from . import guard
 from .cube import SourceCube, check_memory, check_wavelengths
 
 _UNITS_NM = {"nanometers": 1.0, "nanometer": 1.0, "nm": 1.0, "micrometers": 1e3, "micrometer": 1e3, "microns": 1e3,
@@ -45,6 +46,25 @@ def _header_wavelengths(meta: dict, n: int, where: str, notices: list) -> np.nda
     return wl
 
 
+def _check_header_against_data(img, where: str) -> None:
+    """Refuse a header that contradicts its data file: an interleave other
+    than bsq, bil or bip, or a data file whose size is not the header's
+    offset plus lines x samples x bands x bytes per sample (ENVI header
+    format: ``header offset``, ``lines``, ``samples``, ``bands``,
+    ``data type``, ``interleave``)."""
+    interleave = str(img.metadata.get("interleave", "bsq")).strip().lower()
+    if interleave not in ("bsq", "bil", "bip"):
+        raise CfaMitsubaError(f"{where}: header 'interleave = {interleave}' is none of bsq, bil, bip")
+    data_file = Path(img.filename)
+    size = guard.check_regular(data_file, "ENVI data file").st_size
+    rows, cols, n = (int(v) for v in img.shape)
+    expect = int(img.offset) + rows * cols * n * int(img.sample_size)
+    if size != expect:
+        raise CfaMitsubaError(
+            f"{where}: the header declares {rows} lines x {cols} samples x {n} bands of {img.sample_size} bytes "
+            f"(+ {img.offset} offset) = {expect} bytes, but the data file {data_file.name!r} holds {size}")
+
+
 def read_envi(path, wavelengths=None) -> SourceCube:
     """Read an ENVI cube by its ``.hdr`` header (module doc); ``wavelengths``
     (nm) replaces the header's list."""
@@ -52,6 +72,7 @@ def read_envi(path, wavelengths=None) -> SourceCube:
 
     p = Path(path)
     where = f"ENVI cube {str(p)!r}"
+    guard.read_text(p, "ENVI header", limit=1 << 20)  # a regular text file (UTF-8), bounded: before spectral parses it
     try:
         img = envi.open(str(p))
     except Exception as exc:  # spectral raises its own exception types, FileNotFoundError included
@@ -62,6 +83,7 @@ def read_envi(path, wavelengths=None) -> SourceCube:
     wl = check_wavelengths(header_wl if wavelengths is None else wavelengths, n, where,
                            "the header has no 'wavelength' list: pass --wavelengths")
     check_memory((rows, cols, n), where)
+    _check_header_against_data(img, where)
     try:
         with warnings.catch_warnings():  # spectral warns of NaN; check_values refuses them in one line
             warnings.simplefilter("ignore")

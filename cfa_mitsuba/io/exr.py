@@ -215,6 +215,10 @@ def spectral_exr_size(path) -> tuple[int, int, int]:
     """(height, width, spectral bands) of an EXR, from its header alone."""
     import OpenEXR
 
+    from .guard import check_regular
+
+    check_regular(path, "OpenEXR file")  # not a FIFO or device
+
     try:
         with OpenEXR.File(str(path), header_only=True) as f:  # the header is the file's: read it while open
             header = f.header()

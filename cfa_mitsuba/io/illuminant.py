@@ -72,10 +72,9 @@ def resolve_illuminant(spec, base: Path | None = None) -> Illuminant:
         known = ", ".join(sorted(colour.SDS_ILLUMINANTS)[:10])
         raise CfaMitsubaError(f"unknown illuminant {text!r}: not a colour-science name (e.g. {known}, ...) "
                               "nor an existing .csv file")
-    try:
-        lines = p.read_text().splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise CfaMitsubaError(f"cannot read illuminant file {str(p)!r}: {exc}") from None
+    from .guard import read_text
+
+    lines = read_text(p, "illuminant file").splitlines()  # regular file, bounded, strict UTF-8
     rows = []
     for i, line in enumerate(lines):
         cells = [c.strip() for c in re.split(r"[,;\t]", line) if c.strip()]

@@ -53,15 +53,22 @@ class ImageFile:
     meta: dict = field(default_factory=dict)
 
 
+#: Values per pixel of each PNG colour type once decoded (a palette is expanded to RGB(A)).
+_PNG_PLANES = {0: 1, 2: 3, 3: 4, 4: 2, 6: 4}
+
+
 def _read_png(path: Path) -> ImageFile:
     import png
 
-    try:
-        width, height, rows, info = png.Reader(filename=str(path)).asDirect()
+    from . import guard
+
+    data = guard.read_bytes(path, "PNG")  # a regular file, bounded
+    w, h, _, colour = guard.png_header(data, path, "PNG")
+    guard.require_pixels(path, h, w, _PNG_PLANES[colour], 4, "PNG")  # before a pixel is decoded
+    with guard.decoding(path, "PNG", (png.Error,)):  # zlib errors, a header that lies about the rows
+        width, height, rows, info = png.Reader(bytes=data).asDirect()
         planes = int(info["planes"])
         arr = np.vstack([np.asarray(r, dtype=np.uint32) for r in rows]).reshape(height, width, planes)
-    except png.Error as exc:
-        raise CfaMitsubaError(f"{str(path)!r} is not a readable PNG: {exc}") from None
     if planes in (2, 4):  # drop alpha
         arr = arr[..., :-1]
     if arr.shape[2] == 1:
@@ -72,6 +79,16 @@ def _read_png(path: Path) -> ImageFile:
 def _read_exr(path: Path) -> ImageFile:
     import OpenEXR
 
+    from .guard import check_regular, require_pixels
+
+    check_regular(path, "OpenEXR file")
+    try:  # the decoded size, from the header, before any pixel is read
+        with OpenEXR.File(str(path), header_only=True) as f:
+            (x0, y0), (x1, y1) = (tuple(int(v) for v in c) for c in f.header()["dataWindow"])
+            n_channels = max(1, len(f.header().get("channels", ())))
+    except Exception as exc:  # OpenEXR raises plain Exceptions on bad files
+        raise CfaMitsubaError(f"{str(path)!r} is not a readable OpenEXR file: {exc}") from None
+    require_pixels(path, y1 - y0 + 1, x1 - x0 + 1, n_channels, 4, "OpenEXR file")
     try:
         with OpenEXR.File(str(path)) as f:
             header = dict(f.header().items())

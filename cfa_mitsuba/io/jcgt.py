@@ -63,6 +63,9 @@ def read_exr_cube(path) -> tuple[SourceCube, dict]:
         raise CfaMitsubaError(f"no such file: {where}")
     if p.is_dir():
         raise CfaMitsubaError(f"{where} is a directory, not a spectral EXR")
+    from .guard import check_regular
+
+    check_regular(p, "OpenEXR file")  # not a FIFO or device
     import OpenEXR
 
     def kind(name: str):

@@ -103,6 +103,10 @@ class _V73:
 def _open(p: Path, where: str):
     import h5py
 
+    from .guard import check_regular
+
+    check_regular(p, "MATLAB file")  # not a FIFO or device, before scipy or h5py opens it
+
     return _V73(p, where) if h5py.is_hdf5(str(p)) else _V5(p, where)
 
 

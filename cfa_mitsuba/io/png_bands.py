@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CfaMitsubaError
+from . import guard
 from .cube import SourceCube, check_memory, check_wavelengths
 
 #: CAVE: 31 bands, 400 nm to 700 nm in 10-nm steps, numbered 01..31.
@@ -69,9 +70,11 @@ def _read_png(path: Path, where: str) -> tuple[np.ndarray, int]:
     from PIL import Image
 
     try:
-        with Image.open(path) as im:
+        with guard.open_regular(path, "PNG") as fh, Image.open(fh) as im:
             mode = im.mode
             arr = np.asarray(im)
+    except CfaMitsubaError as exc:
+        raise CfaMitsubaError(f"{where}: {exc}") from None
     except Exception as exc:  # Pillow raises several types on broken files
         raise CfaMitsubaError(f"{where}: cannot read {path.name!r}: {' '.join(str(exc).split())}") from None
     if arr.ndim == 3:
@@ -98,8 +101,10 @@ def read_png_folder(folder, wavelengths=None) -> SourceCube:
     sizes = set()
     for f in files:
         try:
-            with Image.open(f) as im:
+            with guard.open_regular(f, "PNG") as fh, Image.open(fh) as im:
                 sizes.add(im.size)
+        except CfaMitsubaError as exc:
+            raise CfaMitsubaError(f"{where}: {exc}") from None
         except Exception as exc:
             raise CfaMitsubaError(f"{where}: cannot read {f.name!r}: {' '.join(str(exc).split())}") from None
     if len(sizes) != 1:

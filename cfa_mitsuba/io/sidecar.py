@@ -52,12 +52,11 @@ def read_sidecar(path) -> dict:
     nested too deeply or not of the sidecar schema (:mod:`.validate`)."""
     from .validate import check_sidecar, load_json_text
 
+    from .guard import read_text
+
     p = Path(path)
-    try:
-        text = p.read_text()
-    except FileNotFoundError:
-        raise CfaMitsubaError(f"no such sidecar: {str(p)!r}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise CfaMitsubaError(f"cannot read sidecar {str(p)!r}: {exc}") from None
+    if not p.exists():
+        raise CfaMitsubaError(f"no such sidecar: {str(p)!r}")
+    text = read_text(p, "sidecar")  # regular file, bounded, strict UTF-8
     # bounded (size, depth), then checked against the schema of what the stages read
     return check_sidecar(load_json_text(text, f"sidecar {str(p)!r}"), f"sidecar {str(p)!r}")

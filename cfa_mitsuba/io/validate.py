@@ -180,7 +180,9 @@ def _header(fh, where: str):
 
 
 def _kind(path: Path) -> str:
-    with open(path, "rb") as fh:
+    from .guard import open_regular
+
+    with open_regular(path, "numpy file") as fh:  # not a FIFO or device
         magic = fh.read(6)
     if magic == b"\x93NUMPY":
         return "npy"

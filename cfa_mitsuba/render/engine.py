@@ -113,7 +113,7 @@ def _wavelengths(bands) -> tuple[float, ...]:
 
 def resolve_settings(scene, *, width=None, height=None, spp=None, luminance=None, variant=None, seed=None,
                      bands=None, oversample=None, fov=None, max_depth=None, f_number=None, white_from=None,
-                     allow_outside_paths=False) -> tuple[Scene, RenderConfig]:
+                     allow_outside_paths=False, defines=None, asset_root=None) -> tuple[Scene, RenderConfig]:
     """Validate render settings and fill the scene's defaults.
 
     Parameters (all optional; None takes the scene's default)
@@ -136,11 +136,19 @@ def resolve_settings(scene, *, width=None, height=None, spp=None, luminance=None
     white_from : the white-reference rule, 'panel' (default), 'illuminant'
         or X,Y,Z in cd/m^2 (:mod:`.white`); not part of the cache key.
     allow_outside_paths : a scene file may name files outside its folder.
+    defines : a scene file's parameters, ``NAME=VALUE`` strings or a table
+        (``--define``, Mitsuba's ``-D``).
+    asset_root : one more folder a scene file may name files in.
+
+    The field of view of a scene file is its camera's at the render's film
+    size (:func:`.userxml.fov_at`: a ``fov_axis`` other than x makes it
+    depend on the aspect ratio), as Mitsuba renders it.
 
     Returns ``(scene, config)``.  Raises :class:`CfaMitsubaError` naming the
     first bad setting.
     """
-    sc = scene if isinstance(scene, Scene) else get_scene(scene, allow_outside_paths=bool(allow_outside_paths))
+    sc = scene if isinstance(scene, Scene) else get_scene(scene, allow_outside_paths=bool(allow_outside_paths),
+                                                          defines=defines, asset_root=asset_root)
     w = _positive_int(sc.width if width is None else width, "width", maximum=_limits.MAX_SIDE)
     h = _positive_int(sc.height if height is None else height, "height", maximum=_limits.MAX_SIDE)
     n = _positive_int(sc.spp if spp is None else spp, "spp", maximum=_limits.MAX_SPP)
@@ -154,6 +162,11 @@ def resolve_settings(scene, *, width=None, height=None, spp=None, luminance=None
     if fov is not None and sc.path is not None:
         raise CfaMitsubaError("--fov applies to built-in scenes; a scene file keeps its camera's field of view")
     f = _positive_float(sc.fov_deg if fov is None else fov, "fov")
+    if fov is None and sc.fov_at is not None and (w, h) != (sc.width, sc.height):
+        f = sc.fov_at(w, h)
+        if not 0 < f < 170:
+            raise CfaMitsubaError(f"scene {sc.name!r}: its camera at {w} x {h} pixels has a horizontal field of view "
+                                  f"of {f:.4g} degrees; cfa-mitsuba needs less than 170 (change --width / --height)")
     if f >= 170:
         raise CfaMitsubaError(f"fov (--fov) must be below 170 degrees, got {f:g}")
     depth = _positive_int(sc.max_depth if max_depth is None else max_depth, "max_depth", maximum=64)
@@ -415,7 +428,8 @@ def _current(sc: Scene) -> Scene:
     """A scene file's :class:`Scene` read again if any of its files changed
     since it was read, so that the cache key follows the files on disk."""
     if sc.path is not None and not _userxml.files_unchanged(sc):
-        return get_scene(sc.path, allow_outside_paths=sc.allow_outside_paths)
+        return get_scene(sc.path, allow_outside_paths=sc.allow_outside_paths, defines=sc.defines,
+                         asset_root=sc.asset_root)
     return sc
 
 

@@ -1,6 +1,6 @@
 """Child process that loads a user's scene file once before the parent
 does (``python -m cfa_mitsuba.render.loadcheck VARIANT FILE.xml
-[--allow-outside-paths]``); why: :func:`.userxml._loads_elsewhere`.
+[--allow-outside-paths] [--asset-root DIR] [--define=NAME=VALUE ...]``); why: :func:`.userxml._loads_elsewhere`.
 
 Exit status 0: Mitsuba instantiated the scene.  Exit status
 :data:`.userxml.LOADCHECK_REFUSED`: it did not, and the last line on
@@ -21,9 +21,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("variant")
     ap.add_argument("path")
     ap.add_argument("--allow-outside-paths", action="store_true")
+    ap.add_argument("--asset-root")
+    ap.add_argument("--define", action="append", default=[])
     args = ap.parse_args(argv)
     try:
-        load_check(args.path, args.allow_outside_paths, args.variant)
+        load_check(args.path, args.allow_outside_paths, args.variant, args.define, args.asset_root)
     except CfaMitsubaError as exc:
         print(str(exc), file=sys.stderr)
         return LOADCHECK_REFUSED

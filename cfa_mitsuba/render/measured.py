@@ -129,7 +129,7 @@ def measured_key(path, **options) -> str:
 def measured_canonical(path, **options) -> SpectralImage:
     """The measured image on the band grid, before luminance scaling (the
     form the cache stores; ``meta['canonical_white_radiance']``)."""
-    from ..io.cube import cube_to_radiance
+    from ..io.cube import cube_to_radiance, on_grid
     from ..io.hyperspectral import load_cube
 
     p, o = _resolve(path, options)
@@ -161,8 +161,11 @@ def measured_canonical(path, **options) -> SpectralImage:
         "wavelengths": [float(v) for v in grid],
         "band_edges_nm": spectra.band_edges(grid).tolist(),
         "units": "W/(m^2 sr nm)",
-        "band_definition": "box mean over the band's edges of the source spectrum linearly interpolated between "
-                           "its tabulated wavelengths" + product,
+        "band_definition": ("the source's own samples at the band centres (band values, passed through "
+                            "unchanged)" + product.replace("(box mean of the product)", "band means")
+                            if on_grid(np.asarray(cube.wavelengths, dtype=np.float64), grid) is not None else
+                            "box mean over the band's edges of the source spectrum linearly interpolated between "
+                            "its tabulated wavelengths" + product),
         "band_constant_spectra": False,
         "illuminant": label,
         "canonical_white_radiance": [float(v) for v in white],

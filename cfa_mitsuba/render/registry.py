@@ -33,14 +33,19 @@ def list_scenes() -> list[tuple[str, str]]:
     return [(s.name, s.description) for s in _REGISTRY.values()]
 
 
-def get_scene(name, *, allow_outside_paths: bool = False) -> Scene:
+def get_scene(name, *, allow_outside_paths: bool = False, defines=None, asset_root=None) -> Scene:
     """A built-in scene by name, or a user's scene from a path to a ``.xml``
     Mitsuba 3 scene file (read and checked: see :mod:`.userxml`; with
-    ``allow_outside_paths`` it may name files outside its folder)."""
+    ``allow_outside_paths`` it may name files outside its folder, with
+    ``asset_root`` files in that one folder too; ``defines`` sets its
+    parameters, as Mitsuba's ``-D NAME=VALUE``)."""
     key = str(name)
     if key in _REGISTRY:
+        if defines or asset_root is not None:
+            what = "--define" if defines else "--asset-root"
+            raise CfaMitsubaError(f"{what} applies to a scene FILE.xml, not to the built-in scene {key!r}")
         return _REGISTRY[key]
     if key.lower().endswith(".xml") or Path(key).suffix or "/" in key:
-        return user_scene(Path(key), allow_outside_paths=allow_outside_paths)
+        return user_scene(Path(key), allow_outside_paths=allow_outside_paths, defines=defines, asset_root=asset_root)
     known = ", ".join(_REGISTRY)
     raise CfaMitsubaError(f"unknown scene {key!r} (built-in scenes: {known}; or a Mitsuba scene FILE.xml)")

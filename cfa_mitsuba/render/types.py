@@ -128,6 +128,13 @@ class Scene:
     f_number : the thin lens's default f-number (None: set by the scene
         file's aperture).
     allow_outside_paths : a user XML may name files outside its folder.
+    defines : ((name, value), ...) scene parameters given to a user XML
+        (``render --define``, Mitsuba's ``-D``), overriding its ``<default>``s.
+    asset_root : one more folder a user XML may name files in (besides its
+        own), or None.
+    fov_at : ``fov_at(width, height)`` -> the horizontal field of view
+        (degrees) the camera has on a film of that size, where it depends
+        on the size (a user XML's ``fov_axis``); None: ``fov_deg`` always.
     """
 
     name: str
@@ -147,6 +154,9 @@ class Scene:
     thin_lens: bool = False
     f_number: float | None = None
     allow_outside_paths: bool = False
+    defines: tuple[tuple[str, str], ...] = ()
+    asset_root: str | None = None
+    fov_at: Callable[[int, int], float] | None = field(default=None, repr=False, compare=False)
 
     @property
     def is_3d(self) -> bool:

@@ -19,10 +19,18 @@ Refused with one line naming the file and line of the element:
   integrator traces surfaces only;
 - a BSDF outside :data:`SUPPORTED_BSDFS`: the integrator draws one
   direction per path for all bands, exact only when a BSDF's sampling does
-  not depend on wavelength;
+  not depend on wavelength; the ``principled`` and ``principledthin``
+  BSDFs (which Blender's exporter writes) sample by scalar weights and are
+  rendered, unless a ``spec_tint`` or ``sheen_tint`` is set (Mitsuba
+  normalises the tint by a luminance estimated from a path's own 4
+  wavelengths, which no all-band evaluation can reproduce) or a
+  ``principledthin``'s ``eta`` is a spectrum (its refraction would depend
+  on wavelength);
 - no ``<sensor>`` (Mitsuba would invent a camera), or a first one that is
-  not a ``perspective`` or ``thinlens`` camera; a horizontal field of view
-  of :data:`MAX_FOV_DEG` or more;
+  not a ``perspective`` or ``thinlens`` camera (an ``orthographic`` camera
+  has no angular field of view: the lens, relative illumination and
+  S-CIELAB's samples per degree need one); a horizontal field of view of
+  :data:`MAX_FOV_DEG` or more;
 - no emitter;
 - film sizes, path depths or apertures we cannot render (named by element
   and attribute).
@@ -31,6 +39,14 @@ Before a scene file is loaded in this process it is loaded once in a child
 process (:mod:`.loadcheck`): a file Mitsuba cannot instantiate is refused
 from there, because a failed instantiation leaves Mitsuba's process state
 unsafe for later renders (:func:`_loads_elsewhere`).
+
+The camera's field of view follows Mitsuba's own rule for the film it
+renders (``mitsuba.parse_fov`` with the render's aspect ratio, whatever
+its ``fov_axis``), so ``--width``/``--height`` that change the aspect ratio
+change the recorded field of view exactly as they change the render
+(:func:`fov_at`).  Scene parameters (``$name``) take ``defines`` (``render
+--define NAME=VALUE``, Mitsuba's ``-D``) before the file's ``<default>``s;
+``asset_root`` lets the files reach one shared folder besides their own.
 
 The integrator's ``max_depth`` is kept (-1, unlimited, becomes
 :data:`UNLIMITED_DEPTH`), else :data:`DEFAULT_MAX_DEPTH`.  A ``thinlens``
@@ -42,9 +58,10 @@ the film width in 2.2 um pixels (:func:`.types.focal_length_m`); the
 
 from __future__ import annotations
 
-__all__ = ["SUPPORTED_BSDFS", "DEFAULT_MAX_DEPTH", "UNLIMITED_DEPTH", "DEFAULT_SPP", "MAX_FOV_DEG", "user_scene",
-           "files_unchanged"]
+__all__ = ["SUPPORTED_BSDFS", "TINTED_BSDFS", "DEFAULT_MAX_DEPTH", "UNLIMITED_DEPTH", "DEFAULT_SPP", "MAX_FOV_DEG",
+           "user_scene", "files_unchanged", "fov_at"]
 
+import functools
 import json
 import math
 import os
@@ -59,11 +76,20 @@ from . import xmlscan
 from .loading import first_line, inspect_settings
 from .types import NATURAL, Built, RenderConfig, Scene, focal_length_m
 
-#: BSDF plugins whose sampling is wavelength-independent (Mitsuba 3.9).
+#: BSDF plugins whose sampling is wavelength-independent (Mitsuba 3.9): a
+#: ``blendbsdf`` picks a child by a scalar weight (``eval_1``), ``plastic``
+#: and ``pplastic`` by a weight fixed when the plugin is built,
+#: ``measured_polarized`` by a fixed lobe weight and GGX width, ``polarizer``
+#: passes straight through.
 SUPPORTED_BSDFS = frozenset({
     "diffuse", "twosided", "plastic", "roughplastic", "conductor", "roughconductor",
     "dielectric", "roughdielectric", "thindielectric", "null", "mask", "bumpmap", "normalmap",
+    "principled", "principledthin", "blendbsdf", "pplastic", "polarizer", "measured_polarized",
 })
+#: BSDFs exact only without a tint (module docstring): the properties refused when set and not 0.
+TINTED_BSDFS = {"principled": ("spec_tint", "sheen_tint"), "principledthin": ("spec_tint", "sheen_tint")}
+#: The sensor properties that set its field of view (``mitsuba.parse_fov``).
+_FOV_KEYS = ("fov", "fov_axis", "focal_length")
 #: Path length for scene files whose integrator does not set one.
 DEFAULT_MAX_DEPTH = 5
 #: Path length used for an XML max_depth of -1 (unlimited).
@@ -100,6 +126,7 @@ class _Read:
     aperture_m: float | None
     focus_m: float | None
     files: list[tuple[str, Path]]
+    fov_props: tuple[tuple[str, object], ...] = ()
 
 
 def _tag(mi, node) -> str:
@@ -119,21 +146,64 @@ def _number(props, key, default=None):
     return float(props[key]) if key in props.keys() else default
 
 
-def _read(path: Path, allow_outside_paths: bool) -> _Read:
-    scan = xmlscan.scan(path, allow_outside_paths=allow_outside_paths)
+def fov_at(fov_props, width: int, height: int) -> float:
+    """The horizontal field of view (degrees) of a camera whose ``fov``,
+    ``fov_axis`` and ``focal_length`` are ``fov_props`` ((key, value)
+    pairs) on a film of ``width`` x ``height`` pixels: Mitsuba's own
+    ``parse_fov`` at that aspect ratio, as its perspective and thin-lens
+    cameras compute it from their film (fov_axis x, y, diagonal, smaller,
+    larger; a focal length over the 36 x 24 mm diagonal)."""
+    mi = _variant.load(_variant.choose_variant())
+    props = mi.Properties("perspective")
+    for key, value in fov_props:
+        props[key] = value
+    return float(mi.parse_fov(props, int(width) / int(height)))
+
+
+def _fov_props(mi, sp) -> tuple[tuple[str, object], ...]:
+    out = []
+    for key in _FOV_KEYS:
+        if key in sp.keys():
+            out.append((key, float(sp[key]) if sp.type(key) == mi.Properties.Type.Float else str(sp[key])))
+    return tuple(out)
+
+
+def _check_tints(mi, nodes, at) -> None:
+    for i, n in enumerate(nodes):
+        name = n.props.plugin_name() if n.type == mi.ObjectType.BSDF else None
+        for key in TINTED_BSDFS.get(name, ()):
+            props = n.props
+            if key in props.keys() and not (props.type(key) == mi.Properties.Type.Float and float(props[key]) == 0):
+                raise CfaMitsubaError(
+                    f"{at(i)}, {key}: a tinted principled BSDF cannot be rendered exactly at every band (Mitsuba "
+                    "divides the tint by a luminance estimated from a path's own 4 wavelengths); remove the tint "
+                    "or set it to 0")
+        if name == "principledthin" and "eta" in n.props.keys() and n.props.type("eta") != mi.Properties.Type.Float:
+            raise CfaMitsubaError(f"{at(i)}, eta: a spectral index of refraction makes this BSDF's refraction "
+                                  "depend on wavelength; give eta as one <float>")
+
+
+def _read(path: Path, allow_outside_paths: bool, defines=(), asset_root=None) -> _Read:
+    scan = xmlscan.scan(path, allow_outside_paths=allow_outside_paths, defines=defines, asset_root=asset_root)
     main = scan.main
     mi = _variant.load(_variant.choose_variant())
     config = mi.parser.ParserConfig(mi.variant())
+    # A --define the file does not use is not an error (the same --define
+    # spp=16 serves a folder of scenes); Mitsuba's parser refuses it by default.
+    config.unused_parameters = mi.LogLevel.Debug
     try:
-        state = mi.parser.parse_file(config, str(main))
+        state = mi.parser.parse_file(config, str(main), **dict(defines))
         mi.parser.transform_upgrade(config, state)
         mi.parser.transform_resolve(config, state)
     except Exception as exc:  # Mitsuba reports parse errors as RuntimeError, with file and line
         _fail(main, f"Mitsuba cannot read it: {first_line(exc)}")
     parsed = {Path(os.path.realpath(str(f))) for f in state.files}
     scanned = {p for role, p in scan.files if role == "xml"}
-    if parsed != scanned:  # pragma: no cover - our walk follows Mitsuba's rules; refuse if it ever does not
-        _fail(main, f"Mitsuba read other XML files than the check did: {sorted(map(str, parsed ^ scanned))}")
+    # Mitsuba lists only the files that gave it elements (an include of only
+    # <default>s is read but not listed): refuse only a file it read that
+    # the check did not.
+    if not parsed <= scanned:  # pragma: no cover - our walk follows Mitsuba's rules; refuse if it ever does not
+        _fail(main, f"Mitsuba read XML files the check did not: {sorted(map(str, parsed - scanned))}")
     nodes = state.nodes
 
     def at(i: int) -> str:
@@ -147,12 +217,20 @@ def _read(path: Path, allow_outside_paths: bool) -> _Read:
         if n.type == mi.ObjectType.BSDF and n.props.plugin_name() not in SUPPORTED_BSDFS:
             _fail(main, f"{at(i)}: this BSDF's sampling depends on wavelength or is not supported "
                         f"(supported: {', '.join(sorted(SUPPORTED_BSDFS))})")
+    try:
+        _check_tints(mi, nodes, at)
+    except CfaMitsubaError as exc:
+        _fail(main, str(exc))
     root = _children(mi, nodes[0])
     sensors = [j for _, j in root if nodes[j].type == mi.ObjectType.Sensor]
     if not sensors:
         _fail(main, "has no <sensor>: cfa-mitsuba renders through the scene's own camera")
     s = sensors[0]
     camera = nodes[s].props.plugin_name()
+    if camera == "orthographic":
+        _fail(main, f"{at(s)}: an orthographic camera has no angular field of view, which the lens (focal length, "
+                    "relative illumination) and S-CIELAB's samples per degree need: use a perspective or thinlens "
+                    "camera")
     if camera not in _CAMERAS:
         _fail(main, f"{at(s)}: cfa-mitsuba needs a perspective or thinlens camera")
     if not any(n.type == mi.ObjectType.Emitter for n in nodes):
@@ -209,14 +287,15 @@ def _read(path: Path, allow_outside_paths: bool) -> _Read:
             _fail(main, f'{at(s)}, <float name="aperture_radius">: must be given, finite and not negative '
                         f"(got {aperture})")
         focus = _number(sp, "focus_distance")
-    return _Read(scan, state, s, camera, (size[0], size[1]), depth, fov, aperture, focus, files)
+    return _Read(scan, state, s, camera, (size[0], size[1]), depth, fov, aperture, focus, files, _fov_props(mi, sp))
 
 
-def _identity(read: _Read) -> dict:
-    """The files the render reads, each with its content hash: any edit of
-    the scene file, an included file, a mesh, texture or spectrum gives a
-    new cache key."""
-    return {"xml_path": str(read.scan.main),
+def _identity(read: _Read, defines) -> dict:
+    """The files the render reads, each with its content hash, and the
+    scene parameters given: any edit of the scene file, an included file, a
+    mesh, texture or spectrum, or another ``--define``, gives a new cache
+    key."""
+    return {"xml_path": str(read.scan.main), "defines": [list(d) for d in defines],
             "files": [[role, str(p), xmlscan.file_sha256(p)] for role, p in read.files]}
 
 
@@ -229,10 +308,13 @@ def files_unchanged(scene: Scene) -> bool:
         return False
 
 
-def user_scene(path, *, allow_outside_paths: bool = False) -> Scene:
+def user_scene(path, *, allow_outside_paths: bool = False, defines=None, asset_root=None) -> Scene:
     """Read and check a Mitsuba 3 scene file (module docstring) and return
     it as a :class:`Scene` (defaults: the file's film size, :data:`DEFAULT_SPP`,
-    its camera's horizontal field of view and its integrator's path depth)."""
+    its camera's horizontal field of view and its integrator's path depth).
+    ``defines``: scene parameters (``NAME=VALUE`` strings or a table,
+    :func:`.xmlscan.parse_defines`); ``asset_root``: one more folder its
+    files may be in."""
     p = Path(path)
     if not p.exists():
         raise CfaMitsubaError(f"no such scene file: {str(p)!r}")
@@ -240,20 +322,23 @@ def user_scene(path, *, allow_outside_paths: bool = False) -> Scene:
         raise CfaMitsubaError(f"{str(p)!r} is a directory, not a scene file")
     if p.suffix.lower() != ".xml":
         raise CfaMitsubaError(f"unknown scene {str(p)!r}: a scene file must be a Mitsuba 3 .xml file")
-    read = _read(p, allow_outside_paths)
+    defs = xmlscan.parse_defines(defines)
+    root = xmlscan.check_asset_root(asset_root)
+    read = _read(p, allow_outside_paths, defs, root)
     return Scene(
         name=p.stem,
         description=f"Mitsuba scene file {p.name}",
         width=read.size[0], height=read.size[1], fov_deg=read.fov_deg, spp=DEFAULT_SPP, oversample=1,
         kind=NATURAL, builder=_build, max_depth=read.depth, path=read.scan.main,
-        identity=_identity(read), thin_lens=read.camera == "thinlens", allow_outside_paths=allow_outside_paths,
+        identity=_identity(read, defs), thin_lens=read.camera == "thinlens", allow_outside_paths=allow_outside_paths,
+        defines=defs, asset_root=root, fov_at=functools.partial(fov_at, read.fov_props),
     )
 
 
 def _lens(scene: Scene, read: _Read, config: RenderConfig) -> tuple[dict, float | None]:
     """The lens's sidecar entries and the aperture radius to render with
     (None: the file's own)."""
-    f = focal_length_m(read.size[0], read.fov_deg)
+    f = focal_length_m(config.width, config.fov_deg)
     if read.camera != "thinlens":
         return {"lens": "perspective (pinhole): no defocus", "focal_length_m": f}, None
     if config.f_number is not None:
@@ -274,12 +359,13 @@ def _lens(scene: Scene, read: _Read, config: RenderConfig) -> tuple[dict, float 
 
 
 def _build(scene: Scene, config: RenderConfig) -> Built:
-    read = _read(scene.path, scene.allow_outside_paths)
+    read = _read(scene.path, scene.allow_outside_paths, scene.defines, scene.asset_root)
     lens, radius = _lens(scene, read, config)
     meta = {
-        "fov_deg": read.fov_deg,
+        "fov_deg": config.fov_deg,  # the camera's at the render's film size (fov_at)
         "illuminant": "the scene file's emitters",
         "geometry": {"xml": str(scene.path), "files": [[r, str(p)] for r, p in read.files],
+                     "defines": dict(scene.defines), "asset_root": scene.asset_root,
                      "max_depth": config.max_depth, **lens},
     }
     if lens.get("f_number"):
@@ -325,11 +411,11 @@ _LOADS_ELSEWHERE: set[tuple[str, str]] = set()
 LOADCHECK_REFUSED = 3
 
 
-def load_check(path, allow_outside_paths: bool, variant: str) -> None:
+def load_check(path, allow_outside_paths: bool, variant: str, defines=(), asset_root=None) -> None:
     """Instantiate the scene file at ``path`` once, with stock film, sampler
     and integrator (the child side of :func:`_loads_elsewhere`)."""
     mi = _variant.load(variant)
-    read = _read(Path(path), allow_outside_paths)
+    read = _read(Path(path), allow_outside_paths, xmlscan.parse_defines(defines), xmlscan.check_asset_root(asset_root))
     film, sampler, integrator = inspect_settings(8, 8)
     _instantiate(mi, read, None, film, sampler, integrator)
 
@@ -353,6 +439,10 @@ def _loads_elsewhere(read: _Read, scene: Scene, variant: str) -> None:
     cmd = [sys.executable, "-m", "cfa_mitsuba.render.loadcheck", variant, str(read.scan.main)]
     if scene.allow_outside_paths:
         cmd.append("--allow-outside-paths")
+    if scene.asset_root is not None:
+        cmd += ["--asset-root", scene.asset_root]
+    for name, value in scene.defines:
+        cmd += [f"--define={name}={value}"]
     proc = subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL)
     if proc.returncode != 0:
         lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]

@@ -7,7 +7,8 @@ the disk.  This module walks the scene first, without Mitsuba and without
 recursion inside a file (expat, a streaming parser), following Mitsuba's
 own rules:
 
-- ``<default name value>`` defines ``$name`` unless already defined; every
+- ``<default name value>`` defines ``$name`` unless already defined (a
+  ``--define NAME=VALUE``, Mitsuba's ``-D``, is defined first); every
   attribute's ``$name`` is replaced (longest names first, ``\\$`` escapes
   a dollar), an undefined one is an error; definitions are shared by the
   included files, in document order.
@@ -25,13 +26,15 @@ file and :data:`MAX_TOTAL_XML_BYTES` for the main file and everything it
 includes, elements nested at most :data:`MAX_XML_DEPTH` deep, no entity
 declarations.  Every file named must be a regular file (a FIFO or device is
 refused before it is opened) and must resolve (symlinks followed) inside
-the main file's folder, unless ``allow_outside_paths``.
+the main file's folder or the one ``asset_root`` folder (the shared
+``../../common`` of Mitsuba's own test scenes), unless
+``allow_outside_paths`` (which opens every path).
 """
 
 from __future__ import annotations
 
-__all__ = ["MAX_XML_BYTES", "MAX_TOTAL_XML_BYTES", "MAX_XML_DEPTH", "MAX_INCLUDE_DEPTH", "Scan", "Resolver",
-           "scan", "read_regular", "file_sha256", "checked_file"]
+__all__ = ["MAX_XML_BYTES", "MAX_TOTAL_XML_BYTES", "MAX_XML_DEPTH", "MAX_INCLUDE_DEPTH", "MAX_DEFINES", "Scan",
+           "Resolver", "scan", "read_regular", "file_sha256", "checked_file", "parse_defines", "check_asset_root"]
 
 import hashlib
 import os
@@ -42,6 +45,7 @@ from pathlib import Path
 from xml.parsers import expat
 
 from ..errors import CfaMitsubaError
+from ..io import guard as _guard
 
 #: Largest scene XML file read (bytes).
 MAX_XML_BYTES = 16 << 20
@@ -51,7 +55,62 @@ MAX_TOTAL_XML_BYTES = 64 << 20
 MAX_XML_DEPTH = 64
 #: Deepest chain of includes (Mitsuba's ParserConfig.max_include_depth).
 MAX_INCLUDE_DEPTH = 15
-_OUTSIDE_HINT = "(render with --allow-outside-paths, or set allow_outside_paths = true for a study's custom scene)"
+#: Most ``--define``s one render takes.
+MAX_DEFINES = 256
+_OUTSIDE_HINT = ("(render with --asset-root DIR naming the shared folder, or --allow-outside-paths; in a study's "
+                 "custom scene asset_root = \"DIR\" or allow_outside_paths = true)")
+_DEFINE_NAME = re.compile(r"[A-Za-z_]\w*")
+
+
+def parse_defines(items) -> tuple[tuple[str, str], ...]:
+    """Scene parameters as ``((name, value), ...)`` from ``NAME=VALUE``
+    strings (``render --define``, repeatable) or a ``{name: value}`` table
+    (a study's ``defines``); a later NAME replaces an earlier one.  Names
+    are Mitsuba's ``$name`` (letters, digits, ``_``); values are strings
+    (Mitsuba substitutes them as text)."""
+    if items is None:
+        return ()
+    pairs = []
+    if isinstance(items, dict):
+        pairs = [(str(k), v) for k, v in items.items()]
+    else:
+        if isinstance(items, str):
+            items = [items]
+        for item in items:
+            if isinstance(item, (tuple, list)) and len(item) == 2:
+                pairs.append((str(item[0]), item[1]))
+                continue
+            name, eq, value = str(item).partition("=")
+            if not eq:
+                raise CfaMitsubaError(f"--define {item!r}: expected NAME=VALUE (as Mitsuba's -D)")
+            pairs.append((name.strip(), value))
+    if len(pairs) > MAX_DEFINES:
+        raise CfaMitsubaError(f"{len(pairs)} scene parameters (--define): at most {MAX_DEFINES}")
+    out: dict[str, str] = {}
+    for name, value in pairs:
+        if not _DEFINE_NAME.fullmatch(name):
+            raise CfaMitsubaError(f"--define {name}={value}: {name!r} is not a parameter name (letters, digits, _)")
+        if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+            raise CfaMitsubaError(f"--define {name}: the value must be a string or a number, got {value!r}")
+        text = str(value)
+        if len(text) > 4096 or any(ch in text for ch in "\x00\n\r"):
+            raise CfaMitsubaError(f"--define {name}: the value must be one line of at most 4096 characters")
+        out[name] = text
+    return tuple(sorted(out.items()))
+
+
+def check_asset_root(folder) -> str | None:
+    """The asset folder (``--asset-root``) as an absolute real path, refused
+    unless it is an existing folder; None stays None."""
+    if folder is None:
+        return None
+    real = Path(os.path.realpath(os.path.expanduser(str(folder))))
+    if not real.is_dir():
+        raise CfaMitsubaError(f"--asset-root {str(folder)!r}: not an existing folder")
+    if real == Path(real.anchor):
+        raise CfaMitsubaError(f"--asset-root {str(folder)!r}: the file system's root would open every path; "
+                              "use --allow-outside-paths if that is meant")
+    return str(real)
 
 
 def _fail(main: Path, why: str):
@@ -59,47 +118,20 @@ def _fail(main: Path, why: str):
 
 
 def _kind(mode: int) -> str:
-    for test, name in ((stat.S_ISFIFO, "a FIFO"), (stat.S_ISDIR, "a directory"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
-        if test(mode):
-            return name
-    return "not a regular file"
-
-
-def _open_regular(path: Path) -> int:
-    """A read-only descriptor of ``path``, refused unless it is a regular
-    file: checked by stat before opening (a FIFO would block the open) and
-    again on the open descriptor (the name could have changed between)."""
-    try:
-        st = os.stat(path)
-    except OSError as exc:
-        raise CfaMitsubaError(f"cannot read {str(path)!r}: {exc.strerror}") from None
-    if not stat.S_ISREG(st.st_mode):
-        raise CfaMitsubaError(f"{str(path)!r} is {_kind(st.st_mode)}, not a regular file")
-    try:
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
-    except OSError as exc:
-        raise CfaMitsubaError(f"cannot read {str(path)!r}: {exc.strerror}") from None
-    if not stat.S_ISREG(os.fstat(fd).st_mode):
-        os.close(fd)
-        raise CfaMitsubaError(f"{str(path)!r} is not a regular file")
-    return fd
+    return _guard._kind(mode)
 
 
 def read_regular(path: Path, limit: int) -> bytes:
-    """The bytes of regular file ``path``, refused beyond ``limit`` bytes."""
-    fd = _open_regular(path)
-    with os.fdopen(fd, "rb") as fh:
-        data = fh.read(limit + 1)
-    if len(data) > limit:
-        raise CfaMitsubaError(f"{str(path)!r} is larger than {limit >> 20} MiB")
-    return data
+    """The bytes of regular file ``path``, refused beyond ``limit`` bytes
+    (:func:`cfa_mitsuba.io.guard.read_bytes`: checked by stat before
+    opening, a FIFO would block the open, and again on the descriptor)."""
+    return _guard.read_bytes(path, None, limit)
 
 
 def file_sha256(path: Path) -> str:
     """SHA-256 of a regular file's content (hex)."""
     h = hashlib.sha256()
-    with os.fdopen(_open_regular(path), "rb") as fh:
+    with _guard.open_regular(path) as fh:
         for chunk in iter(lambda: fh.read(1 << 20), b""):
             h.update(chunk)
     return h.hexdigest()
@@ -132,7 +164,8 @@ class Resolver:
 @dataclass
 class Scan:
     """What :func:`scan` found: ``main`` (the scene file, absolute), ``root``
-    (its folder, symlinks resolved: the confinement boundary), ``files``
+    (its folder, symlinks resolved: the confinement boundary), ``asset_root``
+    (the one other folder files may be in, or None), ``files``
     ([(role, real path)] of every XML and spectrum file read, in reading
     order), ``resolver`` (the main file's resolver as Mitsuba builds plugins
     with it) and ``allow_outside``."""
@@ -140,6 +173,7 @@ class Scan:
     main: Path
     root: Path
     allow_outside: bool
+    asset_root: Path | None = None
     files: list[tuple[str, Path]] = field(default_factory=list)
     resolver: Resolver = field(default_factory=Resolver)
     xml_bytes: int = 0
@@ -154,9 +188,11 @@ def checked_file(scan_: Scan, name: str, resolver: Resolver, where: str, *, dire
     real = Path(os.path.realpath(target))
     if not real.exists():
         _fail(scan_.main, f"{where}: {name!r} not found (looked in {', '.join(str(f) for f in resolver.folders)})")
-    if not scan_.allow_outside and not real.is_relative_to(scan_.root):
+    inside = real.is_relative_to(scan_.root) or (scan_.asset_root is not None and real.is_relative_to(scan_.asset_root))
+    if not scan_.allow_outside and not inside:
+        also = f" or the asset root {str(scan_.asset_root)!r}" if scan_.asset_root is not None else ""
         _fail(scan_.main, f"{where}: {name!r} resolves to {str(real)!r}, outside the scene's folder "
-                          f"{str(scan_.root)!r} {_OUTSIDE_HINT}")
+                          f"{str(scan_.root)!r}{also} {_OUTSIDE_HINT}")
     mode = os.stat(real).st_mode
     if directory:
         if not stat.S_ISDIR(mode):
@@ -180,13 +216,17 @@ def _substitute(value: str, params: dict[str, str]) -> str:
     return value.replace("\\$", "$")
 
 
-def scan(path, *, allow_outside_paths: bool = False) -> Scan:
+def scan(path, *, allow_outside_paths: bool = False, defines=(), asset_root=None) -> Scan:
     """Walk the scene file ``path`` and everything it includes (module
-    docstring); raises :class:`CfaMitsubaError` with one line naming the
-    file, line and element on any refusal."""
+    docstring); ``defines`` ((name, value) pairs, :func:`parse_defines`)
+    are set before the file's ``<default>``s; ``asset_root`` (a real folder
+    path, :func:`check_asset_root`) is one more folder files may be in.
+    Raises :class:`CfaMitsubaError` with one line naming the file, line and
+    element on any refusal."""
     main = Path(os.path.abspath(path))
-    out = Scan(main=main, root=Path(os.path.realpath(main.parent)), allow_outside=allow_outside_paths)
-    _scan_file(out, main, Resolver([Path.cwd()]), {}, 0, top=True)
+    out = Scan(main=main, root=Path(os.path.realpath(main.parent)), allow_outside=allow_outside_paths,
+               asset_root=None if asset_root is None else Path(asset_root))
+    _scan_file(out, main, Resolver([Path.cwd()]), dict(defines), 0, top=True)
     return out
 
 

@@ -16,15 +16,16 @@ import numpy as np
 
 from .. import spectra as _spectra
 from ..errors import CfaMitsubaError
+from ..io import guard as _guard
 from .cfa import DEFAULT_SPECTRA_SET, CFA, _check_curve, _order_channels, _parse_tile, make_cfa
 from .spectra_sets import get_spectra_set
 
 
 def _read_csv_curve(path: Path, where: str):
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise CfaMitsubaError(f"{where}: cannot read spectrum file {str(path)!r}: {exc.strerror}") from None
+    try:  # regular file, bounded, strict UTF-8, byte-order mark removed
+        text = _guard.read_text(path, "spectrum file")
+    except CfaMitsubaError as exc:
+        raise CfaMitsubaError(f"{where}: {exc}") from None
     rows = []
     for line in text.splitlines():
         line = line.split("#", 1)[0].strip()
@@ -120,9 +121,7 @@ def load_cfa_toml(path, spectra: str | None = None) -> CFA:
     p = Path(path)
     where = str(p)
     try:
-        data = tomllib.loads(p.read_text())
-    except OSError as exc:
-        raise CfaMitsubaError(f"cannot read CFA file {where!r}: {exc.strerror}") from None
+        data = tomllib.loads(_guard.read_text(p, "CFA file"))
     except tomllib.TOMLDecodeError as exc:
         raise CfaMitsubaError(f"{where}: invalid TOML: {exc}") from None
     unknown = set(data) - {"name", "description", "tile", "spectra", "spectra_set"}

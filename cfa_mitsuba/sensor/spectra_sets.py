@@ -48,6 +48,7 @@ __all__ = ["SpectraSet", "list_spectra_sets", "get_spectra_set", "read_curve_csv
 
 import csv
 import functools
+import io
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -56,6 +57,7 @@ import numpy as np
 
 from .. import spectra as _spectra
 from ..errors import CfaMitsubaError
+from ..io import guard as _guard
 
 DATA_DIR = Path(__file__).resolve().parents[1] / "data"
 FILTERS_DIR = DATA_DIR / "filters"
@@ -113,11 +115,11 @@ def read_curve_csv(path, columns=None, unit: str = "fraction", where: str | None
     """
     p = Path(path)
     where = where or p.name
-    try:
-        with p.open(newline="") as fh:
-            rows = [r for r in csv.reader(fh) if r and not r[0].lstrip().startswith("#")]
-    except OSError as exc:
-        raise CfaMitsubaError(f"{where}: cannot read {str(p)!r}: {exc.strerror}") from None
+    try:  # regular file, bounded, strict UTF-8, byte-order mark removed
+        text = _guard.read_text(p, "spectrum file")
+    except CfaMitsubaError as exc:
+        raise CfaMitsubaError(f"{where}: {exc}") from None
+    rows = [r for r in csv.reader(io.StringIO(text, newline="")) if r and not r[0].lstrip().startswith("#")]
     if len(rows) < 3:
         raise CfaMitsubaError(f"{where}: {p.name} holds fewer than 2 data rows")
     header = [h.strip() for h in rows[0]]
@@ -200,8 +202,8 @@ def read_data_toml(name: str, what: str) -> dict:
     error)."""
     path = DATA_DIR / name
     try:
-        return tomllib.loads(path.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:
+        return tomllib.loads(_guard.read_text(path, what))
+    except (CfaMitsubaError, tomllib.TOMLDecodeError) as exc:
         raise CfaMitsubaError(f"cannot read the {what} {str(path)!r}: {exc}") from None
 
 

@@ -119,8 +119,10 @@ def read_toml(path, what: str) -> tuple[Path, dict]:
     if size > MAX_CONFIG_BYTES:  # issue 27: parsing a 8 MB sweep list alone took 7 s; refused at once
         raise CfaMitsubaError(f"{p.name}: {size:,} bytes, more than a {what} holds (at most "
                               f"{MAX_CONFIG_BYTES:,}: a sweep this long would be refused for its size anyway)")
-    try:
-        return p, tomllib.loads(p.read_text())
+    from ..io.guard import read_text
+
+    try:  # regular file, bounded, strict UTF-8 (io/guard.py)
+        return p, tomllib.loads(read_text(p, what))
     except tomllib.TOMLDecodeError as exc:
         raise CfaMitsubaError(f"{p.name}: invalid TOML: {exc}") from None
     except (OSError, UnicodeDecodeError) as exc:

@@ -77,7 +77,8 @@ def _source(scene, render_common: dict, cond=None) -> dict:
 def _is_3d(scene) -> bool:
     from .. import render
 
-    return bool(render.get_scene(scene.file or scene.name).is_3d)
+    access = {k: scene.render[k] for k in ("allow_outside_paths", "defines", "asset_root") if k in scene.render}
+    return bool(render.get_scene(scene.file or scene.name, **access).is_3d)
 
 
 def _cfa_label(cfa: str) -> str:

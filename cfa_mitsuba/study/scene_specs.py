@@ -73,9 +73,29 @@ def render_common(ck: _Checker, render_cfg, known_scenes) -> dict:
     return out
 
 
+def _scene_access(ck, c: dict, key: str, base: Path) -> dict:
+    """A custom scene's ``defines`` (a table of its ``$name`` parameters, as
+    ``render --define``) and ``asset_root`` (one shared folder its files may
+    be in, relative to the config, as ``render --asset-root``)."""
+    from ..render.xmlscan import check_asset_root, parse_defines
+
+    out = {}
+    try:
+        if "defines" in c:
+            if not isinstance(c["defines"], dict):
+                ck.fail(f"{key}.defines", "must be a table of NAME = value")
+            out["defines"] = dict(parse_defines(c["defines"]))
+        if "asset_root" in c:
+            out["asset_root"] = check_asset_root(base / ck.string(c["asset_root"], f"{key}.asset_root"))
+    except CfaMitsubaError as exc:
+        ck.fail(f"{key}.{'asset_root' if 'asset-root' in str(exc) else 'defines'}", str(exc))
+    return out
+
+
 def _user_scene(ck: _Checker, c, key: str, base: Path, taken: list) -> SceneSpec:
     """One ``[[custom_scenes]]`` entry naming a Mitsuba XML file."""
-    ck.table(c, key, {"name": None, "file": None, "allow_outside_paths": None, **_RENDER_KEYS})
+    ck.table(c, key, {"name": None, "file": None, "allow_outside_paths": None, "defines": None, "asset_root": None,
+                      **_RENDER_KEYS})
     cname = ck.string(c.get("name"), f"{key}.name")
     if safe_name(cname) != cname:  # it names folders under details/: a label, never a path
         ck.fail(f"{key}.name", f"must be a label of letters, digits, '-', '_' and inner '.' (got {cname!r})")
@@ -86,7 +106,9 @@ def _user_scene(ck: _Checker, c, key: str, base: Path, taken: list) -> SceneSpec
         ck.fail(f"{key}.file", f"no such file {str(f)!r}")
     if cname in taken:
         ck.fail(f"{key}.name", f"{cname!r} is already a scene name")
-    over = _render_overrides(ck, {k: v for k, v in c.items() if k not in ("name", "file", "allow_outside_paths")}, key)
+    access = ("name", "file", "allow_outside_paths", "defines", "asset_root")
+    over = _render_overrides(ck, {k: v for k, v in c.items() if k not in access}, key)
+    over.update(_scene_access(ck, c, key, base))
     if "allow_outside_paths" in c:  # the scene may name files outside its folder
         if not isinstance(c["allow_outside_paths"], bool):
             ck.fail(f"{key}.allow_outside_paths", "must be true or false")
