@@ -39,8 +39,8 @@ from ..optics import OpticsParams, compute_optics, integrate_pixels
 from ..values import OpticalImage, RawImage, SpectralImage
 from .catalogue import get_cfa
 from .cfa import CFA
-from .exposure_program import (DEFAULT_MAX_ANALOG_GAIN, DEFAULT_MAX_EXPOSURE_S, EXPOSURE_POLICIES, ExposureChoice,
-                               run_program)
+from .exposure_program import (DEFAULT_MAX_ANALOG_GAIN, DEFAULT_MAX_EXPOSURE_S, EXPOSURE_POLICIES,
+                               PEDESTAL_SIGMAS, ExposureChoice, run_program)
 from .noise import collect_electrons, read_out, temporal_rng
 from .params import NOISE_MODES, SensorParams
 from .physics import apply_crosstalk, channel_map, crosstalk_fractions, with_ir_cut
@@ -217,15 +217,18 @@ def _auto_choice(oi, pix, qe, sensor, s, policy, reference, limits) -> ExposureC
     return run_program(metered_exposure(oi, pix, qe, sensor, s), *limits)
 
 
-def _digital_gain(raw: np.ndarray, gain: float, sensor: SensorParams, noise: str) -> np.ndarray:
-    """The codes after the digital gain: black-subtracted codes x ``gain``,
-    kept in floating point, clipped at the top code (noise ``all``)."""
-    if gain == 1.0:
-        return raw
-    if noise != "all":
-        return raw * gain
-    black = float(sensor.black_level_dn)
-    return np.minimum(black + (raw - black) * gain, float(sensor.max_dn))
+def pedestal_for_gain(sensor: SensorParams) -> SensorParams:
+    """The sensor with its black level raised, where needed, to
+    :data:`~.exposure_program.PEDESTAL_SIGMAS` dark-noise sigmas (read noise
+    and DSNU, in DN at its analogue gain) above code 0, as a designer sets
+    the pedestal for the highest gain in use: otherwise the ADC's clip at 0
+    cuts the dark tail, biasing the mean up and the noise down (at gain 16
+    the default 64 DN is one read-noise sigma).  Solves b = k s g (max - b) /
+    well for b (DN per electron = g (max - b) / well)."""
+    sigma_e = math.hypot(sensor.read_noise_e, sensor.dsnu_e)
+    k = PEDESTAL_SIGMAS * sigma_e * sensor.analog_gain
+    need = math.ceil(k * sensor.max_dn / (sensor.well_capacity_e + k))
+    return sensor.with_(black_level_dn=float(need)) if need > sensor.black_level_dn else sensor
 
 
 def _scaled_meta(oi: OpticalImage, s: float) -> dict:
@@ -313,8 +316,8 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     choice, mode = _resolve_exposure(
         exposure_s, lambda: _auto_choice(oi, pix, qe, sensor, s, policy, reference_luminance_cd_m2, limits))
     exposure = choice.exposure_s
-    if choice.analog_gain != 1.0:  # the program's gain on top of the sensor's own
-        sensor = sensor.with_(analog_gain=sensor.analog_gain * choice.analog_gain)
+    if choice.analog_gain != 1.0:  # the program's gain on top of the sensor's own, its pedestal raised to match
+        sensor = pedestal_for_gain(sensor.with_(analog_gain=sensor.analog_gain * choice.analog_gain))
     h, w, nb = pix.shape
     th, tw = cfa.tile_shape
     require(h >= th and w >= tw, f"the sensor ({w} x {h} pixels) is smaller than the CFA tile ({tw} x {th})")
@@ -354,8 +357,6 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     top = raw >= sensor.max_dn if noise == "all" else np.zeros(raw.shape, dtype=bool)  # the ADC's top code
     meta["clipped_fraction"] = (float(np.mean((electrons >= full) | top)) if top.shape == electrons.shape
                                 else max(meta["saturated_fraction"], float(np.mean(top))))
-    raw = _digital_gain(raw, choice.digital_gain, sensor, noise)
-    dn_per_electron *= choice.digital_gain
     meta["readout"] = {"mode": sensor.readout, "block": block, "binning": sensor.binning if sensor.readout == "bin"
                        else None, "native_tile": cfa.tile_text(), "full_shape": [h, w],
                        "pixel_pitch_um": sensor.pixel_pitch_um * (block if sensor.readout == "bin" else 1)}
