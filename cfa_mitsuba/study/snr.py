@@ -73,7 +73,7 @@ def crossing(luminance, snr, target: float = SNR_TARGET) -> float | None:
     Examples
     --------
     >>> round(crossing([1, 10, 100], [2.0, 6.0, 20.0]), 3)  # between 10 and 100 cd/m^2
-    28.054
+    26.563
     """
     lum = np.asarray(luminance, dtype=np.float64)
     s = np.asarray(snr, dtype=np.float64)
