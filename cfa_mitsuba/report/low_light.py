@@ -7,7 +7,7 @@ CFA's spectra set (``cfas.json``)."""
 
 from __future__ import annotations
 
-__all__ = ["snr_figure", "low_light_tables", "read_snr"]
+__all__ = ["snr_figure", "low_light_tables", "read_snr", "versus_reference", "VERSUS_METRICS"]
 
 import html
 
@@ -167,10 +167,69 @@ def _spectra_html(res: Results) -> str | None:
     return f'{note}<table class="data"><thead><tr><th>CFA</th><th>spectra set</th></tr></thead><tbody>{rows}</tbody></table>'
 
 
+#: What the low-light comparison reads: (metric, scene kind it comes from, higher is better).
+VERSUS_METRICS = (("ysnr", "gray-bar", True), ("chroma_snr", "gray-bar", True), ("scielab", "puppy", False))
+
+
+def _levels(cmp: dict) -> str:
+    return ", ".join(f"{L:g}" for L in cmp) or "never"
+
+
+def versus_reference(metrics, reference: str = "bayer") -> list[dict]:
+    """Per (demosaic, CFA other than ``reference``): the luminances at which
+    it beats ``reference`` (its 95 % interval wholly on the better side), at
+    which it loses (wholly on the worse side), for each of
+    :data:`VERSUS_METRICS`; and at the highest luminance of the study's own
+    charts its ΔE00 and MTF50 beside the reference's (the cost in colour and
+    sharpness).  ``metrics``: a metrics.csv table."""
+    out = []
+    m = metrics
+    for dem in dict.fromkeys(m["demosaic"]):
+        md = m[m["demosaic"] == dem]
+        for cfa in [c for c in dict.fromkeys(md["cfa"]) if c != reference]:
+            row = {"demosaic": dem, "cfa": cfa}
+            for metric, _, higher in VERSUS_METRICS:
+                g = md[md["metric"] == metric]
+                a = g[g["cfa"] == cfa].set_index("luminance")
+                b = g[g["cfa"] == reference].set_index("luminance")
+                wins, losses = [], []
+                for L in sorted(set(a.index) & set(b.index)):
+                    (lo, hi), (rlo, rhi) = a.loc[L, ["ci_low", "ci_high"]], b.loc[L, ["ci_low", "ci_high"]]
+                    better, worse = (lo > rhi, hi < rlo) if higher else (hi < rlo, lo > rhi)
+                    (wins if better else losses if worse else []).append(float(L))
+                row[f"{metric}_wins"], row[f"{metric}_losses"] = wins, losses
+            for metric in ("delta-e", "mtf"):
+                g = md[md["metric"] == metric]
+                if len(g):
+                    top = g["luminance"].max()
+                    v = g[(g["luminance"] == top)].set_index("cfa")["value"]
+                    row[metric] = (float(v.get(cfa, np.nan)), float(v.get(reference, np.nan)))
+            out.append(row)
+    return out
+
+
+def _versus_html(res: Results) -> str | None:
+    m = res.all_metrics if res.all_metrics is not None else res.metrics
+    if "bayer" not in set(m["cfa"]) or "ysnr" not in set(m["metric"]):
+        return None
+    head = "".join(f"<th>{_e(k)}: better / worse than Bayer at (cd/m²)</th>" for k, _, _ in VERSUS_METRICS)
+    rows = [f'<table class="data"><thead><tr><th>demosaic</th><th>CFA</th>{head}<th>ΔE00 (Bayer)</th>'
+            "<th>MTF50 (Bayer)</th></tr></thead><tbody>"]
+    for r in versus_reference(m):
+        cells = "".join(f"<td>{_levels(r[f'{k}_wins'])} / {_levels(r[f'{k}_losses'])}</td>" for k, _, _ in VERSUS_METRICS)
+        cost = "".join(f"<td>{_fmt(r[k][0], '.3g')} ({_fmt(r[k][1], '.3g')})</td>" if k in r else "<td>—</td>"
+                       for k in ("delta-e", "mtf"))
+        rows.append(f"<tr><td>{_e(r['demosaic'])}</td><th>{_e(r['cfa'])}</th>{cells}{cost}</tr>")
+    rows.append("</tbody></table>")
+    return ('<p class="note">Better or worse: the 95 % intervals over the noise realisations do not overlap; '
+            "any luminance not listed is a tie.</p>" + "".join(rows))
+
+
 def low_light_tables(res: Results) -> str | None:
     """The 'Low light' tables of the report (HTML), or None when the results hold none of them."""
     parts = []
-    for title, body in (("SNR10: the scene luminance of YSNR 10", _snr10_html(res)),
+    for title, body in (("Against Bayer: where each CFA is better in low light, and its cost", _versus_html(res)),
+                        ("SNR10: the scene luminance of YSNR 10", _snr10_html(res)),
                         ("What decided each capture", _capture_html(res)),
                         ("Spectra sets", _spectra_html(res))):
         if body:
