@@ -212,6 +212,8 @@ def _auto_choice(oi, pix, qe, sensor, s, policy, reference, limits) -> ExposureC
     if policy in ("reference", "each"):
         ref = None if policy == "each" else (DEFAULT_REFERENCE_LUMINANCE_CD_M2 if reference is _UNSET else reference)
         return ExposureChoice(auto_exposure(oi, qe, sensor, None if policy == "each" else ref, s))
+    require(float(oi.meta["scene_luminance_cd_m2"]) > 0,
+            "auto exposure needs light: the scene is black (mean luminance 0; give a fixed exposure)")
     if policy == "bayer":  # the same camera with Bayer's filters: its program, for every CFA
         qe = with_ir_cut(get_cfa("bayer"), sensor.ir_cut).sensitivities(np.asarray(oi.wavelengths, dtype=np.float64))
     return run_program(metered_exposure(oi, pix, qe, sensor, s), *limits)
