@@ -13,7 +13,7 @@ import html
 
 import numpy as np
 
-from .figure import Absent, ReportFigure, cfa_legend, legend_rows, panel_grid
+from .figure import ReportFigure, cfa_legend, legend_rows, panel_grid
 from .results import Results
 from .style import cfa_styles
 
@@ -23,26 +23,27 @@ def _e(text) -> str:
 
 
 def read_snr(res: Results, name: str = "snr.csv"):
-    """``snr.csv`` or ``snr10.csv`` of the results as a DataFrame, or None."""
+    """``snr.csv`` or ``snr10.csv`` of the results as a DataFrame, the rows
+    of the CFAs and demosaics the report shows; None when there are none."""
     import pandas as pd
 
     path = res.root / name
     if not path.exists():
         return None
     df = pd.read_csv(path, keep_default_na=True)
+    df = df[df["cfa"].astype(str).isin(res.cfas) & df["demosaic"].astype(str).isin(res.demosaics)]
     return df if len(df) else None
 
 
 def snr_figure(res: Results):
     """YSNR against scene luminance, log-log: one panel per demosaic, a line
-    per CFA with its 95 % interval, the YSNR = 10 line."""
+    per CFA with its 95 % interval, the YSNR = 10 line ([] without ``snr.csv``)."""
     title = "YSNR against luminance (mid-grey, after demosaic and colour matrix)"
     snr = read_snr(res)
-    if snr is None:
-        return Absent("sweep", title, 'a gray-bar sweep of ysnr ([[sweep]] scene = "gray-bar", metrics = ["ysnr"])',
-                      not_in_study=True)
-    dems = [d for d in res.demosaics if d in set(snr["demosaic"])] or list(dict.fromkeys(snr["demosaic"]))
-    cfas = [c for c in res.cfas if c in set(snr["cfa"])] or list(dict.fromkeys(snr["cfa"]))
+    if snr is None:  # the study asked for no SNR sweep: nothing to draw or to mention
+        return []
+    dems = [d for d in res.demosaics if d in set(snr["demosaic"])]
+    cfas = [c for c in res.cfas if c in set(snr["cfa"])]
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
     plain = FuncFormatter(lambda v, _: f"{v:g}")  # the report's text has no mathtext
@@ -158,7 +159,9 @@ def _spectra_html(res: Results) -> str | None:
     facts = res.cfa_facts or {}
     if not facts:
         return None
-    sets = {c: str(f.get("spectra") or "its own curves") for c, f in facts.items()}
+    sets = {c: str(f.get("spectra") or "its own curves") for c, f in facts.items() if c in res.cfas}
+    if not sets:
+        return None
     rows = "".join(f"<tr><th>{_e(c)}</th><td>{_e(s)}</td></tr>" for c, s in sets.items())
     note = ""
     if len(set(sets.values())) > 1:
@@ -215,7 +218,7 @@ def _versus_html(res: Results) -> str | None:
     head = "".join(f"<th>{_e(k)}: better / worse than Bayer at (cd/m²)</th>" for k, _, _ in VERSUS_METRICS)
     rows = [f'<table class="data"><thead><tr><th>demosaic</th><th>CFA</th>{head}<th>ΔE00 (Bayer)</th>'
             "<th>MTF50 (Bayer)</th></tr></thead><tbody>"]
-    for r in versus_reference(m):
+    for r in versus_reference(m[m["cfa"].isin(res.cfas) & m["demosaic"].isin(res.demosaics)]):
         cells = "".join(f"<td>{_levels(r[f'{k}_wins'])} / {_levels(r[f'{k}_losses'])}</td>" for k, _, _ in VERSUS_METRICS)
         cost = "".join(f"<td>{_fmt(r[k][0], '.3g')} ({_fmt(r[k][1], '.3g')})</td>" if k in r else "<td>—</td>"
                        for k in ("delta-e", "mtf"))

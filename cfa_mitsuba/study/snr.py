@@ -119,7 +119,7 @@ def write_snr_tables(out_dir, metrics) -> list[Path]:
     out = Path(out_dir)
     snr = snr_table(metrics)
     paths = [out / "snr.csv", out / "snr10.csv"]
-    if snr.empty:
+    if snr.empty or snr.groupby(["cfa", "demosaic"])["luminance"].nunique().max() < 2:
         for p in paths:
             p.unlink(missing_ok=True)
         return []
