@@ -97,7 +97,7 @@ def flat(h, w, reflectance=0.5, **meta):
 
 
 def srgb8(xyz, white):
-    return M.colour.xyz_to_srgb8(xyz, white)
+    return M.colourspace.xyz_to_srgb8(xyz, white)
 
 
 # -------------------------------------------------------------- shared inputs
@@ -141,8 +141,8 @@ def sweep(luminance):
     oi_e, geo_e = optics("slanted-edge")
     e_img = cm.isp.process(cm.sensor.capture(oi_e, "bayer", luminance_cd_m2=luminance, seed=1), "bilinear")
     e_ideal = cm.isp.process(cm.sensor.capture_ideal(oi_e, luminance_cd_m2=luminance))
-    lin = M.colour.xyz_to_linear(e_img.xyz, scale=e_ideal.white_xyz[1])
-    ref = M.colour.xyz_to_linear(e_ideal.xyz, scale=e_ideal.white_xyz[1])
+    lin = M.colourspace.xyz_to_linear(e_img.xyz, scale=e_ideal.white_xyz[1])
+    ref = M.colourspace.xyz_to_linear(e_ideal.xyz, scale=e_ideal.white_xyz[1])
     try:
         r = M.mtf(lin, roi=geo_e["roi"], pixel_pitch_um=2.2, reference=ref)
         out["mtf"] = (float(r), r.details["edge_source"])

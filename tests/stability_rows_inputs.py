@@ -214,7 +214,7 @@ def _():
         assert o.meta["isp"]["saturated_fraction"] > 0.5
     o = outs["bilinear"]
     y = o.xyz[6, 6, 1] / o.white_xyz[1]
-    xy, xy_w = M.colour.xyz_to_xy(o.xyz[6, 6]), M.colour.xyz_to_xy(o.white_xyz)
+    xy, xy_w = M.colourspace.xyz_to_xy(o.xyz[6, 6]), M.colourspace.xyz_to_xy(o.white_xyz)
     return (f"every well full; XYZ finite: every pixel reads the clip level, Y = {y:.3f} x the white's "
             f"(10 s is {10 / auto:.0f} x the auto exposure), tinted: xy ({xy[0]:.3f}, {xy[1]:.3f}) against the white's "
             f"({xy_w[0]:.3f}, {xy_w[1]:.3f}), since each channel clips at its own fraction of its white response")

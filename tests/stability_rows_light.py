@@ -183,12 +183,12 @@ for _nm in (400.0, 550.0, 700.0):
         finite(img.xyz, img.srgb, gw.xyz, img.meta["isp"]["white_balance_gains"], gw.meta["isp"]["white_balance_gains"])
         cam, ref = img.xyz[6, 6], ideal.xyz[6, 6]
         de = float(M.delta_e(ideal.xyz, img.xyz, ideal.white_xyz))
-        xy, xy_ref = M.colour.xyz_to_xy(cam), M.colour.xyz_to_xy(ref)
+        xy, xy_ref = M.colourspace.xyz_to_xy(cam), M.colourspace.xyz_to_xy(ref)
         # the monochromatic stimulus lies on the spectral locus; the camera's
         # 3 x 3 matrix, fitted on reflectances, cannot reach it
         assert abs(ref[1] - 100) < 0.5 and de > 10
         # gray world on a one-colour scene greys it out (its assumption fails)
-        assert np.ptp(M.colour.xyz_to_lab(gw.xyz[6, 6], gw.white_xyz)[1:]) < 1
+        assert np.ptp(M.colourspace.xyz_to_lab(gw.xyz[6, 6], gw.white_xyz)[1:]) < 1
         return (f"ideal xy ({xy_ref[0]:.3f}, {xy_ref[1]:.3f}) Y {ref[1]:.1f}; camera xy ({xy[0]:.3f}, {xy[1]:.3f}) "
                 f"Y {cam[1]:.1f} cd/m^2, sRGB {np.round(img.srgb[6, 6], 2).tolist()}; dE00 {de:.1f}; "
                 f"gray-world: neutral")
@@ -307,7 +307,7 @@ def _():
     img = cm.isp.process(cm.sensor.capture(oi, cfa, seed=1), "pocs")
     ideal = cm.isp.process(cm.sensor.capture_ideal(oi))
     finite(img.xyz)
-    lab = M.colour.xyz_to_lab(img.xyz, img.white_xyz)
+    lab = M.colourspace.xyz_to_lab(img.xyz, img.white_xyz)
     assert np.abs(lab[..., 1:]).max() < 1e-6  # grey: a single channel carries no colour
     de = float(M.delta_e(ideal.xyz, M.mean_match(img.xyz, ideal.xyz, border=2), ideal.white_xyz,
                          patches=geo["patches"]))

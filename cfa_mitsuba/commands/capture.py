@@ -23,7 +23,9 @@ through a diffraction-limited lens and a sensor with the given CFA.
 
 --sensor NAME starts from a measured preset (cfa-mitsuba list sensors): its
 pixel, its CFA unless --cfa is given, and its spectra set unless --spectra
-is given; the sensor options below override single values.
+is given; the sensor options below override single values.  --sensor
+FILE.toml reads a sensor file (QE curves in CSV plus datasheet or EMVA 1288
+numbers; docs/sensor.md, "Bring your own sensor") the same way.
 
 Without --luminance the EXR's radiance is kept.  --exposure auto runs the
 exposure program (--exposure-policy program, the default): the brightest
@@ -65,8 +67,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--spectra", metavar="SET",
                         help="spectra set of the CFA's filters (cfa-mitsuba list spectra; default: the CFA's own, "
                              "or the --sensor preset's)")
-    parser.add_argument("--sensor", metavar="NAME",
-                        help="a measured sensor preset (cfa-mitsuba list sensors): pixel, CFA and spectra")
+    parser.add_argument("--sensor", metavar="NAME|FILE.toml",
+                        help="a measured sensor preset (cfa-mitsuba list sensors) or a sensor file "
+                             "(docs/sensor.md, 'Bring your own sensor'): pixel, CFA and spectra")
     parser.add_argument("--out", required=True, metavar="RAW.npz", help="output raw file (.npz), written atomically")
     parser.add_argument("--luminance", type=positive_float, metavar="CD_M2",
                         help="scale the scene to this mean luminance (default: keep the EXR's radiance)")
@@ -102,6 +105,12 @@ def add_arguments(parser) -> None:
                    help="horizontal field of view (overrides the sidecar; default 10)")
     g.add_argument("--scene-distance-m", type=_distance, metavar="M",
                    help="scene distance, or inf (overrides the sidecar; default 1.2)")
+    add_sensor_options(parser)
+
+
+def add_sensor_options(parser) -> None:
+    """The pixel and read-out options (each overrides one SensorParams value;
+    shared with ``sensor emva``)."""
     s = parser.add_argument_group("sensor (defaults in docs/sensor.md)")
     s.add_argument("--pixel-pitch-um", type=positive_float, metavar="UM", help="default 2.2")
     s.add_argument("--fill-factor", type=positive_float, metavar="F", help="in (0, 1], default 1")
@@ -126,6 +135,30 @@ def add_arguments(parser) -> None:
 _SENSOR_OPTIONS = ("pixel_pitch_um", "fill_factor", "well_capacity_e", "read_noise_e", "dark_current_e_s", "dsnu_e",
                    "prnu_percent", "analog_gain", "adc_bits", "black_level_dn", "sensor_seed", "readout", "binning",
                    "crosstalk", "ir_cut")
+
+
+def resolve_sensor(args):
+    """(SensorParams, CFA or None for 'ideal') from ``--sensor`` (a preset
+    name or a sensor file), ``--cfa``, ``--spectra`` and the sensor options;
+    a bad CFA fails here, before any file is read."""
+    from ..errors import CfaMitsubaError
+    from ..sensor import SensorParams, get_cfa, get_sensor_preset
+
+    preset = get_sensor_preset(args.sensor) if args.sensor else None
+    base = preset.params if preset else SensorParams()
+    sensor = base.with_(**{k: getattr(args, k) for k in _SENSOR_OPTIONS})
+    cfa_name = args.cfa or (preset.cfa_name if preset else None)
+    if cfa_name is None:
+        raise CfaMitsubaError("--cfa is required (or --sensor NAME, whose CFA is used)")
+    if cfa_name == "ideal":
+        if args.spectra:
+            raise CfaMitsubaError("--spectra does not apply to the ideal sensor (CIE 1931 XYZ)")
+        return sensor, None
+    own = preset is not None and preset.own_cfa is not None and not args.spectra \
+        and not str(args.cfa or "").lower().endswith(".toml")  # a sensor file's own QE curves
+    if own:
+        return sensor, preset.cfa(args.cfa)
+    return sensor, get_cfa(cfa_name, spectra=args.spectra or (preset.spectra if preset else None) or None)
 
 
 def _check_output(out, given: str) -> None:
@@ -158,24 +191,15 @@ def run(args) -> int:
     from ..errors import CfaMitsubaError
     from ..io.raw_npz import save_raw_npz
     from ..optics import OpticsParams, compute_optics
-    from ..sensor import SensorParams, capture, capture_ideal, get_cfa, get_sensor_preset
+    from ..sensor import capture, capture_ideal
 
     out = Path(args.out)
     _check_output(out, args.out)
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        preset = get_sensor_preset(args.sensor) if args.sensor else None
-        base = preset.params if preset else SensorParams()
-        sensor = base.with_(**{k: getattr(args, k) for k in _SENSOR_OPTIONS})
-        cfa_name = args.cfa or (preset.cfa_name if preset else None)
-        if cfa_name is None:
-            raise CfaMitsubaError("--cfa is required (or --sensor NAME, whose CFA is used)")
-        spectra = args.spectra or (preset.spectra if preset else None)
-        ideal = cfa_name == "ideal"
-        if ideal and args.spectra:
-            raise CfaMitsubaError("--spectra does not apply to the ideal sensor (CIE 1931 XYZ)")
-        cfa = None if ideal else get_cfa(cfa_name, spectra=spectra)  # a bad CFA fails before the EXR is read
+        sensor, cfa = resolve_sensor(args)
+        ideal = cfa is None
         optics = OpticsParams(f_number=args.f_number, lens_transmittance=args.lens_transmittance,
                               relative_illumination=not args.no_relative_illumination,
                               diffraction=not args.no_diffraction, fov_deg=args.fov_deg,

@@ -9,9 +9,29 @@ KINDS = ("scenes", "cfas", "spectra", "sensors", "demosaics", "metrics")
 
 def add_arguments(parser) -> None:
     parser.add_argument("kind", choices=KINDS, help="what to list")
+    parser.add_argument("files", nargs="*", metavar="FILE.toml",
+                        help="for sensors: sensor files to list after the presets (besides those in the folders "
+                             "of $CFA_MITSUBA_SENSORS; docs/sensor.md, 'Bring your own sensor')")
     parser.add_argument("--json", action="store_true",
                         help="print one JSON array (for metrics: each record's name, scenes, inputs, unit, "
                              "higher_is_better, scored, score_range, label, description)")
+
+
+def _sensor_rows(files) -> list[tuple[str, str]]:
+    from ..sensor import get_sensor_preset, list_sensor_presets
+    from ..sensor.presets import user_sensor_files
+
+    rows = []
+    for n in list(list_sensor_presets()) + user_sensor_files() + list(files):
+        p = get_sensor_preset(n)
+        q = p.params
+        spectra = f"spectra {p.spectra}" if p.spectra else f"own QE curves ({', '.join(p.cfa().channels)})"
+        rows.append((p.name, f"{p.description}; {q.pixel_pitch_um:g} um, fill {q.fill_factor:g}, "
+                             f"well {q.well_capacity_e:.0f} e-, read noise {q.read_noise_e:.3g} e-, "
+                             f"dark {q.dark_current_e_s:.3g} e-/s, PRNU {q.prnu_percent:g} %, "
+                             f"{q.adc_bits} bit, black {q.black_level_dn:g} DN; CFA {p.cfa_name}, "
+                             f"{spectra}; source: {p.source or 'not given'}" + (f"; file {n}" if p.path else "")))
+    return rows
 
 
 def _rows(kind: str) -> list[tuple[str, str]]:
@@ -36,19 +56,6 @@ def _rows(kind: str) -> list[tuple[str, str]]:
 
         return [(n, f"{', '.join(s.letters)}: {s.description}; source: {s.source}")
                 for n, s in ((n, get_spectra_set(n)) for n in list_spectra_sets())]
-    if kind == "sensors":
-        from ..sensor import get_sensor_preset, list_sensor_presets
-
-        rows = []
-        for n in list_sensor_presets():
-            p = get_sensor_preset(n)
-            q = p.params
-            rows.append((n, f"{p.description}; {q.pixel_pitch_um:g} um, fill {q.fill_factor:g}, "
-                            f"well {q.well_capacity_e:.0f} e-, read noise {q.read_noise_e:.3g} e-, "
-                            f"dark {q.dark_current_e_s:.3g} e-/s, PRNU {q.prnu_percent:g} %, "
-                            f"{q.adc_bits} bit, black {q.black_level_dn:g} DN; CFA {p.cfa_name}, "
-                            f"spectra {p.spectra}; source: {p.source}"))
-        return rows
     if kind == "demosaics":
         from ..isp import list_demosaics
         from ..isp.suitability import SUITS_WITHIN_DB, suitability
@@ -69,7 +76,16 @@ def _rows(kind: str) -> list[tuple[str, str]]:
     return list_metrics()
 
 
+def _rows_for(kind: str, files) -> list[tuple[str, str]]:
+    return _sensor_rows(files) if kind == "sensors" else _rows(kind)
+
+
 def run(args) -> int:
+    files = list(getattr(args, "files", []) or [])
+    if files and args.kind != "sensors":
+        from ..errors import CfaMitsubaError
+
+        raise CfaMitsubaError(f"files are listed only with 'sensors', not with {args.kind!r}")
     if getattr(args, "json", False):
         import json
 
@@ -78,10 +94,10 @@ def run(args) -> int:
 
             payload = [record_json(r) for r in METRICS.values()]
         else:
-            payload = [{"name": n, "description": d} for n, d in _rows(args.kind)]
+            payload = [{"name": n, "description": d} for n, d in _rows_for(args.kind, files)]
         print(json.dumps(payload, ensure_ascii=False))
         return 0
-    rows = _rows(args.kind)
+    rows = _rows_for(args.kind, files)
     width = max((len(n) for n, _ in rows), default=0)
     for name, text in rows:
         print(f"{name:<{width}}  {text}".rstrip())

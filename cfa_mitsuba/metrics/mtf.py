@@ -317,91 +317,20 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
     require(int(nbin) == nbin and nbin >= 1, f"nbin must be a positive integer, got {nbin}")
     if pixel_pitch_um is not None:
         require(np.isfinite(pixel_pitch_um) and pixel_pitch_um > 0, f"pixel pitch must be positive, got {pixel_pitch_um}")
-    if roi is None:
-        roi = find_edge_roi(a)
-    y0, x0, y1, x1 = (int(v) for v in roi)
-    require(0 <= y0 < y1 <= a.shape[0] and 0 <= x0 < x1 <= a.shape[1],
-            f"roi {[y0, x0, y1, x1]} is empty or outside the {a.shape[0]} x {a.shape[1]} image")
-    require(min(y1 - y0, x1 - x0) >= 8, f"roi {[y0, x0, y1, x1]} is smaller than 8 x 8 px")
-    a = a[y0:y1, x0:x1]
-    if a.ndim == 3:
-        w = np.asarray(weights, dtype=np.float64)
-        require(w.shape == (3,), f"weights must be 3 numbers (R, G, B), got {w.tolist()}")
-        records = {"R": a[..., 0], "G": a[..., 1], "B": a[..., 2], "lum": a @ w}
-        main = "lum"
-    else:
-        records = {"gray": a}
-        main = "gray"
-
+    roi = _checked_roi(a, find_edge_roi(a) if roi is None else roi)
+    records, main = _records(a[roi[0]:roi[2], roi[1]:roi[3]], weights)
     transposed = _is_horizontal(records[main])
     if transposed:
         records = {k: v.T for k, v in records.items()}
     sign = _polarity(records[main])
-    work = records[main]
-    nlin, npix = work.shape
-    edge_source = "image"
-    try:
-        slope, intercept, rms = _fit_edge(_row_derivative(work) * sign)
-        require(rms < 2.0, f"no straight edge found: edge positions scatter {rms:.1f} px about the fitted line")
-    except CfaMitsubaError:
-        if reference is None:
-            raise
-        slope, intercept, rms = _reference_edge(reference, (y0, y1, x0, x1), weights, transposed, sign)
-        edge_source = "reference"
-        _require_edge_above_noise(work)
-    angle = float(np.degrees(np.arctan(slope)))
-    cycles = np.floor(nlin * abs(slope))
-    require(cycles >= 1,
-            f"edge too close to {'horizontal' if transposed else 'vertical'} ({angle:.2f} deg over {nlin} rows): "
-            "the edge must shift by at least one pixel across the region (slant it 2-10 deg)")
-    require(abs(angle) < 40, f"edge slant {angle:.1f} deg is too far from vertical/horizontal (need < 40 deg)")
-    nlin1 = int(np.floor(cycles / abs(slope) + 0.5))
-    cos_angle = float(np.cos(np.arctan(slope)))
-
-    dark, bright = sorted(side.mean() for side in _sides(work))
-    # Michelson contrast is defined for non-negative signals: a dark side
-    # below 0 (read noise about black in a linear camera image) counts as 0,
-    # so the value stays in [0, 1] (not 1e16 or NaN as bright + dark -> 0).
-    dark = max(dark, 0.0)
-    contrast = (bright - dark) / (bright + dark) if bright > 0 else 0.0
-
-    out = {}
-    for name, rec in records.items():
-        s_r = slope
-        if name != main and edge_source == "image":  # each colour record gets its own edge fit (sfrmat3) ...
-            try:
-                s_fit, _, rms_r = _fit_edge(_row_derivative(rec) * sign)
-                if rms_r < 2.0 and abs(s_fit - slope) < 0.1 * abs(slope) + 0.01:
-                    s_r = s_fit
-            except CfaMitsubaError:  # ... unless a weak channel has no usable edge
-                pass
-        try:
-            esf = _esf(rec[:nlin1], s_r, int(nbin))
-            freq, m = _sfr(esf, int(nbin), cos_angle, sign)
-        except CfaMitsubaError as exc:
-            if name == main:
-                raise
-            out[name] = {"mtf50_cy_px": None, "mtf50_cy_mm": None, "mtf_at_nyquist": None,
-                         "mtf50_found": False, "mtf50p_cy_px": None, "mtf50p_cy_mm": None,
-                         "mtf50p_found": False, "mtf_peak": None, "mtf_peak_cy_px": None,
-                         "error": str(exc)}  # a channel without an edge
-            continue
-        m50, found = _mtf50(freq, m)
-        m50p, peak, f_peak, found_p = _mtf50p(freq, m)
-        per_mm = 1.0 / (pixel_pitch_um * 1e-3) if pixel_pitch_um else None
-        out[name] = {
-            "freq_cy_px": freq, "mtf": m,
-            "mtf50_cy_px": m50, "mtf50_found": found,
-            "mtf50_cy_mm": m50 * per_mm if per_mm else None,
-            "mtf50p_cy_px": m50p, "mtf50p_found": found_p,
-            "mtf50p_cy_mm": m50p * per_mm if per_mm else None,
-            "mtf_peak": peak, "mtf_peak_cy_px": f_peak,
-            "mtf_at_nyquist": float(np.interp(0.5, freq, m)),
-        }
+    edge = _edge(records[main], sign, roi, reference, weights, transposed)
+    per_mm = 1.0 / (pixel_pitch_um * 1e-3) if pixel_pitch_um else None
+    out = {name: _record_mtf(name, rec, main, edge, sign, int(nbin), per_mm) for name, rec in records.items()}
     lum = out[main]
     band = lum["freq_cy_px"] <= 1.0
     above = band & (lum["freq_cy_px"] > 0.5)
     alias = 100.0 * lum["mtf"][above].sum() / lum["mtf"][band].sum()
+    contrast = _contrast(records[main])
     details = {
         "records": out,
         "mtf50_cy_px": lum["mtf50_cy_px"], "mtf50_cy_mm": lum["mtf50_cy_mm"],
@@ -411,14 +340,101 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
         "mtf_at_nyquist": lum["mtf_at_nyquist"], "percent_alias": float(alias),
         "nyquist_cy_px": 0.5,
         "nyquist_cy_mm": 0.5 / (pixel_pitch_um * 1e-3) if pixel_pitch_um else None,
-        "edge_angle_deg": angle, "orientation": "horizontal" if transposed else "vertical",
-        "roi": [y0, x0, y1, x1], "rows_used": nlin1, "edge_fit_rms_px": rms, "edge_source": edge_source,
+        "edge_angle_deg": edge["angle"], "orientation": "horizontal" if transposed else "vertical",
+        "roi": list(roi), "rows_used": edge["rows"], "edge_fit_rms_px": edge["rms"], "edge_source": edge["source"],
         "contrast": float(contrast), "low_contrast": bool(contrast < 0.2),
         "pixel_pitch_um": pixel_pitch_um, "weights": list(map(float, weights)) if a.ndim == 3 else None,
     }
     if pixel_pitch_um:
         return MetricResult(lum["mtf50_cy_mm"], name="mtf", unit="cy/mm", details=details)
     return MetricResult(lum["mtf50_cy_px"], name="mtf", unit="cy/px", details=details)
+
+
+def _checked_roi(a, roi) -> tuple[int, int, int, int]:
+    y0, x0, y1, x1 = (int(v) for v in roi)
+    require(0 <= y0 < y1 <= a.shape[0] and 0 <= x0 < x1 <= a.shape[1],
+            f"roi {[y0, x0, y1, x1]} is empty or outside the {a.shape[0]} x {a.shape[1]} image")
+    require(min(y1 - y0, x1 - x0) >= 8, f"roi {[y0, x0, y1, x1]} is smaller than 8 x 8 px")
+    return y0, x0, y1, x1
+
+
+def _records(a, weights) -> tuple[dict, str]:
+    """The records analysed ({name: 2-D array}) and the headline's name:
+    R, G, B and their weighted luminance ('lum'), or the one 'gray'."""
+    if a.ndim != 3:
+        return {"gray": a}, "gray"
+    w = np.asarray(weights, dtype=np.float64)
+    require(w.shape == (3,), f"weights must be 3 numbers (R, G, B), got {w.tolist()}")
+    return {"R": a[..., 0], "G": a[..., 1], "B": a[..., 2], "lum": a @ w}, "lum"
+
+
+def _edge(work, sign, roi, reference, weights, transposed) -> dict:
+    """The headline record's edge line: slope, rms scatter (px), where it
+    was fitted ('image', or 'reference' when the image's own edge cannot be
+    located), its angle (deg), the rows used (a whole number of phase
+    cycles) and cos(angle)."""
+    y0, x0, y1, x1 = roi
+    nlin = work.shape[0]
+    source = "image"
+    try:
+        slope, _, rms = _fit_edge(_row_derivative(work) * sign)
+        require(rms < 2.0, f"no straight edge found: edge positions scatter {rms:.1f} px about the fitted line")
+    except CfaMitsubaError:
+        if reference is None:
+            raise
+        slope, _, rms = _reference_edge(reference, (y0, y1, x0, x1), weights, transposed, sign)
+        source = "reference"
+        _require_edge_above_noise(work)
+    angle = float(np.degrees(np.arctan(slope)))
+    cycles = np.floor(nlin * abs(slope))
+    require(cycles >= 1,
+            f"edge too close to {'horizontal' if transposed else 'vertical'} ({angle:.2f} deg over {nlin} rows): "
+            "the edge must shift by at least one pixel across the region (slant it 2-10 deg)")
+    require(abs(angle) < 40, f"edge slant {angle:.1f} deg is too far from vertical/horizontal (need < 40 deg)")
+    return {"slope": slope, "rms": rms, "source": source, "angle": angle,
+            "rows": int(np.floor(cycles / abs(slope) + 0.5)), "cos": float(np.cos(np.arctan(slope)))}
+
+
+def _contrast(work) -> float:
+    """Michelson contrast of the edge, for non-negative signals: a dark side
+    below 0 (read noise about black in a linear camera image) counts as 0,
+    so the value stays in [0, 1] (not 1e16 or NaN as bright + dark -> 0)."""
+    dark, bright = sorted(side.mean() for side in _sides(work))
+    dark = max(dark, 0.0)
+    return (bright - dark) / (bright + dark) if bright > 0 else 0.0
+
+
+def _record_mtf(name, rec, main, edge, sign, nbin, per_mm) -> dict:
+    """One record's MTF curve with its MTF50, MTF50P, peak and value at Nyquist."""
+    s_r = edge["slope"]
+    if name != main and edge["source"] == "image":  # each colour record gets its own edge fit (sfrmat3) ...
+        try:
+            s_fit, _, rms_r = _fit_edge(_row_derivative(rec) * sign)
+            if rms_r < 2.0 and abs(s_fit - s_r) < 0.1 * abs(s_r) + 0.01:
+                s_r = s_fit
+        except CfaMitsubaError:  # ... unless a weak channel has no usable edge
+            pass
+    try:
+        esf = _esf(rec[:edge["rows"]], s_r, nbin)
+        freq, m = _sfr(esf, nbin, edge["cos"], sign)
+    except CfaMitsubaError as exc:
+        if name == main:
+            raise
+        return {"mtf50_cy_px": None, "mtf50_cy_mm": None, "mtf_at_nyquist": None,
+                "mtf50_found": False, "mtf50p_cy_px": None, "mtf50p_cy_mm": None,
+                "mtf50p_found": False, "mtf_peak": None, "mtf_peak_cy_px": None,
+                "error": str(exc)}  # a channel without an edge
+    m50, found = _mtf50(freq, m)
+    m50p, peak, f_peak, found_p = _mtf50p(freq, m)
+    return {
+        "freq_cy_px": freq, "mtf": m,
+        "mtf50_cy_px": m50, "mtf50_found": found,
+        "mtf50_cy_mm": m50 * per_mm if per_mm else None,
+        "mtf50p_cy_px": m50p, "mtf50p_found": found_p,
+        "mtf50p_cy_mm": m50p * per_mm if per_mm else None,
+        "mtf_peak": peak, "mtf_peak_cy_px": f_peak,
+        "mtf_at_nyquist": float(np.interp(0.5, freq, m)),
+    }
 
 
 #: This module's metric records (collected by :mod:`.registry`).

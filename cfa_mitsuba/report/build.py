@@ -23,6 +23,7 @@ _MAX_EMBED_PNG = 900_000
 
 def _figure_functions(res: Results, thumbnails: bool):
     from . import figures_detail as fd
+    from . import figures_sensor as fsen
     from . import figures_sweep as fsw
     from . import figures_scores as fs
     from . import low_light, tiles
@@ -39,6 +40,7 @@ def _figure_functions(res: Results, thumbnails: bool):
     yield fd.gray_bar_profiles
     yield fs.luminance_sweep
     yield low_light.snr_figure
+    yield fsen.sensor_curves
     for axis in res.swept_axes:
         def by_axis(r, axis=axis):
             return fsw.axis_sweep(r, axis)
@@ -76,7 +78,7 @@ def _draw(res: Results, thumbnails: bool, log) -> tuple[list, list]:
 def _section_of(name: str) -> str:
     for key, sec in (("radar", "scores"), ("rank", "scores"), ("patch", "colour"), ("scielab", "scielab"),
                      ("mtf", "mtf"), ("moire", "moire"), ("gray", "achromatic"), ("sweep", "sweep"),
-                     ("thumb", "outputs")):
+                     ("thumb", "outputs"), ("sensor", "sensor")):
         if key in name:
             return sec
     return "scores"
@@ -174,6 +176,10 @@ def _facts(res: Results) -> dict:
                              f"{fmt_value(m, best)} {info.unit} ({', '.join(side)}; measured "
                              f"{fmt_value(m, g['value'].min())} … {fmt_value(m, g['value'].max())}{note}).")
             facts["oor_lines"] = lines
+    from .figures_sensor import spectra_note
+
+    if spectra_note(res):
+        facts["spectra_note"] = spectra_note(res)
     t = res.timing
     if isinstance(t, dict):
         p = t.get("phases") or {}

@@ -156,18 +156,14 @@ def _capture_html(res: Results) -> str | None:
 
 
 def _spectra_html(res: Results) -> str | None:
+    """Each CFA's spectra set (cfas.json); the summary's 'Spectra' row
+    (figures_sensor.spectra_note) says when the compared sets differ."""
     facts = res.cfa_facts or {}
-    if not facts:
-        return None
     sets = {c: str(f.get("spectra") or "its own curves") for c, f in facts.items() if c in res.cfas}
     if not sets:
         return None
     rows = "".join(f"<tr><th>{_e(c)}</th><td>{_e(s)}</td></tr>" for c, s in sets.items())
-    note = ""
-    if len(set(sets.values())) > 1:
-        note = ('<p class="note">The compared CFAs use different spectra sets: a difference between them is '
-                "partly one of dyes, not of layouts alone.</p>")
-    return f'{note}<table class="data"><thead><tr><th>CFA</th><th>spectra set</th></tr></thead><tbody>{rows}</tbody></table>'
+    return f'<table class="data"><thead><tr><th>CFA</th><th>spectra set</th></tr></thead><tbody>{rows}</tbody></table>'
 
 
 #: What the low-light comparison reads: (metric, scene kind it comes from, higher is better).

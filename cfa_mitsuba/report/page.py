@@ -36,6 +36,8 @@ SECTIONS = (
      "How the image metrics degrade as the scene gets darker."),
     ("outputs", "Camera outputs", "Figs 10, 12, 14 (images)",
      "The rendered sRGB images, every CFA and demosaicing method next to the ideal sensor."),
+    ("sensor", "Sensors: spectra of the compared CFAs", "sensor_curves.csv",
+     "Each CFA's channel quantum efficiencies as the study captured them."),
 )
 
 _CSS = """
@@ -198,6 +200,8 @@ def _summary(res: Results, facts: dict, not_run: list) -> str:
         scenes = res.scenes
     rows.append(("Scenes", "; ".join(scenes) or "none"))
     rows.append(("CFAs", f"{len(res.cfas)}: " + ", ".join(res.cfas)))
+    if facts.get("spectra_note"):
+        rows.append(("Spectra", facts["spectra_note"]))
     rows.append(("Demosaicing", f"{len(res.demosaics)}: " + ", ".join(res.demosaics)))
     lums = ", ".join(f"{v:g}" for v in res.base_luminances) or "—"
     rows.append(("Luminance", f"{lums} cd/m² (every metric)"))

@@ -29,7 +29,7 @@ def get_cfa(name, spectra: str | None = None) -> CFA:
     if spectra is not None:
         get_spectra_set(spectra)  # an unknown set is refused first, by name
     if key.lower().endswith(".toml"):
-        return _load_toml(key, spectra=spectra)
+        return load_cfa_toml(key, spectra=spectra)
     if key in _REGISTRY:
         if spectra is not None and spectra != _REGISTRY[key].spectra:
             raise CfaMitsubaError(f"CFA {key!r} was registered with its own curves; a spectra set applies to "
@@ -43,5 +43,13 @@ def get_cfa(name, spectra: str | None = None) -> CFA:
 
 
 def load_cfa_toml(path, spectra: str | None = None) -> CFA:
-    """Read a user CFA (:func:`cfa_mitsuba.sensor.cfa_toml.load_cfa_toml`)."""
+    """Read a user CFA (:func:`cfa_mitsuba.sensor.cfa_toml.load_cfa_toml`),
+    or the CFA of a sensor file (:mod:`.sensor_file`: its layout with its own
+    QE curves; a spectra set does not apply to it)."""
+    from .sensor_file import is_sensor_file, read_sensor_file
+
+    if is_sensor_file(path):
+        if spectra is not None:
+            raise CfaMitsubaError(f"{path}: a sensor file carries its own QE curves; a spectra set does not apply")
+        return read_sensor_file(path)["cfa"]
     return _load_toml(path, spectra=spectra)

@@ -142,11 +142,12 @@ def _dataclass_table(ck: _Checker, data, key: str, cls, extra: dict) -> dict:
     return {**params, **rest}
 
 
-def _sensor_preset(ck: _Checker, data):
+def _sensor_preset(ck: _Checker, data, base: Path = Path(".")):
     """(the [sensor] table without ``preset``, the preset or None):
     ``sensor = "imx363"`` or ``[sensor] preset = "imx363"`` starts from a
-    measured preset's pixel parameters (``cfa-mitsuba list sensors``); the
-    CFAs keep their own spectra sets."""
+    measured preset's pixel parameters (``cfa-mitsuba list sensors``), or a
+    sensor file's (``sensor = "my_sensor.toml"``, relative to the config's
+    folder); the CFAs keep their own spectra sets."""
     from ..sensor import get_sensor_preset
 
     name = None
@@ -157,6 +158,8 @@ def _sensor_preset(ck: _Checker, data):
         name = ck.string(data.pop("preset"), "sensor.preset")
     if name is None:
         return data, None
+    if name.lower().endswith(".toml") and not Path(name).is_absolute():
+        name = str((base / name).resolve())
     try:
         return data, get_sensor_preset(name)
     except CfaMitsubaError as exc:
@@ -293,7 +296,7 @@ def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, di
         "max_analog_gain": lambda v, k: _at_least_one(ck, v, k),
         "spectra_sets": lambda v, k: _spectra_map(ck, v, k),
     }
-    sensor_cfg, preset = _sensor_preset(ck, data.get("sensor", {}))
+    sensor_cfg, preset = _sensor_preset(ck, data.get("sensor", {}), base)
     sensor_all = _dataclass_table(ck, sensor_cfg, "sensor", SensorParams, capture_extra)
     capture = {k: sensor_all.pop(k) for k in list(sensor_all) if k in capture_extra}
     sensor_all = _sensor_values(ck, preset, sensor_all, cfas, base)

@@ -52,7 +52,8 @@ def aggregate(df, keys: list[str], column: str = "value", prefix: str = ""):
     rows = []
     for k, g in df.groupby(keys, sort=False, dropna=False):
         mean, lo, hi, sd, n = t_interval(g[column])
-        rows.append((*((k,) if len(keys) == 1 else k), mean, lo, hi, sd, n))
+        # pandas gives a 1-tuple for a one-key list in some versions and the bare key in others
+        rows.append((*(k if isinstance(k, tuple) else (k,)), mean, lo, hi, sd, n))
     cols = [f"{prefix}{column}", f"{prefix}ci_low", f"{prefix}ci_high", f"{prefix}std", f"{prefix}n"]
     return pd.DataFrame(rows, columns=[*keys, *cols])
 

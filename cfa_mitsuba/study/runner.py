@@ -13,6 +13,7 @@ luminance, CFA, demosaic), write the tables.  The report is the next stage
       scores.csv      the scored rows with normalised scores and ranks
       timing.json     where the time went
       config.json     the validated config, as run
+      sensor_curves.csv  each compared CFA's QE curves as captured (sensor_curves.py)
       details/        per evaluation: curves and tables (JSON), reduced
                       S-CIELAB maps (.npy), thumbnails (.png)
       figures/, report.html   (cfa_mitsuba.report, built after the runner)
@@ -42,6 +43,7 @@ from ..io import atomic_output, check_writable_dir
 from ..metrics import scored_metrics
 from .config import StudyConfig
 from .cfa_facts import write_cfa_facts
+from .sensor_curves import write_sensor_curves
 from .tables import mean_table, order_rows, write_tables
 from .snr import write_snr_tables
 from .tasks import EvaluationTask, evaluate_task, render_task
@@ -228,6 +230,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         with atomic_output(out / "config.json") as tmp:
             tmp.write_text(json.dumps({**config.to_dict(), "base_condition": config.base_condition().to_dict()},
                                       indent=1, default=str))
+        write_sensor_curves(config, out)  # the compared sensors' QE curves, for the report
         log(f"study {config.name!r}: {len(config.scenes)} scene(s), {len(config.cfas)} CFA(s), "
             f"{len(config.demosaics)} demosaic(s); {len(tasks)} evaluation task(s)"
             + (f", {reused} already done" if reused else "") + f"; running on {executor.description}")

@@ -1,0 +1,99 @@
+"""Where a study's evaluation time goes, by function (cProfile).
+
+    python benchmarks/profile_study.py [--paper | --config FILE] [--cfas bayer,rgbw1] [--top 25]
+
+Plans the study (configs/paper.toml with --paper), renders what it needs
+into the render cache first (not profiled), then runs the evaluation tasks
+of the chosen CFAs (default: every CFA) one after another in this process
+under cProfile, and prints two tables: the time per camera stage (the
+chain's own timers) and the functions with the most time of their own
+(``tottime``) and, below, the most cumulative time.  Per-process work that
+the study shares between tasks (the optical image, the ideal sensor) is
+counted once per (scene, condition), as in a worker.
+
+Times are seconds of this process on a shared machine: read them as
+proportions.
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import io
+import pstats
+import sys
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+
+def _tasks(config_path: Path, cfas: list[str] | None):
+    from cfa_mitsuba.study.config import load_config
+    from cfa_mitsuba.study.runner import plan_study
+
+    config = load_config(config_path)
+    sources, tasks = plan_study(config, None)
+    if cfas:
+        tasks = [t for t in tasks if (t.cfa_label or t.cfa) in cfas]
+    return config, sources, tasks
+
+
+def _table(rows, header) -> str:
+    widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
+    line = lambda r: "  ".join(str(c).rjust(w) if i else str(c).ljust(w) for i, (c, w) in enumerate(zip(r, widths)))
+    return "\n".join([line(header), line(["-" * w for w in widths]), *map(line, rows)])
+
+
+def _functions(stats: pstats.Stats, key: str, top: int, total: float) -> list:
+    stats.sort_stats(key)
+    rows = []
+    for func in stats.fcn_list[:top]:
+        cc, nc, tt, ct, _ = stats.stats[func]
+        file, line, name = func
+        where = f"{Path(file).name}:{line}" if file != "~" else "(builtin)"
+        rows.append([f"{name} [{where}]", nc, f"{tt:.2f}", f"{ct:.2f}", f"{100 * (tt if key == 'tottime' else ct) / total:.1f}"])
+    return rows
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    src = ap.add_mutually_exclusive_group()
+    src.add_argument("--paper", action="store_true", help="configs/paper.toml (the default is configs/quick.toml)")
+    src.add_argument("--config", help="a study config")
+    ap.add_argument("--cfas", help="comma-separated CFA labels to profile (default: all)")
+    ap.add_argument("--top", type=int, default=25)
+    args = ap.parse_args(argv)
+    config_path = Path(args.config) if args.config else REPO / "configs" / ("paper.toml" if args.paper else "quick.toml")
+    from cfa_mitsuba.study.tasks import evaluate_task, render_task
+
+    config, sources, tasks = _tasks(config_path, args.cfas.split(",") if args.cfas else None)
+    t0 = time.perf_counter()
+    for s in sources:
+        render_task(s)
+    print(f"{config_path.name}: {len(tasks)} evaluation task(s), {config.seeds} realisation(s) each; "
+          f"renders ready in {time.perf_counter() - t0:.1f} s (not profiled)")
+    stages: dict = {}
+    prof = cProfile.Profile()
+    t0 = time.perf_counter()
+    prof.enable()
+    for t in tasks:
+        for k, v in evaluate_task(t)["timing"].items():
+            stages[k] = stages.get(k, 0.0) + v
+    prof.disable()
+    wall = time.perf_counter() - t0
+    print(f"\nevaluation wall time {wall:.1f} s in one process\n")
+    print(_table([[k, f"{v:.1f}", f"{100 * v / wall:.1f}"] for k, v in sorted(stages.items(), key=lambda kv: -kv[1])],
+                 ["stage", "s", "% of wall"]))
+    stats = pstats.Stats(prof, stream=io.StringIO())
+    header = ["function [file:line]", "calls", "own s", "cum s", "%"]
+    print(f"\nmost time of their own (% of wall in the function itself)\n")
+    print(_table(_functions(stats, "tottime", args.top, wall), header))
+    print(f"\nmost cumulative time (% of wall under the function)\n")
+    print(_table(_functions(stats, "cumulative", args.top, wall), header))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
