@@ -92,6 +92,27 @@ def test_capture_ideal_and_toml(exr, tmp_path, capsys):
     assert cfa_from_raw(v).tile_text() == "G R / B V"
 
 
+def test_exposure_program_options(exr, tmp_path, capsys):
+    """--exposure auto runs the program by default (issue 22); the policy and its limits are options."""
+    def run(*extra):
+        out = tmp_path / "p.npz"
+        rc, stdout, err = cli(capsys, "capture", exr["chart"], "--cfa", "rgbw1", "--out", out, "--noise", "off", *extra)
+        assert rc == 0, err
+        return load_raw_npz(out), stdout
+
+    dim, stdout = run("--luminance", "1", "--max-exposure-s", "0.01", "--max-analog-gain", "4")
+    st = dim.settings
+    assert st["exposure_policy"] == "program" and dim.exposure_s == pytest.approx(0.01)
+    assert st["analog_gain"] == pytest.approx(4.0) and st["digital_gain"] > 1.0 and "analogue gain 4" in stdout
+    same, _ = run("--luminance", "1", "--exposure-policy", "bayer", "--max-exposure-s", "0.01")
+    assert same.settings["exposure_policy"] == "bayer"
+    ref, _ = run("--luminance", "1", "--reference-luminance", "100")
+    assert ref.settings["exposure_policy"] == "reference" and ref.settings["analog_gain"] == 1.0
+    rc, _, err = cli(capsys, "capture", exr["chart"], "--cfa", "bayer", "--out", tmp_path / "q.npz",
+                     "--max-analog-gain", "0.5")
+    assert rc == 2 and len(err.strip().splitlines()) == 1 and "max_analog_gain" in err
+
+
 def test_luminance_exposure_and_noise_options(exr, tmp_path, capsys):
     def run(*extra):
         out = tmp_path / "x.npz"

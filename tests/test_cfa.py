@@ -181,18 +181,32 @@ def test_registry_protects_names():
 def test_example_tomls_in_configs():
     sony = load_cfa_toml(REPO / "configs/cfas/rgbw_sony4x4.toml")
     assert sony.densities == {"R": 0.125, "G": 0.25, "B": 0.125, "W": 0.5}
-    np.testing.assert_allclose(sony.curves["W"][1], builtin_filter_curve("W")[1])
+    # no [spectra]: the RGBW CFAs' own set (issue 22), not the Nikon construction
+    assert sony.spectra == "isetcam-rgbw"
+    np.testing.assert_allclose(sony.curves["W"][1], builtin_filter_curve("W", "isetcam-rgbw")[1])
+    np.testing.assert_allclose(sony.curves["R"][1], get_cfa("rgbw1").curves["R"][1])
     v = get_cfa(str(REPO / "configs/cfas/rgbv_photopic.toml"))
     assert v.channels == ("R", "G", "B", "V") and v.name == "rgbv-photopic"
+    assert v.spectra == "isetcam-rgb"  # its R, G, B are Bayer's: the comparison is of layouts, not dyes
+    np.testing.assert_allclose(v.curves["G"][1], get_cfa("bayer").curves["G"][1])
     import colour
 
     lef = colour.colorimetry.SDS_LEFS_PHOTOPIC["CIE 1924 Photopic Standard Observer"]
     np.testing.assert_allclose(v.curves["V"][1], lef[v.curves["V"][0]] * 0.5, rtol=1e-5)
 
 
+def test_toml_without_spectra_takes_the_set_of_the_builtin_cfas_of_its_letters(tmp_path):
+    for tile, expected in (("G R / B G", "isetcam-rgb"), ("C M / Y C", "isetcam-cmy"), ("W R / B G", "isetcam-rgbw")):
+        cfa = load_cfa_toml(_toml(tmp_path, f'tile = "{tile}"\n'))
+        assert cfa.spectra == expected
+    with pytest.raises(CfaMitsubaError, match="unknown filters 'Q', 'Z'") as info:
+        load_cfa_toml(_toml(tmp_path, 'tile = "G R / Q Z"\n'))
+    assert "\n" not in str(info.value)
+
+
 def test_toml_spectrum_sources(tmp_path):
     (tmp_path / "e.csv").write_text("# a comment\nnm;qe\n390;0.1\n550;0.3\n710;0.1\n")
-    p = _toml(tmp_path, 'name = "mix"\ntile = "G R / B E / C2 Y"\n'
+    p = _toml(tmp_path, 'name = "mix"\ntile = "G R / B E / C2 Y"\nspectra_set = "nikon-d5100"\n'
                         '[spectra]\nE = "e.csv"\nB = { source = "colour:Nikon 5100 (NPL)/blue", scale = 0.4 }\n'
                         'R = { wavelengths = [390, 710], values = [0.1, 0.2] }')
     cfa = load_cfa_toml(p)

@@ -69,7 +69,7 @@ def test_uniform_field_electrons_match_the_hand_calculation():
 def test_auto_exposure_on_a_uniform_field_is_exact():
     oi = compute_optics(uniform_scene(40.0), OpticsParams(relative_illumination=False))
     for name in ("bayer", "rgbw1", "cmy2"):
-        r = capture(oi, name, noise="off")  # reference 100 cd/m^2: this 40 cd/m^2 field gets 40 % of it
+        r = capture(oi, name, noise="off", exposure_policy="reference")  # at 100 cd/m^2: this 40 cd/m^2 field gets 40 %
         e = r.raw / r.dn_per_electron
         assert e.max() == pytest.approx(0.4 * 0.95 * SensorParams().well_capacity_e, rel=1e-9), name
         r = capture(oi, name, noise="off", reference_luminance_cd_m2=None)  # plain ISETCam AE
@@ -117,11 +117,11 @@ def test_auto_exposure_fills_the_brightest_pixel_to_95_percent_at_the_reference(
         # less the 0.3 % the Airy halo carries out to the dark half 12+ px away
         assert e[8:24, 4:12].max() == pytest.approx(0.95 * well, rel=5e-3), name
         # the exposure kept from the reference: 3 cd/m^2 is 100/3 times dimmer, same exposure
-        dim = capture(oi, name, luminance_cd_m2=3.0, noise="off")
+        dim = capture(oi, name, luminance_cd_m2=3.0, noise="off", exposure_policy="reference")
         assert dim.exposure_s == r.exposure_s
         np.testing.assert_allclose(dim.raw, r.raw * 0.03, rtol=1e-12)
     # brighter than the reference: the bright pixels clip at the well
-    bright = capture(oi, "bayer", luminance_cd_m2=200.0, noise="off")
+    bright = capture(oi, "bayer", luminance_cd_m2=200.0, noise="off", exposure_policy="reference")
     assert (bright.raw / bright.dn_per_electron).max() == pytest.approx(well)
 
 

@@ -229,7 +229,7 @@ def test_toml_spectra_set(tmp_path):
     assert cfa.spectra == "isetcam-rgbw" and _same(cfa.curves["W"], get_spectra_set("isetcam-rgbw").curve("W"))
     assert _same(get_cfa(str(p), spectra="nikon-d5100").curves["W"], get_spectra_set("nikon-d5100").curve("W"))
     p.write_text('tile = "G R / B W"\n')
-    assert cm.sensor.load_cfa_toml(p).spectra == "nikon-d5100"  # user files: as before sets existed
+    assert cm.sensor.load_cfa_toml(p).spectra == "isetcam-rgbw"  # user files: the set of the built-in RGBW CFAs
 
 
 def test_list_spectra_names_every_set_with_its_source():

@@ -37,16 +37,24 @@ def test_paper_config_is_the_papers_study():
     cfg = load_config(REPO / "configs" / "paper.toml")
     assert len(cfg.cfas) == 12 and set(cfg.demosaics) == {"bilinear", "laplacian", "adaptive-laplacian", "pocs"}
     assert {s.name for s in cfg.scenes} == {"macbeth", "slanted-edge", "chirp", "gray-bar", "puppy"}
-    (sweep,) = cfg.sweeps
+    sweep, snr = cfg.sweeps
     assert sweep.scenes == ("puppy",) and set(sweep.metrics) == {"scielab", "ssim"}
-    assert sweep.values["luminance"] == (3, 6, 12, 50, 100, 200, 400)
+    assert sweep.values["luminance"] == (0.3, 1, 3, 6, 12, 50, 100, 200, 400)  # the paper's 3..400, and lower (issue 22)
+    assert snr.scenes == ("gray-bar",) and snr.metrics == ("ysnr",) and snr.values["luminance"] == sweep.values["luminance"]
+    assert cfg.chain_settings().exposure_policy == "program"
 
 
 def test_exposure_policies_set_where_auto_exposure_is_chosen(tmp_path):
     each = load_config(write(tmp_path, GOOD + '[sensor]\nexposure_policy = "each"\n')).chain_settings()
     assert each.reference_luminance_cd_m2 is None  # ISETCam's auto exposure at every luminance
-    ref = load_config(write(tmp_path, GOOD)).chain_settings()
-    assert ref.reference_luminance_cd_m2 == 100.0
+    program = load_config(write(tmp_path, GOOD)).chain_settings()
+    assert (program.exposure_policy, program.max_exposure_s, program.max_analog_gain) == ("program", 1 / 30, 16.0)
+    ref = load_config(write(tmp_path, GOOD + '[sensor]\nexposure_policy = "reference"\n')).chain_settings()
+    assert ref.reference_luminance_cd_m2 == 100.0 and ref.exposure_policy == "reference"
+    bayer = load_config(write(tmp_path, GOOD + '[sensor]\nexposure_policy = "bayer"\nmax_analog_gain = 8\n'))
+    assert bayer.chain_settings().exposure_policy == "bayer" and bayer.chain_settings().max_analog_gain == 8.0
+    isetcam = load_config(REPO / "configs" / "paper-isetcam.toml").chain_settings()
+    assert isetcam.exposure_policy == "each"  # ISETCam's own rule, chosen explicitly
     fixed = load_config(write(tmp_path, GOOD + '[sensor]\nexposure_policy = "fixed"\nexposure = 0.02\n'))
     assert fixed.base_condition().exposure == 0.02
 
@@ -81,6 +89,10 @@ BAD = [
     ("[[sweep]]\nscene = \"chirp\"\nluminances = [10]\n", "sweep[0].scene", "not one of"),
     ("[output]\nfigures = [\"jpg\"]\n", "output.figures[0]", "png or svg"),
     ("[sensor]\nexposure_policy = \"sometimes\"\n", "sensor.exposure_policy", "one of"),
+    ("[sensor]\nreference_luminance_cd_m2 = 50\n", "sensor.reference_luminance_cd_m2", "reference"),
+    ("[sensor]\nmax_analog_gain = 0.5\n", "sensor.max_analog_gain", "at least 1"),
+    ("[sensor]\nmax_exposure_s = -1\n", "sensor.max_exposure_s", "positive"),
+    ("[sensor]\nexposure_policy = \"each\"\nmax_exposure_s = 0.1\n", "sensor.max_exposure_s", "program"),
     ("[sensor]\nexposure_policy = \"fixed\"\n", "sensor.exposure", "needs an exposure time"),
     ("[sensor]\nexposure = 0.01\n", "sensor.exposure_policy", "fixed"),
     ("[sensor]\nexposure_policy = \"each\"\nreference_luminance_cd_m2 = 50\n",

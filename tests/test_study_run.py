@@ -131,6 +131,41 @@ def test_moire_bounds_are_censored(quick):
     assert means.loc[means["metric"] == "moire", "censored"].any()
 
 
+def test_quick_study_gets_no_worse_with_more_light(quick):
+    """Issue 22, acceptance 4: below 100 cd/m^2 no (CFA, demosaic, metric)
+    gets worse from one luminance to the next higher by more than its
+    interval (the intervals do not overlap); and the study records what
+    decided each capture and its SNR against light."""
+    import cfa_mitsuba as cm
+
+    out, _, _ = quick
+    m = pd.read_csv(out / "metrics.csv")
+    worse, pairs = [], 0
+    for (scene, cfa, dem, metric), g in m.groupby(["scene", "cfa", "demosaic", "metric"]):
+        rows = g.sort_values("luminance").to_dict("records")
+        higher = cm.metrics.METRICS[metric].higher_is_better
+        for a, b in zip(rows, rows[1:]):
+            if b["luminance"] > 100:
+                continue
+            pairs += 1
+            if (b["ci_high"] < a["ci_low"]) if higher else (b["ci_low"] > a["ci_high"]):
+                worse.append(f"{scene} {cfa} {dem} {metric}: {a['value']:.4g} at {a['luminance']:g} -> "
+                             f"{b['value']:.4g} at {b['luminance']:g} cd/m^2")
+    assert pairs >= 100 and not worse, worse
+    for col in ("exposure_s", "analog_gain", "digital_gain", "clipped_fraction"):
+        assert m[col].notna().all() and (m[col] >= 0).all(), col
+    snr, snr10 = pd.read_csv(out / "snr.csv"), pd.read_csv(out / "snr10.csv")
+    assert list(snr.columns[:7]) == ["cfa", "demosaic", "luminance", "ysnr", "ysnr_low", "ysnr_high", "chroma_snr"]
+    assert list(snr10.columns[:5]) == ["cfa", "demosaic", "snr10_cd_m2", "ci_low", "ci_high"]
+    assert len(snr) == 4 * 4 * 4 and (snr["ysnr_low"] <= snr["ysnr"]).all() and (snr["ysnr"] <= snr["ysnr_high"]).all()
+    # every value or a note saying why not; the interval brackets the value
+    for r in snr10.itertuples():
+        assert (r.ci_low <= r.snr10_cd_m2 <= r.ci_high) if np.isfinite(r.snr10_cd_m2) else isinstance(r.note, str)
+    facts = json.loads((out / "cfas.json").read_text())
+    assert {f["spectra"] for f in facts.values()} == {"isetcam-rgb", "isetcam-cmy", "isetcam-rgbw"}
+    assert "SNR10" in (out / "report.html").read_text()
+
+
 def _tasks_done(out: Path) -> int:
     return len(list((out / ".work").glob("*.json"))) if (out / ".work").is_dir() else 0
 

@@ -27,10 +27,14 @@ is given; the sensor options below override single values.  --sensor
 FILE.toml reads a sensor file (QE curves in CSV plus datasheet or EMVA 1288
 numbers; docs/sensor.md, "Bring your own sensor") the same way.
 
-Without --luminance the EXR's radiance is kept.  --exposure auto fills the
-brightest pixel's well to 95 % for the scene at the reference luminance
-(100 cd/m^2), and keeps that exposure at any --luminance, so dim captures
-are noisier.  The lens (field of view, distance, f-number) and the
+Without --luminance the EXR's radiance is kept.  --exposure auto runs the
+exposure program (--exposure-policy program, the default): the brightest
+pixel's well to 95 % at the captured luminance, the time capped at
+--max-exposure-s (1/30 s), then analogue gain up to --max-analog-gain (16),
+then digital gain.  --exposure-policy reference (or --reference-luminance)
+chooses ISETCam's exposure at the reference luminance (100 cd/m^2) and keeps
+it at any --luminance; each: ISETCam's at the captured luminance; bayer:
+the program's time and gains for Bayer (docs/sensor.md s. 3.2).  The lens (field of view, distance, f-number) and the
 oversampling come from the options, else from the sidecar, else from the
 documented defaults (docs/sensor.md).  --oversample must divide the EXR's
 width and height (a remainder is refused, not cropped).
@@ -71,8 +75,15 @@ def add_arguments(parser) -> None:
                         help="scale the scene to this mean luminance (default: keep the EXR's radiance)")
     parser.add_argument("--exposure", type=_exposure, default="auto", metavar="S|auto",
                         help="exposure in seconds, or auto (default)")
-    parser.add_argument("--reference-luminance", type=positive_float, default=100.0, metavar="CD_M2",
-                        help="mean luminance at which auto exposure is chosen (default 100)")
+    parser.add_argument("--reference-luminance", type=positive_float, default=None, metavar="CD_M2",
+                        help="for --exposure-policy reference: the mean luminance at which auto exposure is chosen "
+                             "(default 100; giving it selects that policy)")
+    parser.add_argument("--exposure-policy", choices=("program", "bayer", "reference", "each"), default=None,
+                        help="how --exposure auto chooses the time and gains (default program)")
+    parser.add_argument("--max-exposure-s", type=positive_float, default=1.0 / 30.0, metavar="S",
+                        help="the program's longest exposure (default 1/30)")
+    parser.add_argument("--max-analog-gain", type=positive_float, default=16.0, metavar="G",
+                        help="the program's highest analogue gain, >= 1 (default 16)")
     parser.add_argument("--noise", choices=("off", "shot", "all"), default="all",
                         help="off: none; shot: photon noise only, no ADC; all (default): the full sensor")
     parser.add_argument("--oversample", type=positive_int, metavar="K",
@@ -209,8 +220,11 @@ def run(args) -> int:
         if ideal:
             raw = capture_ideal(oi, luminance_cd_m2=args.luminance, exposure_s=args.exposure, sensor=sensor)
         else:
+            policy = args.exposure_policy or ("reference" if args.reference_luminance is not None else "program")
+            ref = {"reference_luminance_cd_m2": args.reference_luminance} if args.reference_luminance else {}
             raw = capture(oi, cfa, luminance_cd_m2=args.luminance, exposure_s=args.exposure, noise=args.noise,
-                          seed=args.seed, sensor=sensor, reference_luminance_cd_m2=args.reference_luminance)
+                          seed=args.seed, sensor=sensor, exposure_policy=policy, max_exposure_s=args.max_exposure_s,
+                          max_analog_gain=args.max_analog_gain, **ref)
         save_raw_npz(out, raw)
     for w in caught:
         sys.stderr.write(f"{args._prog}: warning: {' '.join(str(w.message).split())}\n")
@@ -234,8 +248,9 @@ def run(args) -> int:
         lines.append(f"  luminance {meta['luminance_cd_m2']:.4g} cd/m^2; XYZ absolute (Y cd/m^2): "
                      f"mean Y {y.mean():.4g}, max Y {y.max():.4g}")
     else:
-        mode = (f"auto at {st['reference_luminance_cd_m2']:g} cd/m^2" if st["exposure_mode"] == "auto"
-                else "fixed")
+        mode = "fixed" if st["exposure_mode"] != "auto" else (
+            f"auto at {st['reference_luminance_cd_m2']:g} cd/m^2" if st["exposure_policy"] == "reference" else
+            f"{st['exposure_policy']}: analogue gain {st['analog_gain']:.3g}, digital gain {st['digital_gain']:.3g}")
         clipped = 100.0 * meta["saturated_fraction"]
         lines.append(f"  luminance {meta['luminance_cd_m2']:.4g} cd/m^2, exposure {raw.exposure_s * 1e3:.4g} ms "
                      f"({mode}), noise {args.noise}, seed {raw.seed}")

@@ -95,13 +95,23 @@ def _saturation_electrons(raw: RawImage) -> float | None:
 
 
 def _fit_noise(raw: RawImage, epr: np.ndarray, white: np.ndarray) -> np.ndarray | None:
-    """The capture's own noise at an 18 % grey per balanced channel (the
-    colour fit's Tikhonov weights); None for a noise-free capture."""
+    """The colour fit's Tikhonov weights: each balanced channel's relative
+    noise at an 18 % grey when the scene white fills the most sensitive
+    channel's well (the sensor's own design point: its full well and read
+    noise), the same for every exposure, gain and luminance of one sensor,
+    so that the matrix, and with it the noise gain, cannot change with the
+    light; None for a noise-free capture.  A capture that does not record
+    its full well is weighted by its own white (the rule before issue 22)."""
     mode = (raw.settings or {}).get("noise") if isinstance(raw.settings, dict) else None
     if mode == "off":
         return None
-    read = float(_sensor_settings(raw).get("read_noise_e") or 0.0) if mode == "all" else 0.0
-    return channel_noise(epr @ white, read_noise_e=read)
+    sensor = _sensor_settings(raw)
+    read = float(sensor.get("read_noise_e") or 0.0) if mode == "all" else 0.0
+    white_e = epr @ white
+    well = sensor.get("well_capacity_e")
+    if isinstance(well, (int, float)) and well > 0 and np.all(white_e > 0):
+        white_e = float(well) * white_e / float(white_e.max())
+    return channel_noise(white_e, read_noise_e=read)
 
 
 def _check_white_signal(raw: RawImage, epr: np.ndarray, white: np.ndarray) -> None:
@@ -134,12 +144,14 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         to ``white_radiance``) or 'gray-world'.
     white_preserving : constrain the colour fit so the scene white maps
         exactly to its XYZ (default True).
-    regularise : fit the colour matrix for the capture's own noise (default
+    regularise : fit the colour matrix for the sensor's noise (default
         True): Tikhonov weights sigma_c = the relative noise of each balanced
         channel at an 18 % grey, shot noise (and read noise with noise
-        'all') from the electrons the channel collects from the scene white
-        (:func:`~cfa_mitsuba.isp.colour_matrix.channel_noise`); a noise-free capture
-        gets the exact fit.  False: always the exact fit.
+        'all'), when the scene white fills the most sensitive channel's well
+        (:func:`~cfa_mitsuba.isp.colour_matrix.channel_noise`): one matrix per
+        sensor and CFA, whatever the light, exposure or gain, so that the
+        processing cannot make a capture worse with more light (docs/isp.md);
+        a noise-free capture gets the exact fit.  False: always the exact fit.
     clip_highlights : clip every balanced channel at the lowest balanced
         level at which any channel saturates (default True; dcraw's
         highlight mode 0), so a pixel whose wells are full reads the same in

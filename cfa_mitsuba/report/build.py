@@ -26,7 +26,7 @@ def _figure_functions(res: Results, thumbnails: bool):
     from . import figures_sensor as fsen
     from . import figures_sweep as fsw
     from . import figures_scores as fs
-    from . import tiles
+    from . import low_light, tiles
 
     yield fs.radar_per_demosaic
     yield fs.radar_per_cfa
@@ -39,6 +39,7 @@ def _figure_functions(res: Results, thumbnails: bool):
     yield fd.moire_curves
     yield fd.gray_bar_profiles
     yield fs.luminance_sweep
+    yield low_light.snr_figure
     yield fsen.sensor_curves
     for axis in res.swept_axes:
         def by_axis(r, axis=axis):
@@ -252,6 +253,7 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
                 f.figure.clear()
         log(f"  encoding: {time.perf_counter() - t:.2f} s")
     from . import page, tables
+    from .low_light import low_light_tables
 
     tabs = {
         "table1": tables.table1(res),
@@ -261,6 +263,7 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
         "sweep": tables.sweep_table(res),
         "ranges": tables.ranges_table(res),
         "policies": tables.policy_table(res),
+        "low_light": low_light_tables(res),
     }
     text = page.render_page(res, figures=figures, absents=absents, embeds=embeds, tables=tabs, facts=_facts(res))
     # figures/: this build's files only (a rebuild must not leave figures of CFAs no longer in the

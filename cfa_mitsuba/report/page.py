@@ -351,6 +351,9 @@ def _tables_section(res: Results, tables: dict) -> str:
     if tables.get("sweep"):
         t.append('<details class="more"><summary>The luminance sweep\'s values</summary>')
         t.append(f'<div class="tablewrap">{tables["sweep"]}</div></details>')
+    if tables.get("low_light"):  # issue 22: SNR10, exposure and gains, electrons, spectra sets
+        t.append('<details class="more" open><summary>Low light: SNR10, exposure, gain, electrons, spectra sets'
+                 f'</summary><div class="tablewrap">{tables["low_light"]}</div></details>')
     t.append("</section>")
     return "".join(t)
 

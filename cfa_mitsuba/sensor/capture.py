@@ -24,7 +24,7 @@ same OTF and pixel-area integration as the camera.
 
 from __future__ import annotations
 
-__all__ = ["capture", "capture_ideal", "capture_many", "auto_exposure", "optical_image_for",
+__all__ = ["capture", "capture_ideal", "capture_many", "auto_exposure", "metered_exposure", "optical_image_for",
            "DEFAULT_REFERENCE_LUMINANCE_CD_M2", "AUTO_EXPOSURE_LEVEL", "IDEAL_NOMINAL_EXPOSURE_S"]
 
 import copy
@@ -39,6 +39,8 @@ from ..optics import OpticsParams, compute_optics, integrate_pixels
 from ..values import OpticalImage, RawImage, SpectralImage
 from .catalogue import get_cfa
 from .cfa import CFA
+from .exposure_program import (DEFAULT_MAX_ANALOG_GAIN, DEFAULT_MAX_EXPOSURE_S, EXPOSURE_POLICIES,
+                               PEDESTAL_SIGMAS, ExposureChoice, run_program)
 from .noise import collect_electrons, read_out, temporal_rng
 from .params import NOISE_MODES, SensorParams
 from .physics import apply_crosstalk, channel_map, crosstalk_fractions, with_ir_cut
@@ -162,7 +164,8 @@ def auto_exposure(oi: OpticalImage, spectra_cb: np.ndarray, sensor: SensorParams
     return AUTO_EXPOSURE_LEVEL * sensor.well_capacity_e / peak
 
 
-def _resolve_exposure(exposure_s, auto) -> tuple[float, str]:
+def _resolve_exposure(exposure_s, auto) -> tuple[ExposureChoice, str]:
+    """(the choice, 'auto' or 'fixed'): ``auto()`` gives the choice for 'auto'."""
     if isinstance(exposure_s, str):
         if exposure_s.strip().lower() != "auto":
             raise CfaMitsubaError(f"exposure must be a time in seconds or 'auto', got {exposure_s!r}")
@@ -170,7 +173,64 @@ def _resolve_exposure(exposure_s, auto) -> tuple[float, str]:
     ok = isinstance(exposure_s, numbers.Real) and not isinstance(exposure_s, bool)
     ok = ok and math.isfinite(exposure_s) and exposure_s > 0
     require(ok, f"exposure must be a positive number of seconds or 'auto', got {exposure_s!r}")
-    return float(exposure_s), "fixed"
+    return ExposureChoice(float(exposure_s)), "fixed"
+
+
+#: ``capture``'s reference luminance when the caller gives none: the policy
+#: is then the program (a caller that names a reference luminance, or None,
+#: keeps the old 'reference' / 'each' rule unless it names a policy).
+_UNSET = object()
+
+
+def _policy_of(exposure_policy, reference) -> str:
+    if exposure_policy is None:
+        return "program" if reference is _UNSET else ("each" if reference is None else "reference")
+    require(exposure_policy in EXPOSURE_POLICIES,
+            f"unknown exposure policy {exposure_policy!r} (choose {', '.join(EXPOSURE_POLICIES)})")
+    return exposure_policy
+
+
+def metered_exposure(oi: OpticalImage, pix: np.ndarray, spectra_cb: np.ndarray, sensor: SensorParams,
+                     luminance_scale: float) -> float:
+    """The time (s) that brings the brightest pixel's most sensitive channel
+    to 95 % of the well at base gain, at the captured luminance: the shorter
+    of ISETCam's rule (:func:`auto_exposure`, the brightest scene pixel as a
+    uniform field on the axis) and the brightest pixel of the optical image
+    itself (``pix`` (H, W, B) W/(m^2 nm), after the OTF and the off-axis
+    falloff), any channel at any pixel, so that no well fills."""
+    wl = np.asarray(oi.wavelengths, dtype=np.float64)
+    t_rule = auto_exposure(oi, spectra_cb, sensor, None, luminance_scale)
+    w = (np.asarray(spectra_cb) * _electrons_per_irradiance(wl, sensor)[None, :]).T * luminance_scale  # (B, C)
+    peak = float((pix.reshape(-1, pix.shape[-1]) @ w).max())
+    if not (math.isfinite(peak) and peak > 0):
+        return t_rule
+    return min(t_rule, AUTO_EXPOSURE_LEVEL * sensor.well_capacity_e / peak)
+
+
+def _auto_choice(oi, pix, qe, sensor, s, policy, reference, limits) -> ExposureChoice:
+    """The exposure ``policy`` chooses (module doc of :mod:`.exposure_program`)."""
+    if policy in ("reference", "each"):
+        ref = None if policy == "each" else (DEFAULT_REFERENCE_LUMINANCE_CD_M2 if reference is _UNSET else reference)
+        return ExposureChoice(auto_exposure(oi, qe, sensor, None if policy == "each" else ref, s))
+    require(float(oi.meta["scene_luminance_cd_m2"]) > 0,
+            "auto exposure needs light: the scene is black (mean luminance 0; give a fixed exposure)")
+    if policy == "bayer":  # the same camera with Bayer's filters: its program, for every CFA
+        qe = with_ir_cut(get_cfa("bayer"), sensor.ir_cut).sensitivities(np.asarray(oi.wavelengths, dtype=np.float64))
+    return run_program(metered_exposure(oi, pix, qe, sensor, s), *limits)
+
+
+def pedestal_for_gain(sensor: SensorParams) -> SensorParams:
+    """The sensor with its black level raised, where needed, to
+    :data:`~.exposure_program.PEDESTAL_SIGMAS` dark-noise sigmas (read noise
+    and DSNU, in DN at its analogue gain) above code 0, as a designer sets
+    the pedestal for the highest gain in use: otherwise the ADC's clip at 0
+    cuts the dark tail, biasing the mean up and the noise down (at gain 16
+    the default 64 DN is one read-noise sigma).  Solves b = k s g (max - b) /
+    well for b (DN per electron = g (max - b) / well)."""
+    sigma_e = math.hypot(sensor.read_noise_e, sensor.dsnu_e)
+    k = PEDESTAL_SIGMAS * sigma_e * sensor.analog_gain
+    need = math.ceil(k * sensor.max_dn / (sensor.well_capacity_e + k))
+    return sensor.with_(black_level_dn=float(need)) if need > sensor.black_level_dn else sensor
 
 
 def _scaled_meta(oi: OpticalImage, s: float) -> dict:
@@ -205,8 +265,9 @@ def _check_seed(seed) -> int:
 
 def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposure_s="auto",
             noise: str = "all", seed: int = 0, sensor: SensorParams | None = None,
-            optics: OpticsParams | None = None, oversample=None,
-            reference_luminance_cd_m2: float | None = DEFAULT_REFERENCE_LUMINANCE_CD_M2) -> RawImage:
+            optics: OpticsParams | None = None, oversample=None, reference_luminance_cd_m2=_UNSET,
+            exposure_policy: str | None = None, max_exposure_s: float = DEFAULT_MAX_EXPOSURE_S,
+            max_analog_gain: float = DEFAULT_MAX_ANALOG_GAIN) -> RawImage:
     """Capture a raw mosaic.
 
     Parameters
@@ -218,15 +279,20 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
         (returns :func:`capture_ideal`).
     luminance_cd_m2 : scale the scene to this mean luminance (cd/m^2);
         None keeps its radiance.
-    exposure_s : seconds, or ``"auto"`` (:func:`auto_exposure` at the
-        reference luminance).
+    exposure_s : seconds, or ``"auto"``: the time and gains the exposure
+        policy chooses (:mod:`.exposure_program`).
     noise : ``off``, ``shot`` or ``all`` (:mod:`cfa_mitsuba.sensor.noise`).
     seed : temporal noise seed (non-negative int); the fixed pattern comes
         from ``sensor.sensor_seed``.
     sensor : :class:`SensorParams` (defaults documented there).
     optics, oversample : for a SpectralImage, as in ``compute_optics``.
-    reference_luminance_cd_m2 : mean luminance at which auto exposure is
-        chosen (default 100); None: at the captured luminance.
+    reference_luminance_cd_m2 : for the 'reference' policy, the mean
+        luminance at which auto exposure is chosen (default 100); None: at
+        the captured luminance ('each').  Given without a policy, it selects
+        'reference' (or 'each' for None), the rule before the program.
+    exposure_policy : :data:`~.exposure_program.EXPOSURE_POLICIES`; default
+        'program' (unless a reference luminance is given, above).
+    max_exposure_s, max_analog_gain : the program's limits (1/30 s, 16).
 
     Returns
     -------
@@ -246,10 +312,14 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     s = _luminance_scale(oi, luminance_cd_m2)
     wl = np.asarray(oi.wavelengths, dtype=np.float64)
     qe = cfa.sensitivities(wl)  # (C, B)
-    exposure, mode = _resolve_exposure(
-        exposure_s, lambda: auto_exposure(oi, qe, sensor, reference_luminance_cd_m2, s))
-
+    policy = _policy_of(exposure_policy, reference_luminance_cd_m2)
+    limits = (max_exposure_s, max_analog_gain)
     pix = _pixel_irradiance(oi, sensor.fill_factor)
+    choice, mode = _resolve_exposure(
+        exposure_s, lambda: _auto_choice(oi, pix, qe, sensor, s, policy, reference_luminance_cd_m2, limits))
+    exposure = choice.exposure_s
+    if choice.analog_gain != 1.0:  # the program's gain on top of the sensor's own, its pedestal raised to match
+        sensor = pedestal_for_gain(sensor.with_(analog_gain=sensor.analog_gain * choice.analog_gain))
     h, w, nb = pix.shape
     th, tw = cfa.tile_shape
     require(h >= th and w >= tw, f"the sensor ({w} x {h} pixels) is smaller than the CFA tile ({tw} x {th})")
@@ -286,6 +356,9 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     # wells that were full before read-out (read noise then spreads their codes)
     full = sensor.well_capacity_e if well is None else well
     meta["saturated_fraction"] = float(np.count_nonzero(electrons >= full)) / electrons.size
+    top = raw >= sensor.max_dn if noise == "all" else np.zeros(raw.shape, dtype=bool)  # the ADC's top code
+    meta["clipped_fraction"] = (float(np.mean((electrons >= full) | top)) if top.shape == electrons.shape
+                                else max(meta["saturated_fraction"], float(np.mean(top))))
     meta["readout"] = {"mode": sensor.readout, "block": block, "binning": sensor.binning if sensor.readout == "bin"
                        else None, "native_tile": cfa.tile_text(), "full_shape": [h, w],
                        "pixel_pitch_um": sensor.pixel_pitch_um * (block if sensor.readout == "bin" else 1)}
@@ -294,7 +367,15 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
         "noise": noise,
         "exposure_mode": mode,
         "exposure_s": exposure,
-        "reference_luminance_cd_m2": reference_luminance_cd_m2 if mode == "auto" else None,
+        "exposure_policy": policy if mode == "auto" else "fixed",
+        "analog_gain": choice.analog_gain,
+        "digital_gain": choice.digital_gain,
+        "metered_exposure_s": choice.metered_exposure_s,
+        "max_exposure_s": float(max_exposure_s) if mode == "auto" and policy in ("program", "bayer") else None,
+        "max_analog_gain": float(max_analog_gain) if mode == "auto" and policy in ("program", "bayer") else None,
+        "reference_luminance_cd_m2": (
+            (DEFAULT_REFERENCE_LUMINANCE_CD_M2 if reference_luminance_cd_m2 is _UNSET else reference_luminance_cd_m2)
+            if mode == "auto" and policy == "reference" else None),
         "auto_exposure_level": AUTO_EXPOSURE_LEVEL if mode == "auto" else None,
         "luminance_cd_m2": meta["luminance_cd_m2"],
         "luminance_scale": s,
@@ -329,7 +410,8 @@ def capture_ideal(image, *, luminance_cd_m2: float | None = None, exposure_s="au
     sensor = sensor or SensorParams()
     oi = optical_image_for(image, sensor, optics, oversample)
     s = _luminance_scale(oi, luminance_cd_m2)
-    exposure, mode = _resolve_exposure(exposure_s, lambda: IDEAL_NOMINAL_EXPOSURE_S)
+    choice, mode = _resolve_exposure(exposure_s, lambda: ExposureChoice(IDEAL_NOMINAL_EXPOSURE_S))
+    exposure = choice.exposure_s
     wl = np.asarray(oi.wavelengths, dtype=np.float64)
     pix = _pixel_irradiance(oi, sensor.fill_factor)
     h, w, nb = pix.shape

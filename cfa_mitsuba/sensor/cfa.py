@@ -31,6 +31,7 @@ __all__ = [
     "CFA",
     "CANONICAL_ORDER",
     "DEFAULT_SPECTRA_SET",
+    "default_spectra_set",
     "layout_info",
     "list_layouts",
     "list_cfas",
@@ -50,8 +51,10 @@ from .. import spectra as _spectra
 from ..errors import CfaMitsubaError
 from .spectra_sets import get_spectra_set, read_data_toml
 
-#: The spectra set of a user TOML's built-in letters unless it names one
-#: (``spectra_set = "..."``): the Nikon construction, as before sets existed.
+#: The spectra set of :func:`builtin_filter_curve` (the Nikon construction).
+#: A user TOML that names no ``spectra_set`` takes the set of the built-in
+#: CFAs of its letters instead (:func:`default_spectra_set`), so that it is
+#: compared with them on the same dyes (issue 22).
 DEFAULT_SPECTRA_SET = "nikon-d5100"
 
 #: Channel order of every CFA: these letters first, in this order, then any
@@ -230,6 +233,32 @@ def layout_info(name: str) -> dict:
     if name not in _layouts():
         raise CfaMitsubaError(f"unknown CFA {name!r} (known: {', '.join(list_cfas())}; or a FILE.toml)")
     return dict(_layouts()[name])
+
+
+def default_spectra_set(letters) -> tuple[str | None, list[str]]:
+    """(the spectra set, []) a user CFA of filter ``letters`` takes by
+    default: that of the first built-in CFA (``data/layouts.toml`` order:
+    bayer's ``isetcam-rgb``, the CMY CFAs' ``isetcam-cmy``, the RGBW ones'
+    ``isetcam-rgbw``, ...) whose set has every letter; or (None, the
+    letters that the set covering most of them lacks) when none has all.
+
+    Examples
+    --------
+    >>> default_spectra_set(["R", "G", "B", "W"])
+    ('isetcam-rgbw', [])
+    >>> default_spectra_set(["G", "R", "B", "V"])
+    (None, ['V'])
+    """
+    want = list(dict.fromkeys(letters))
+    best: tuple[int, list[str]] = (-1, want)
+    for name in _layouts():
+        sset = get_spectra_set(_layouts()[name]["spectra"])
+        missing = [c for c in want if c not in sset.curves]
+        if not missing:
+            return sset.name, []
+        if len(want) - len(missing) > best[0]:
+            best = (len(want) - len(missing), missing)
+    return None, best[1]
 
 
 _REGISTRY: dict[str, CFA] = {}

@@ -17,7 +17,7 @@ import numpy as np
 from .. import spectra as _spectra
 from ..errors import CfaMitsubaError
 from ..io import guard as _guard
-from .cfa import DEFAULT_SPECTRA_SET, CFA, _check_curve, _order_channels, _parse_tile, make_cfa
+from .cfa import DEFAULT_SPECTRA_SET, CFA, _check_curve, _order_channels, _parse_tile, default_spectra_set, make_cfa
 from .spectra_sets import get_spectra_set
 
 
@@ -100,6 +100,25 @@ def _curve_from_toml(letter: str, spec, base: Path, where: str, sset):
     return _check_curve(letter, wl, np.asarray(qe, float) * scale, where)
 
 
+def _default_set(pattern, given: dict, where: str) -> str:
+    """The set of the built-in CFAs of the tile's letters not under
+    ``[spectra]`` (all the letters when every one is given); a one-line
+    refusal naming the letters no such set has."""
+    letters = _order_channels(pattern)
+    need = [c for c in letters if c not in given]
+    named = [v for v in given.values() if isinstance(v, str) and not v.lower().endswith(".csv") and ":" not in v]
+    name, missing = default_spectra_set([*need, *named] or letters)  # [spectra] W = "W": the set's W too
+    if name is not None:
+        return name
+    if not need:
+        return DEFAULT_SPECTRA_SET  # every spectrum given: the set names no filter used
+    plural = "s" if len(missing) > 1 else ""
+    raise CfaMitsubaError(
+        f"{where}: unknown filter{plural} {', '.join(map(repr, missing))} in the tile: no built-in CFA's spectra set "
+        f"has {'them' if plural else 'it'} beside the other letters; give {'their' if plural else 'its'} spectr"
+        f"{'a' if plural else 'um'} under [spectra] or name a spectra_set (cfa-mitsuba list spectra)")
+
+
 def load_cfa_toml(path, spectra: str | None = None) -> CFA:
     """Read a user CFA.
 
@@ -109,14 +128,21 @@ def load_cfa_toml(path, spectra: str | None = None) -> CFA:
         description = "..."            # optional
         tile = ["W R", "B W"]          # or "W R / B W", or [["W","R"],["B","W"]]
         spectra_set = "isetcam-rgbw"   # optional: the set of the letters not
-                                       # given below (default "nikon-d5100")
+                                       # given below (default: the set of the
+                                       # built-in CFAs of those letters)
         [spectra]                      # optional for the set's letters
         W = "W"                        # a filter of the spectra set
         R = "my_red.csv"               # CSV: wavelength_nm, qe (relative to this file)
         B = { source = "colour:Nikon 5100 (NPL)/blue", scale = 0.4 }
         X = { wavelengths = [400, 550, 700], values = [0.1, 0.5, 0.1] }
 
-    ``spectra`` overrides the file's ``spectra_set``.
+    ``spectra`` overrides the file's ``spectra_set``.  Without either, the
+    letters not given under ``[spectra]`` take the set of the built-in CFAs
+    of those letters (:func:`~.cfa.default_spectra_set`: R, G, B from
+    ``isetcam-rgb``, C, M, Y from ``isetcam-cmy``, R, G, B, W from
+    ``isetcam-rgbw``), so a user CFA is compared with the built-in ones on
+    the same dyes; a tile whose letters no built-in CFA's set has together
+    is refused, naming the letters.
     """
     p = Path(path)
     where = str(p)
@@ -133,17 +159,17 @@ def load_cfa_toml(path, spectra: str | None = None) -> CFA:
     name = data.get("name", p.stem)
     if not isinstance(name, str) or not name:
         raise CfaMitsubaError(f"{where}: 'name' must be a non-empty string")
-    set_name = spectra or data.get("spectra_set", DEFAULT_SPECTRA_SET)
+    pattern = _parse_tile(data["tile"], where)
+    given = data.get("spectra", {})
+    if not isinstance(given, dict):
+        raise CfaMitsubaError(f"{where}: 'spectra' must be a table of filter = spectrum")
+    set_name = spectra or data.get("spectra_set") or _default_set(pattern, given, where)
     if not isinstance(set_name, str):
         raise CfaMitsubaError(f"{where}: 'spectra_set' must be the name of a spectra set")
     try:
         sset = get_spectra_set(set_name)
     except CfaMitsubaError as exc:
         raise CfaMitsubaError(f"{where}: {exc}") from None
-    pattern = _parse_tile(data["tile"], where)
-    given = data.get("spectra", {})
-    if not isinstance(given, dict):
-        raise CfaMitsubaError(f"{where}: 'spectra' must be a table of filter = spectrum")
     curves = {}
     for letter in _order_channels(pattern):
         if letter in given:

@@ -38,9 +38,13 @@ class ChainSettings:
     ``optics`` and ``sensor`` are :class:`~cfa_mitsuba.optics.OpticsParams`
     and :class:`~cfa_mitsuba.sensor.params.SensorParams` (their f-number,
     pitch and read noise are replaced by the condition's); ``noise`` is
-    'off', 'shot' or 'all'; ``reference_luminance_cd_m2`` is where 'auto'
-    exposure is chosen (None: at each capture's own luminance, ISETCam's
-    plain auto exposure); ``isp`` the processing options (white balance,
+    'off', 'shot' or 'all'; ``exposure_policy`` how 'auto' exposure is
+    chosen (:data:`~cfa_mitsuba.sensor.exposure_program.EXPOSURE_POLICIES`:
+    'program', the default, within ``max_exposure_s`` and
+    ``max_analog_gain``; 'bayer'; 'reference'; 'each');
+    ``reference_luminance_cd_m2`` is where the 'reference' policy chooses it
+    (None: at each capture's own luminance, ISETCam's plain auto exposure,
+    the 'each' policy); ``isp`` the processing options (white balance,
     white preserving, ...) as sorted (key, value) pairs; ``demosaic_options``
     each method's own options (``[demosaics.<name>]``);
     ``mean_match`` scales each camera output to the ideal's mean (ISETCam);
@@ -54,6 +58,9 @@ class ChainSettings:
     noise: str = "all"
     reference_luminance_cd_m2: float | None = 100.0
     isp: tuple = ()
+    exposure_policy: str = "program"
+    max_exposure_s: float = 1.0 / 30.0
+    max_analog_gain: float = 16.0
     mean_match: bool = True
     spectra_sets: tuple = ()
     metric_options: tuple = ()
@@ -234,8 +241,17 @@ class CameraChain:
         if spectra is not None:
             cfa = get_cfa(cfa, spectra=spectra)
         return self._timed("capture_s", capture, oi, cfa, luminance_cd_m2=cond.luminance, exposure_s=cond.exposure,
-                           noise=noise or self.settings.noise, seed=seed, sensor=sensor,
-                           reference_luminance_cd_m2=self.settings.reference_luminance_cd_m2)
+                           noise=noise or self.settings.noise, seed=seed, sensor=sensor, **self.exposure_keywords())
+
+    def exposure_keywords(self) -> dict:
+        """The keywords of :func:`cfa_mitsuba.sensor.capture` that choose an 'auto' exposure."""
+        st = self.settings
+        policy = "each" if st.exposure_policy == "reference" and st.reference_luminance_cd_m2 is None \
+            else st.exposure_policy
+        kw = {"exposure_policy": policy, "max_exposure_s": st.max_exposure_s, "max_analog_gain": st.max_analog_gain}
+        if policy == "reference":
+            kw["reference_luminance_cd_m2"] = st.reference_luminance_cd_m2
+        return kw
 
     def process(self, raw, method: str, cond: Condition | None = None, **options):
         from ..isp import process

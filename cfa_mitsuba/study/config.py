@@ -26,11 +26,17 @@ from .sweeps import SweepSpec, _sweeps
 
 from .scene_specs import IMAGE_METRICS, SceneSpec, parse_scenes, render_common as render_common_of  # noqa: F401
 
-#: How a study chooses the exposure: 'reference' (ISETCam's auto exposure,
-#: chosen once at the reference luminance and kept at every luminance: the
-#: camera of a fixed scene brightness, the default), 'each' (auto exposure at
-#: each luminance, ISETCam's default in a sweep), 'fixed' (the given time).
-EXPOSURE_POLICIES = ("reference", "each", "fixed")
+#: How a study chooses the exposure: 'program' (a camera's exposure program:
+#: auto exposure at each luminance, the time capped at ``max_exposure_s``,
+#: then analogue gain up to ``max_analog_gain``, then digital gain; the
+#: default; :mod:`cfa_mitsuba.sensor.exposure_program`), 'bayer' (every CFA at
+#: the time and gains the program gives Bayer), 'reference' (ISETCam's auto
+#: exposure, chosen once at the reference luminance and kept at every
+#: luminance), 'each' (ISETCam's auto exposure at each luminance, its default
+#: in a sweep), 'fixed' (the given time).
+EXPOSURE_POLICIES = ("program", "bayer", "reference", "each", "fixed")
+#: The policy of a config that names none.
+DEFAULT_EXPOSURE_POLICY = "program"
 #: Noise realisations of every capture unless a config says otherwise (each
 #: value is their mean with a 95 % interval: study/intervals.py).
 DEFAULT_SEEDS = 3
@@ -78,6 +84,7 @@ class StudyConfig:
             noise=self.capture.get("noise", "all"),
             reference_luminance_cd_m2=(None if self.capture.get("exposure_policy") == "each"
                                        else float(self.capture.get("reference_luminance_cd_m2", 100.0))),
+            **_exposure_settings(self.capture),
             isp=dict(self.isp), mean_match=self.mean_match,
             spectra_sets=dict(self.capture.get("spectra_sets", {})), metric_options=dict(self.metric_options),
             demosaic_options=dict(self.demosaic_options))
@@ -87,6 +94,16 @@ class StudyConfig:
         lum = self.luminances[0] if luminance is None else luminance
         return self.chain_settings().base_condition(luminance=lum, exposure=self.capture.get("exposure", "auto"),
                                                     seed=self.seed)
+
+
+def _exposure_settings(capture: dict) -> dict:
+    """The :class:`~.chain.ChainSettings` fields of the exposure policy."""
+    from ..sensor.exposure_program import DEFAULT_MAX_ANALOG_GAIN, DEFAULT_MAX_EXPOSURE_S
+
+    policy = capture.get("exposure_policy", DEFAULT_EXPOSURE_POLICY)
+    return {"exposure_policy": DEFAULT_EXPOSURE_POLICY if policy == "fixed" else policy,
+            "max_exposure_s": float(capture.get("max_exposure_s", DEFAULT_MAX_EXPOSURE_S)),
+            "max_analog_gain": float(capture.get("max_analog_gain", DEFAULT_MAX_ANALOG_GAIN))}
 
 
 def _dataclass_table(ck: _Checker, data, key: str, cls, extra: dict) -> dict:
@@ -275,6 +292,8 @@ def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, di
         "exposure": lambda v, k: v if v == "auto" else ck.number(v, k, positive=True),
         "reference_luminance_cd_m2": lambda v, k: ck.number(v, k, positive=True),
         "exposure_policy": lambda v, k: ck.string(v, k, EXPOSURE_POLICIES),
+        "max_exposure_s": lambda v, k: ck.number(v, k, positive=True),
+        "max_analog_gain": lambda v, k: _at_least_one(ck, v, k),
         "spectra_sets": lambda v, k: _spectra_map(ck, v, k),
     }
     sensor_cfg, preset = _sensor_preset(ck, data.get("sensor", {}), base)
@@ -283,7 +302,7 @@ def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, di
     sensor_all = _sensor_values(ck, preset, sensor_all, cfas, base)
     if preset is not None:
         capture["sensor_preset"] = preset.name
-    policy = capture.get("exposure_policy", "reference")
+    policy = capture.get("exposure_policy", DEFAULT_EXPOSURE_POLICY)
     fixed = capture.get("exposure", "auto") != "auto"
     if policy == "fixed" and not fixed:
         ck.fail("sensor.exposure", "exposure_policy 'fixed' needs an exposure time in seconds here")
@@ -293,7 +312,20 @@ def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, di
     if policy == "each" and "reference_luminance_cd_m2" in capture:
         ck.fail("sensor.reference_luminance_cd_m2", "exposure_policy 'each' chooses the exposure at each "
                                                    "luminance: a reference luminance does not apply")
+    if policy in ("program", "bayer") and "reference_luminance_cd_m2" in capture:
+        ck.fail("sensor.reference_luminance_cd_m2", f"exposure_policy {policy!r} meters each luminance: a "
+                                                   "reference luminance applies to exposure_policy \"reference\" only")
+    for key in ("max_exposure_s", "max_analog_gain"):
+        if key in capture and policy not in ("program", "bayer"):
+            ck.fail(f"sensor.{key}", f"applies to exposure_policy \"program\" or \"bayer\", not {policy!r}")
     return optics, sensor_all, capture
+
+
+def _at_least_one(ck: _Checker, v, key: str) -> float:
+    x = ck.number(v, key, positive=True)
+    if x < 1:
+        ck.fail(key, f"must be at least 1 (got {x:g})")
+    return x
 
 
 def _normalisation(ck: _Checker, norm) -> tuple[bool, str, dict]:

@@ -6,7 +6,10 @@ luminance, CFA, demosaic), write the tables.  The report is the next stage
       metrics.csv     tidy: scene, cfa, demosaic, the condition axes (luminance,
                       f_number, pixel_pitch_um, exposure, read_noise_e,
                       seed), base (a study condition, not only a sweep's),
-                      metric, value, unit
+                      metric, value, unit, and the capture's exposure_s,
+                      analog_gain, digital_gain, clipped_fraction
+      snr.csv, snr10.csv  YSNR and chroma SNR against luminance, the
+                      luminance of YSNR 10 (:mod:`.snr`; studies that measure ysnr)
       scores.csv      the scored rows with normalised scores and ranks
       timing.json     where the time went
       config.json     the validated config, as run
@@ -42,6 +45,7 @@ from .config import StudyConfig
 from .cfa_facts import write_cfa_facts
 from .sensor_curves import write_sensor_curves
 from .tables import mean_table, order_rows, write_tables
+from .snr import write_snr_tables
 from .tasks import EvaluationTask, evaluate_task, render_task
 
 #: Metrics that enter the scores (the paper's eight); other rows in
@@ -279,6 +283,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         out, realisations, ideal, paper_ranges=_paper_ranges(config, render_info), overrides=dict(config.ranges),
         policy=config.range_policy, clip=config.clip_scores, builtin_scenes=builtin)
     write_cfa_facts(out, config.cfas, order["cfa"], config.chain_settings(), config.base_condition())
+    write_snr_tables(out, metrics)
     with atomic_output(out / "ranges.json") as tmp:
         tmp.write_text(json.dumps({**{k: _range_pair(v) for k, v in ranges.items()},
                                    "_policy": config.range_policy, "_constant": constant}, indent=1))

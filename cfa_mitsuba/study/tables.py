@@ -21,6 +21,13 @@ from ..io import atomic_output
 from ..metrics import scored_metrics
 from .axes import AXES
 
+#: What each evaluation's capture was (issue 22): its exposure time (s), the
+#: exposure program's analogue and digital gains, and the fraction of its
+#: pixels clipped at the full well or the ADC's top code (the mean over the
+#: realisations in metrics.csv).
+CAPTURE_COLUMNS = ("exposure_s", "analog_gain", "digital_gain", "clipped_fraction")
+
+
 #: The columns that identify a value (one per condition axis included).
 def key_columns() -> list[str]:
     """The columns that identify a value: scene, CFA, demosaic, one per
@@ -36,8 +43,8 @@ def metric_columns(*, realisations: bool = False) -> list[str]:
     ``censored``."""
     keys = key_columns()
     if realisations:
-        return [*keys[:-1], "realisation", "metric", "value", "unit", "censored"]
-    return [*keys, "value", "ci_low", "ci_high", "n", "unit", "censored"]
+        return [*keys[:-1], "realisation", "metric", "value", "unit", "censored", *CAPTURE_COLUMNS]
+    return [*keys, "value", "ci_low", "ci_high", "n", "unit", "censored", *CAPTURE_COLUMNS]
 
 
 def order_rows(rows, config_order: dict, columns: list[str] | None = None):
@@ -72,11 +79,11 @@ def _condition_keys(df) -> list[tuple]:
 
 def mean_table(realisations):
     """metrics.csv from the per-realisation table (the order kept)."""
+    import pandas as pd
+
     from .intervals import aggregate
 
     if realisations.empty:
-        import pandas as pd
-
         return pd.DataFrame(columns=metric_columns())
     keyed = realisations.assign(exposure=realisations["exposure"].astype(str),
                                 f_number=realisations["f_number"].astype(float))
@@ -87,7 +94,12 @@ def mean_table(realisations):
     bound = keyed.assign(censored=keyed["censored"].fillna(False).astype(bool)).groupby(
         keys, sort=False, dropna=False)["censored"].any().reset_index()
     out = out.merge(bound, on=keys, how="left")
-    return out[metric_columns()]
+    have = [c for c in CAPTURE_COLUMNS if c in keyed.columns]
+    if have:
+        caps = keyed[keys + have].copy()
+        caps[have] = caps[have].apply(pd.to_numeric, errors="coerce")
+        out = out.merge(caps.groupby(keys, sort=False, dropna=False)[have].mean().reset_index(), on=keys, how="left")
+    return out.reindex(columns=metric_columns())
 
 
 def scored_rows(metrics, builtin_scenes):

@@ -211,10 +211,24 @@ def _save_details(folder: Path, stem: str, results: dict, rendered, extra: dict)
         _thumbnail(rendered.srgb, folder / f"{stem}.png")
 
 
+def _capture_columns(raw) -> dict:
+    """metrics.csv's columns of the capture (:data:`.tables.CAPTURE_COLUMNS`)."""
+    st = raw.settings or {}
+    return {"exposure_s": float(raw.exposure_s), "analog_gain": float(st.get("analog_gain") or 1.0),
+            "digital_gain": float(st.get("digital_gain") or 1.0),
+            "clipped_fraction": raw.meta.get("clipped_fraction", raw.meta.get("saturated_fraction"))}
+
+
+def _grey_electrons(raw, grey: float = 0.18) -> dict:
+    """{channel: mean electrons per pixel} on an 18 % grey on the axis, in this capture."""
+    e = np.asarray(raw.electrons_per_radiance) @ (grey * np.asarray(raw.white_radiance))
+    return {str(c): float(v) for c, v in zip(raw.channels, e)}
+
+
 def _details_extra(ev, raw, seed) -> dict:
     """What the report reads beside a camera output's curves."""
     isp_meta = ev.processed.meta.get("isp", {})
-    return {
+    return {**_capture_columns(raw), "grey_electrons": _grey_electrons(raw),
         "mean_match_scale": ev.mean_match_scale, "condition_number": isp_meta.get("condition_number"),
         "noise_gain_xyz": isp_meta.get("noise_gain_xyz"), "fit_rank": isp_meta.get("fit_rank"),
         "exposure_s": float(raw.exposure_s), "saturated_fraction": raw.meta.get("saturated_fraction"), "seed": seed,
@@ -259,7 +273,7 @@ def evaluate_task(task) -> dict:
                 # output is unmeasurable.
                 failures.extend({**base, "metric": name, "error": str(ev)} for name in t.metrics)
                 continue
-            rows.extend({**base, **r} for r in _result_rows(ev.results))
+            rows.extend({**base, **r, **_capture_columns(raw)} for r in _result_rows(ev.results))
             failures.extend({**base, **f} for f in ev.failures)
             if details_dir is not None and i == 0:  # curves and thumbnails of the first realisation
                 _save_details(details_dir / t.scene / safe_label(cfa_label) / method, tag, ev.results,

@@ -1,0 +1,126 @@
+"""Luminance and chroma SNR on a flat mid-grey after the whole image
+processor (demosaic and colour matrix): the sensor engineer's SNR against
+light (ISO 15739's 'total noise' region SNR, here on the camera's XYZ).
+
+The region is the gray bar's step nearest an 18 % grey (the mid-grey of
+exposure metering, ISO 2720), inset by ``margin`` pixels on every side so
+that the demosaic's and the optics' blur across the step edges stays out.
+
+Noise is what differs from the ideal sensor: the camera's Y less the
+ideal's Y scaled to the camera's mean on the region, so that the scene's
+own slow variation over the region (the lens's off-axis falloff) is not
+counted as noise.  With ``n`` the noise image on the region:
+
+    YSNR       = mean(Y) / std(n_Y)
+    chroma SNR = mean(Y) / sqrt((var(n_x) + var(n_z)) / 2)
+
+where the chroma noise is that of the white-normalised opponent signals
+x' - y' and z' - y' (x' = X / Xw, y' = Y / Yw, z' = Z / Zw; both 0 on a
+neutral grey), in the units of y' (so the two SNRs are comparable: a
+camera whose X, Y and Z noise were equal and independent would have chroma
+SNR = YSNR / sqrt(2)).  This chroma definition is ours (ISO 15739 gives
+colour noise in CIELAB; a linear opponent pair keeps the SNR independent of
+the exposure scale and free of the L* curve's bias at low signal).
+
+References
+----------
+ISO 15739:2017, Photography -- Electronic still-picture imaging -- Noise
+measurements (region SNR on uniform patches).
+"""
+
+from __future__ import annotations
+
+__all__ = ["RECORDS", "ysnr", "GREY_REFLECTANCE"]
+
+import numpy as np
+
+from ..errors import require
+from ._common import as_pair, as_white
+from ._result import MetricResult
+from .record import MetricRecord
+
+#: The reflectance whose gray-bar step is measured (18 %, ISO 2720's mid-grey).
+GREY_REFLECTANCE = 0.18
+
+
+def _region(ref_y: np.ndarray, white_y: float, steps, margin: int, grey: float) -> tuple[int, int, int, int]:
+    """(y0, x0, y1, x1) of the step whose ideal mean Y / Yw is nearest ``grey``
+    (the whole image when ``steps`` is None), inset by ``margin``."""
+    h, w = ref_y.shape
+    if steps:
+        level = [abs(float(ref_y[:, max(a, 0):min(b, w)].mean()) / white_y - grey) if min(b, w) > max(a, 0)
+                 else np.inf for a, b in steps]
+        x0, x1 = steps[int(np.argmin(level))]
+    else:
+        x0, x1 = 0, w
+    y0, y1, x0, x1 = margin, h - margin, max(int(x0), 0) + margin, min(int(x1), w) - margin
+    require(y1 - y0 >= 2 and x1 - x0 >= 2,
+            f"the mid-grey region is empty after a {margin} px margin (image {h} x {w} px): a larger gray bar is needed")
+    return y0, x0, y1, x1
+
+
+def ysnr(reference_xyz, test_xyz, white_xyz, *, steps=None, margin: int = 3,
+         grey: float = GREY_REFLECTANCE) -> MetricResult:
+    """Luminance SNR (and, in the details, chroma SNR) on a flat mid-grey.
+
+    Parameters
+    ----------
+    reference_xyz, test_xyz : (H, W, 3) XYZ of the ideal and camera images
+        (any common scale: the SNR is a ratio).
+    white_xyz : (3,) scene white, on the reference's scale.
+    steps : the gray bar's ``(x0, x1)`` column ranges (scene geometry); the
+        step nearest ``grey`` is measured; None: the whole image (a flat patch).
+    margin : pixels left out at each side of the region.
+    grey : the reflectance of the step chosen (Y / Yw of the ideal).
+
+    Raises CfaMitsubaError on a noise-free image (the ideal against itself).
+
+    Returns
+    -------
+    MetricResult
+        Headline YSNR (unit ``''``, a ratio; higher is better).  Details:
+        ``chroma_snr``, ``ysnr_db`` (20 log10), ``region`` (y0, x0, y1, x1),
+        ``mean_y_rel`` (the region's Y / Yw of the ideal) and ``noise_y``,
+        ``noise_chroma`` (rms, in units of the region's mean Y).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> ref = np.full((40, 40, 3), 18.0)
+    >>> test = ref * (1 + 0.05 * rng.standard_normal((40, 40, 3)))   # 5 % noise, independent per channel
+    >>> r = ysnr(ref, test, [100.0, 100.0, 100.0])
+    >>> round(float(r)), round(r.details["chroma_snr"])                # chroma: YSNR / sqrt(2)
+    (21, 14)
+    """
+    ref, test = as_pair(reference_xyz, test_xyz)
+    white = as_white(white_xyz)
+    y0, x0, y1, x1 = _region(ref[..., 1], float(white[1]), steps, int(margin), float(grey))
+    r = ref[y0:y1, x0:x1].reshape(-1, 3)
+    t = test[y0:y1, x0:x1].reshape(-1, 3)
+    mean_y = float(t[:, 1].mean())
+    require(mean_y > 0, "the mid-grey region of the camera image is black: no SNR")
+    noise = t - r * (t.mean(axis=0) / np.where(r.mean(axis=0) > 0, r.mean(axis=0), 1.0))
+    rel = noise / (white / white[1])  # x' - ..., on Y's scale
+    sd_y = float(noise[:, 1].std(ddof=1))
+    chroma_var = 0.5 * (float((rel[:, 0] - rel[:, 1]).var(ddof=1)) + float((rel[:, 2] - rel[:, 1]).var(ddof=1)))
+    require(sd_y > 0 and chroma_var > 0, "the mid-grey region has no noise (a noise-free image): its SNR is unbounded")
+    value = mean_y / sd_y
+    chroma = mean_y / np.sqrt(chroma_var)
+    details = {"chroma_snr": float(chroma), "ysnr_db": float(20 * np.log10(value)),
+               "region": [y0, x0, y1, x1], "mean_y_rel": float(r[:, 1].mean() / white[1]),
+               "noise_y": sd_y / mean_y, "noise_chroma": float(np.sqrt(chroma_var)) / mean_y}
+    return MetricResult(value, name="ysnr", unit="", details=details)
+
+
+_YSNR = MetricRecord(
+    name="ysnr", function=ysnr, scenes=("gray-bar",), inputs="xyz", unit="", higher_is_better=True, scored=False,
+    label="YSNR", order=40, decimals=2,
+    description="luminance SNR on the gray bar's mid-grey step after demosaic and colour matrix (ISO 15739 region SNR)")
+
+#: This module's metric records (collected by :mod:`.registry`).
+RECORDS = (
+    _YSNR,
+    _YSNR.detail("chroma_snr", name="chroma_snr", unit="", higher_is_better=True, label="chroma SNR", order=41,
+                 decimals=2, description="chroma SNR on the same mid-grey: mean Y over the rms of the white-normalised "
+                                         "opponent noise (x' - y', z' - y')"),
+)
