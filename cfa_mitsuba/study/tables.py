@@ -7,6 +7,8 @@
                                the ``ideal`` range policy)
     scores.csv                 the scored rows under the study's range policy, with
                                score and rank intervals (:mod:`.ranking`)
+    decisions.csv              per aspect the CFA(s) that can rank first, ``winner`` or
+                               ``tie`` (:mod:`.decisions`)
     policies.csv               for each range policy: per metric the scores clipped and
                                whether it is constant across the CFAs, and each CFA's rank
 """
@@ -155,4 +157,8 @@ def write_tables(out_dir: Path, realisations, ideal, *, paper_ranges: dict, over
         ranks["scope"] = "rank"
         save("policies.csv", pd.concat([clipping, ranks], ignore_index=True))
     save("scores.csv", scores)
+    if len(scored_real) and len(scores):
+        from .decisions import write_decisions
+
+        write_decisions(out_dir, realisations, scored_real, scores, ranges, clip=clip, constant=constant)
     return metrics, scores, ranges, constant
