@@ -185,7 +185,10 @@ def _facts(res: Results) -> dict:
         if p:
             parts = [f"{k[:-2]} {float(v):.1f} s" for k, v in p.items() if k.endswith("_s") and k != "total_s"]
             total = p.get("total_s")
-            text = (f"{float(total):.1f} s in all" if total is not None else "") + (
+            # built inside a study the phases have no report_s yet: the total then stops before the report,
+            # and timing.json's total (written after it) adds the report's own time
+            whole = "in all" if "report_s" in p else "before this report (timing.json's total adds the report's time)"
+            text = (f"{float(total):.1f} s {whole}" if total is not None else "") + (
                 f" ({', '.join(parts)})" if parts else "")
             renders = t.get("renders") or {}
             if renders:

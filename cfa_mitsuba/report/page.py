@@ -174,12 +174,11 @@ def _summary(res: Results, facts: dict, not_run: list) -> str:
     cst = cfa_styles(res.cfas)
     parts = []
     cards = []
-    if facts.get("best_total"):
-        c, v = facts["best_total"]
-        sub = "mean of the per-demosaic scores" if len(res.demosaics) > 1 else "mean normalised score"
-        cards.append(("Best CFA overall", c, f"{v:.4f} ({sub})", cst.get(c, {}).get("color")))
-    for d, (c, v) in facts.get("best_per_demosaic", {}).items():
-        cards.append((f"Best with {d}", c, f"score {v:.4f}", cst.get(c, {}).get("color")))
+    from .decision_panel import decision_panel, summary_cards, sweep_lines
+
+    parts.append(decision_panel(res.root))
+    for label, c, sub in summary_cards(res.scores, res.primary_luminance, res.demosaics):
+        cards.append((label, c, sub, cst.get(c, {}).get("color")))
     if cards:
         parts.append('<div class="cards">')
         for k, v, s, colour in cards:
@@ -205,12 +204,7 @@ def _summary(res: Results, facts: dict, not_run: list) -> str:
     rows.append(("Demosaicing", f"{len(res.demosaics)}: " + ", ".join(res.demosaics)))
     lums = ", ".join(f"{v:g}" for v in res.base_luminances) or "—"
     rows.append(("Luminance", f"{lums} cd/m² (every metric)"))
-    sweeps = []
-    for sw in cfg.get("sweeps") or []:
-        if isinstance(sw, dict):
-            sweeps.append(f"{', '.join(metric_display(m).short for m in sw.get('metrics') or [])} on "
-                          f"{sw.get('scene')} at {', '.join(f'{float(v):g}' for v in sw.get('luminances') or [])}"
-                          " cd/m²")
+    sweeps = sweep_lines(cfg, lambda m: metric_display(m).short)
     if sweeps:
         rows.append(("Sweeps", "; ".join(sweeps)))
     n_eval = len(res.metrics.drop_duplicates(["scene", "cfa", "demosaic", "luminance"])) if len(res.metrics) else 0
