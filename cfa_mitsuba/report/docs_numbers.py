@@ -88,7 +88,7 @@ def _read(path: Path):
         else:
             import pandas as pd
 
-            _CACHE[key] = pd.read_csv(path, dtype=str, keep_default_na=False)
+            _CACHE[key] = pd.read_csv(path, dtype=str, keep_default_na=False, comment="#")
     return _CACHE[key]
 
 
