@@ -143,3 +143,13 @@ def test_spearman_interval_matches_fisher_z_for_twelve_cfas(rho, lo, hi):
     rho_b, lo_b, hi_b, n = claim_verdicts.spearman_interval(a, b)
     assert rho_b == pytest.approx(1 - 6 * 12 / (12 * 143)) and n == 12
     assert np.tanh(np.arctanh(rho_b) - half) == pytest.approx(lo_b) and lo_b < rho_b < hi_b
+
+
+def test_the_page_is_what_the_committed_runs_generate(tmp_path):
+    """Every number of docs/paper-comparison.md comes from the committed runs: regenerating it changes nothing."""
+    from cfa_mitsuba.report.paper_comparison import write_comparison
+
+    committed = {k: v for k, v in RUNS.items() if (v / "metrics.csv").is_file()}
+    out = write_comparison(tmp_path / "page.md", default=committed.get("ours, defaults"),
+                           isetcam=committed.get("ours, ISETCam procedure"))
+    assert out.read_text() == PAGE.read_text()

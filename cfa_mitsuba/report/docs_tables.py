@@ -8,7 +8,8 @@ interval of exactly 1, otherwise the tied set.
 
 from __future__ import annotations
 
-__all__ = ["GENERATORS", "rank_table", "rank_summary", "timing_sentence", "decisions_table_md"]
+__all__ = ["GENERATORS", "rank_table", "rank_summary", "timing_sentence", "decisions_table_md", "spearman_sentence",
+           "claims_sentence"]
 
 import json
 from pathlib import Path
@@ -107,10 +108,40 @@ def decisions_table_md(repo: Path, results: str) -> str:
     return "\n\n" + "\n".join(lines) + "\n\n"
 
 
+def spearman_sentence(repo: Path, results: str, demosaic: str = "bilinear") -> str:
+    """The rank correlation of a run's Table 3 column with the paper's, with its 95 % interval."""
+    from .claim_verdicts import spearman_interval
+    from .paper_data import load_run, paper_values
+
+    run = load_run(repo / results, "run", "run")
+    pv = paper_values()
+    pv = pv[(pv["metric"] == "score") & (pv["demosaic"] == demosaic)]
+    paper = dict(zip(pv["cfa"], pv["number"]))
+    got = run.scores_of(demosaic)
+    both = [c for c in paper if c in got]
+    rho, lo, hi, n = spearman_interval([paper[c] for c in both], [got[c][0] for c in both])
+    return f"Spearman {rho:+.2f} (95 % interval {lo:+.2f} to {hi:+.2f}, {n} CFAs)"
+
+
+def claims_sentence(repo: Path, results: str) -> str:
+    """Which of the paper's claims hold, tie and differ in a run, by the rule of claim_verdicts."""
+    from .paper_data import claims, judge, load_run
+
+    run = load_run(repo / results, "run", "run")
+    by: dict = {}
+    for c in claims():
+        if c["source"] == "paper":
+            by.setdefault(judge(run, c)[0], []).append(c["id"])
+    return "; ".join(f"{v}: {len(by[v])} ({', '.join(by[v])})" for v in ("holds", "tie", "differs", "not measured")
+                     if v in by)
+
+
 #: {name: function(repo, *args) -> Markdown}
 GENERATORS = {
     "rank-table": rank_table,
     "rank-summary": rank_summary,
     "timing": timing_sentence,
     "decisions": decisions_table_md,
+    "spearman": spearman_sentence,
+    "claims": claims_sentence,
 }
