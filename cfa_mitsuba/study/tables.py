@@ -152,7 +152,7 @@ def write_tables(out_dir: Path, realisations, ideal, *, paper_ranges: dict, over
                 constant.remove(m)
         cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
         scores = score_realisations(scored_real[cols], ranges, clip=clip, constant=constant)
-        clipping, ranks = policy_summary(scored_mean, paper_ranges, ideal_vals, clip)
+        clipping, ranks = policy_summary(scored_mean, paper_ranges, ideal_vals, clip, realisations=scored_real)
         clipping["scope"] = "clipping"
         ranks["scope"] = "rank"
         save("policies.csv", pd.concat([clipping, ranks], ignore_index=True))
