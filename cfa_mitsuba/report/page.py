@@ -75,6 +75,7 @@ table.data th.metric,table.data td.scene{font-weight:normal}
 table.data tr.group-start>*{border-top:2px solid var(--rule)}
 table.data tr.total>*{border-top:2px solid #8c959f;font-weight:600}
 table.data td.best{outline:2px solid var(--best);outline-offset:-2px;font-weight:700}
+table.data td.besttie{outline:2px dashed var(--best);outline-offset:-2px}
 table.data td.na{color:#aab}
 table.data td.oor{color:var(--warn)}
 table.data td.warn{color:var(--warn);font-weight:600}
@@ -310,7 +311,9 @@ def _tables_section(res: Results, tables: dict) -> str:
              'patches <span class="paper">(paper Table 1)</span></h3>')
     if tables.get("table1"):
         t.append(f'<div class="tablewrap">{tables["table1"]}</div>')
-        t.append(f'<p class="note">ColorChecker at {lum:g} cd/m². Boxed: the lowest value in the row.</p>')
+        t.append(f'<p class="note">ColorChecker at {lum:g} cd/m². Each value ± half its 95 % interval over the noise '
+                 "realisations. Boxed: the lowest value in the row when its interval overlaps no other's; dashed: "
+                 "the lowest value, tied within the intervals.</p>")
     else:
         t.append('<div class="absent"><b>Not available:</b> no ColorChecker (macbeth) scene in this study.</div>')
     for L, tab in tables.get("table2", []):
@@ -320,7 +323,8 @@ def _tables_section(res: Results, tables: dict) -> str:
         if tab:
             t.append(f'<div class="tablewrap">{tab}</div>')
             t.append('<p class="note">Boxed: the best value of the metric for the demosaic (the paper\'s red '
-                     "boxes). ↑ higher / ↓ lower is better; † outside the metric's score range (see below); ≥ an "
+                     "boxes) when its 95 % interval overlaps no other CFA's; dashed: the best value, but inside "
+                     "another CFA's interval (a tie). Each value ± half its 95 % interval. ↑ higher / ↓ lower is better; † outside the metric's score range (see below); ≥ an "
                      "MSP where no moiré was found up to the chirp's top frequency. Hover a cell for its score and "
                      "rank.</p>")
     if not tables.get("table2"):
@@ -334,8 +338,9 @@ def _tables_section(res: Results, tables: dict) -> str:
             t.append('<p class="note">Each cell: the mean of the CFA\'s normalised metric scores for that method, '
                      "± half its 95 % interval over the noise realisations, and its rank in brackets (1 = best); "
                      "a range such as (1–3) is a rank interval: CFAs whose score intervals overlap are tied, "
-                     "and a tie is not a ranking. 'Total' is the mean over the methods. Boxed: rank 1. Shading "
-                     "follows the score.</p>")
+                     "and a tie is not a ranking. 'Total' is the mean over the methods; rows are sorted by it. Boxed: "
+                     "a rank interval of exactly 1 (first beyond the intervals). Shading follows the score. The "
+                     "intervals cover sensor noise (the noise realisations); the renders are fixed.</p>")
     if not tables.get("table3"):
         t.append('<div class="absent"><b>Not available:</b> nothing was scored.</div>')
     if tables.get("other"):
