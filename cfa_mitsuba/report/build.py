@@ -28,9 +28,14 @@ def _figure_functions(res: Results, thumbnails: bool):
     from . import figures_scores as fs
     from . import tiles
 
-    yield fs.radar_per_demosaic
-    yield fs.radar_per_cfa
-    yield fs.rank_chart
+    from . import figures_ranks as fr
+
+    if len(res.cfas) > fr.HEATMAP_ABOVE:  # a radar of more polygons cannot be read
+        yield fr.score_heatmap
+    else:
+        yield fs.radar_per_demosaic
+        yield fs.radar_per_cfa
+    yield fr.rank_chart
     yield tiles.tiles_by_family
     yield fd.patch_ab
     yield fd.patch_xy
@@ -75,7 +80,7 @@ def _draw(res: Results, thumbnails: bool, log) -> tuple[list, list]:
 
 
 def _section_of(name: str) -> str:
-    for key, sec in (("radar", "scores"), ("rank", "scores"), ("patch", "colour"), ("scielab", "scielab"),
+    for key, sec in (("radar", "scores"), ("heatmap", "scores"), ("rank", "scores"), ("patch", "colour"), ("scielab", "scielab"),
                      ("mtf", "mtf"), ("moire", "moire"), ("gray", "achromatic"), ("sweep", "sweep"),
                      ("thumb", "outputs"), ("sensor", "sensor")):
         if key in name:
