@@ -82,11 +82,12 @@ def _intervals(res: Results) -> dict:
             for r in m.itertuples(index=False)}
 
 
-def _pm(ci) -> str:
-    """`` ±half`` of a 95 % interval, small, after a value."""
+def _pm(ci, metric: str) -> str:
+    """``±half`` of a 95 % interval, small, on a line of its own under the value
+    (the column stays as wide as the values), one decimal more than the value."""
     if ci is None or not all(np.isfinite(ci)):
         return ""
-    return f' <span class="ci">±{(ci[1] - ci[0]) / 2:.2g}</span>'
+    return f'<br><span class="ci">±{(ci[1] - ci[0]) / 2:.{metric_display(metric).decimals + 1}f}</span>'
 
 
 def _separated(best: set, cis: dict) -> set:
@@ -130,7 +131,7 @@ def table1(res: Results) -> str | None:
                     row.append('<td class="na">—</td>')
                     continue
                 klass = ("best" if c in best else "besttie" if c in by_value else "") if len(cfas) > 1 else ""
-                row.append(f'<td class="{klass}" data-value="{_num(v)}">{fmt_value(m, v)}{_pm(cis[c])}</td>')
+                row.append(f'<td class="{klass}" data-value="{_num(v)}">{fmt_value(m, v)}{_pm(cis[c], m)}</td>')
             row.append("</tr>")
             out.append("".join(row))
     out.append("</tbody></table>")
@@ -185,7 +186,7 @@ def table2(res: Results, luminance: float) -> str | None:
                     ge = "≥"
                     tip += "; no moiré up to the chirp's top frequency: a lower bound"
                 row.append(f'<td class="{" ".join(klass)}" data-value="{_num(r.value)}" title="{_e(tip)}">'
-                           f"{ge}{fmt_value(m, r.value)}{mark}{_pm(cis[c])}</td>")
+                           f"{ge}{fmt_value(m, r.value)}{mark}{_pm(cis[c], m)}</td>")
             row.append("</tr>")
             out.append("".join(row))
     out.append("</tbody></table>")
