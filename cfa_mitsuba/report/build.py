@@ -134,6 +134,12 @@ def _write(path: Path, data) -> None:
             tmp.write_text(data, encoding="utf-8")
 
 
+def _moire_sensitivity(res: Results):
+    from .moire_sensitivity import sensitivity_table
+
+    return sensitivity_table(res)
+
+
 def _facts(res: Results) -> dict:
     facts: dict = {}
     s = res.scores
@@ -269,6 +275,7 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
         "sweep": tables.sweep_table(res),
         "ranges": tables.ranges_table(res),
         "policies": tables.policy_table(res),
+        "moire_thresholds": _moire_sensitivity(res),
     }
     text = page.render_page(res, figures=figures, absents=absents, embeds=embeds, tables=tabs, facts=_facts(res))
     # figures/: this build's files only (a rebuild must not leave figures of CFAs no longer in the

@@ -347,6 +347,13 @@ def _tables_section(res: Results, tables: dict) -> str:
         t.append('<details class="more"><summary>Measurements reported but not scored (ΔE*ab, grey ΔL, '
                  "interior S-CIELAB)</summary>")
         t.append(f'<div class="tablewrap">{tables["other"]}</div></details>')
+    if tables.get("moire_thresholds"):
+        t.append('<details class="more"><summary>Moiré starting point at C*ab thresholds 20, 25 and 30 (how much '
+                 "the MSP ranking turns on the paper's threshold)</summary>")
+        t.append(f'<div class="tablewrap">{tables["moire_thresholds"]}</div><p class="note">From each camera\'s '
+                 "block-mean chroma curve (first noise realisation), by the metric's own rule; ≥: no moiré up to "
+                 "the chirp's top frequency (a bound); shaded rows move by more than 10 % between 20 and 30.</p>"
+                 "</details>")
     if tables.get("sweep"):
         t.append('<details class="more"><summary>The luminance sweep\'s values</summary>')
         t.append(f'<div class="tablewrap">{tables["sweep"]}</div></details>')
