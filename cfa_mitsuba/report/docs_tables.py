@@ -136,6 +136,39 @@ def claims_sentence(repo: Path, results: str) -> str:
                      if v in by)
 
 
+def design_table(repo: Path, results: str) -> str:
+    """A design run's fullchain.csv as Markdown: each CFA's objectives with 95 % intervals and what dominates it."""
+    import pandas as pd
+
+    path = repo / results / "fullchain.csv"
+    if not path.is_file():
+        raise CfaMitsubaError(f"{results}/fullchain.csv not found")
+    f = pd.read_csv(path, keep_default_na=False)
+    objectives = [c for c in f.columns if "@" in c and not c.endswith((" low", " high", " n"))]
+    head = ["CFA", "tile", *[o.replace("/bilinear", "") for o in objectives], "dominated by"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in f.to_dict("records"):
+        name = f"**{r['cfa']}**" if str(r["pareto"]) == "True" else r["cfa"]
+        cells = [name, r["tile_text"]] + [f"{float(r[o]):.4g} [{float(r[o + ' low']):.4g}, {float(r[o + ' high']):.4g}]"
+                                          for o in objectives]
+        dom = r["dominated_by"] or ("— (Pareto)" if str(r["pareto"]) == "True" else "—")
+        lines.append("| " + " | ".join([*cells, dom]) + " |")
+    return "\n\n" + "\n".join(lines) + "\n\n"
+
+
+def design_front(repo: Path, results: str) -> str:
+    """How many candidates a design run put on the Pareto front, of how many run through the full chain."""
+    import pandas as pd
+
+    f = pd.read_csv(repo / results / "fullchain.csv", keep_default_na=False)
+    cand = f[f["kind"] == "candidate"]
+    n_front = int((cand["pareto"].astype(str) == "True").sum())
+    named = f[f["kind"] == "named"]
+    beaten = sorted({d for d in cand["dominated_by"] if d})
+    return (f"{n_front} Pareto candidate(s) of {len(cand)} run through the full chain beside "
+            f"{', '.join(named['cfa'])}" + (f"; candidates dominated by {', '.join(beaten)}" if beaten else ""))
+
+
 #: {name: function(repo, *args) -> Markdown}
 GENERATORS = {
     "rank-table": rank_table,
@@ -144,4 +177,6 @@ GENERATORS = {
     "decisions": decisions_table_md,
     "spearman": spearman_sentence,
     "claims": claims_sentence,
+    "design-table": design_table,
+    "design-front": design_front,
 }
