@@ -122,6 +122,21 @@ def _ideal_values(ideal, scored) -> dict:
     return out
 
 
+def _measured(scores, means):
+    """scores.csv with the measured means and intervals in ``value``, ``ci_low``, ``ci_high`` and the
+    ``censored`` flag (the scores may have been computed from a bound's scoring value)."""
+    if scores.empty:
+        return scores
+    keys = ["scene", "cfa", "demosaic", "luminance", "metric"]
+    m = means[keys + ["value", "ci_low", "ci_high", "censored"]].copy()
+    m["luminance"] = m["luminance"].astype(float)
+    out = scores.drop(columns=["value", "ci_low", "ci_high"]).assign(luminance=scores["luminance"].astype(float))
+    out = out.merge(m, on=keys, how="left")
+    cols = list(scores.columns)
+    cols.insert(cols.index("unit") + 1 if "unit" in cols else len(cols), "censored")
+    return out[cols]
+
+
 def write_tables(out_dir: Path, realisations, ideal, *, paper_ranges: dict, overrides: dict, policy: str,
                  clip: bool, builtin_scenes) -> tuple:
     """Write every table of the module docstring atomically; returns
@@ -151,7 +166,10 @@ def write_tables(out_dir: Path, realisations, ideal, *, paper_ranges: dict, over
             if m in constant and worst != best:
                 constant.remove(m)
         cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
-        scores = score_realisations(scored_real[cols], ranges, clip=clip, constant=constant)
+        from .censored import values_for_scoring
+
+        scored_real = values_for_scoring(scored_real, ranges)  # a bound scores by the stated rule (censored.py)
+        scores = _measured(score_realisations(scored_real[cols], ranges, clip=clip, constant=constant), scored_mean)
         clipping, ranks = policy_summary(scored_mean, paper_ranges, ideal_vals, clip, realisations=scored_real)
         clipping["scope"] = "clipping"
         ranks["scope"] = "rank"
