@@ -145,20 +145,7 @@ def _facts(res: Results) -> dict:
     s = res.scores
     lum = res.primary_luminance
     if s is not None and lum is not None and len(s):
-        sl = s[s["luminance"] == lum]
-        per = sl.drop_duplicates(["cfa", "demosaic"])
-        if "total_score" in per.columns and len(per):
-            tot = per.drop_duplicates("cfa").set_index("cfa")["total_score"].astype(float)
-            best = tot.idxmax()
-            facts["best_total"] = (best, float(tot[best]))
-        if len(res.demosaics) > 1:
-            bpd = {}
-            for d in res.demosaics:
-                g = per[per["demosaic"] == d]
-                if len(g):
-                    r = g.loc[g["mean_score"].astype(float).idxmax()]
-                    bpd[d] = (str(r["cfa"]), float(r["mean_score"]))
-            facts["best_per_demosaic"] = bpd
+        # the cards (who is first, by the rank-interval rule) are decision_panel.summary_cards
         if "out_of_range" in s.columns:
             lines = []
             from .style import fmt_value, metric_display
