@@ -327,6 +327,7 @@ def sweep_table(res: Results) -> str | None:
     if not parts:
         return None
     cfas = [c for c in res.cfas if c in set(m["cfa"])]
+    ints = _intervals(res)
     out = ['<table class="data">', _head(res, cfas, ["metric", "demosaic", "cd/m²"]), "<tbody>"]
     for scene, metric, g in parts:
         for d in res.demosaics:
@@ -341,8 +342,9 @@ def sweep_table(res: Results) -> str | None:
                 row.append(f'<td class="lum">{lum:g}</td>')
                 for c in cfas:
                     v = res.value(scene, c, d, lum, metric)
+                    ci = ints.get((scene, c, d, float(lum), metric))
                     row.append('<td class="na">—</td>' if v is None else
-                               f'<td data-value="{_num(v)}">{fmt_value(metric, v)}</td>')
+                               f'<td data-value="{_num(v)}">{fmt_value(metric, v)}{_pm(ci, metric)}</td>')
                 row.append("</tr>")
                 out.append("".join(row))
     out.append("</tbody></table>")
