@@ -68,11 +68,19 @@ class Span:
     end: int
 
 
+def _in_code(src: str, pos: int) -> bool:
+    """Whether ``pos`` lies in a code block (fenced, or a line indented by 4 spaces): examples, not markers."""
+    line_start = src.rfind("\n", 0, pos) + 1
+    if src.startswith("    ", line_start) or src.startswith("\t", line_start):
+        return True
+    return src.count("\n```", 0, pos) % 2 == 1
+
+
 def find_spans(path: Path) -> list[Span]:
-    """Every marked span of the Markdown file ``path``, in order."""
+    """Every marked span of the Markdown file ``path``, in order (code blocks left out)."""
     src = path.read_text()
     return [Span(path, src.count("\n", 0, m.start()) + 1, m.group("spec"), m.group("text"),
-                 m.start("text"), m.end("text")) for m in MARKER.finditer(src)]
+                 m.start("text"), m.end("text")) for m in MARKER.finditer(src) if not _in_code(src, m.start())]
 
 
 _CSV_QUERY = re.compile(r"^(?:(?P<agg>first|mean|min|max|sum|count|nunique):)?(?P<col>[\w-]+)"
@@ -192,9 +200,11 @@ def check(repo: Path = REPO, files=None) -> list[str]:
             problems.append(f"{path.relative_to(repo)}: {e}")
             continue
         for span, want in diffs:
-            short = (lambda s: s if len(s) < 60 else s[:57] + "...")
-            problems.append(f"{path.relative_to(repo)}:{span.line}: '{span.spec}' holds {short(span.text)!r}, "
-                            f"its source gives {short(want)!r}")
+            # where they first differ, with a little context either side
+            at = next((i for i, (a, b) in enumerate(zip(span.text, want)) if a != b), min(len(span.text), len(want)))
+            lo = max(0, at - 25)
+            problems.append(f"{path.relative_to(repo)}:{span.line}: '{span.spec}' holds {span.text[lo:at + 25]!r}, "
+                            f"its source gives {want[lo:at + 25]!r}")
     return problems
 
 
