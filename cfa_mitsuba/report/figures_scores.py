@@ -256,6 +256,10 @@ def luminance_sweep(res: Results):
                 st = cst[cfa]
                 ax.plot(gc["luminance"], gc["value"], color=st["color"], marker=st["marker"],
                         linestyle=st["linestyle"], linewidth=1.2, markersize=3.5)
+                if {"ci_low", "ci_high"} <= set(gc.columns):  # the 95 % interval over the noise realisations
+                    ax.errorbar(gc["luminance"], gc["value"], yerr=np.vstack([gc["value"] - gc["ci_low"],
+                                                                             gc["ci_high"] - gc["value"]]),
+                                fmt="none", ecolor=st["color"], elinewidth=0.9, capsize=2.0)
                 if cfa not in cfas_drawn:
                     cfas_drawn.append(cfa)
             ax.set_xscale("log")
@@ -267,7 +271,8 @@ def luminance_sweep(res: Results):
             label_sweep_panel(ax, r, c, rows, d, "scene luminance (cd/m²)", info, scene)
     cfa_legend(fig, cst, [c for c in res.cfas if c in cfas_drawn], ncol=ncol)
     cap = ("Each metric that was measured at several luminances, against the scene's mean luminance "
-           "(log axis; the dotted line is the luminance the scores use). The exposure is the one chosen at the "
+           "(log axis; the dotted line is the luminance the scores use); whiskers: the 95 % interval over the "
+           "noise realisations. The exposure is the one chosen at the "
            "reference luminance (capture.reference_luminance_cd_m2, 100 cd/m² by default) at every level, so "
            "darker scenes give fewer photons and more visible noise, and scenes brighter than the reference can "
            "saturate pixels.")
