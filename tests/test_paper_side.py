@@ -230,20 +230,25 @@ def test_verdicts_follow_the_numbers():
     claim = {"kind": "order", "metric": "delta-e76", "demosaic": "bilinear", "groups": [["rgbw1"], ["bayer"]]}
     assert paper_data.judge(run({"rgbw1": (2.0, 0.1), "bayer": (3.0, 0.1)}), claim)[0] == "holds"
     assert paper_data.judge(run({"rgbw1": (3.0, 0.1), "bayer": (2.0, 0.1)}), claim)[0] == "differs"
-    assert paper_data.judge(run({"rgbw1": (2.0, 0.6), "bayer": (3.0, 0.6)}), claim)[0] == "unresolved"
-    strict = {**claim, "strict": True, "groups": [["rgbw1", "rgbw2"], ["bayer"]]}
-    # the group mean is better, but one member is not: strict says differs
-    assert paper_data.judge(run({"rgbw1": (1.0, 0.1), "rgbw2": (3.5, 0.1), "bayer": (3.0, 0.1)}),
-                            {**strict, "strict": False})[0] == "holds"
-    assert paper_data.judge(run({"rgbw1": (1.0, 0.1), "rgbw2": (3.5, 0.1), "bayer": (3.0, 0.1)}), strict)[0] == "differs"
+    assert paper_data.judge(run({"rgbw1": (2.0, 0.6), "bayer": (3.0, 0.6)}), claim)[0] == "tie"
+    group = {**claim, "groups": [["rgbw1", "rgbw2"], ["bayer"]]}
+    # the group mean is better, but one member is worse beyond the intervals: judged pairwise, that differs,
+    # with or without the old ``strict`` key
+    for strict in (False, True):
+        assert paper_data.judge(run({"rgbw1": (1.0, 0.1), "rgbw2": (3.5, 0.1), "bayer": (3.0, 0.1)}),
+                                {**group, "strict": strict})[0] == "differs"
+    # one member better, the other within the intervals: a tie, not a hold
+    assert paper_data.judge(run({"rgbw1": (1.0, 0.1), "rgbw2": (2.9, 0.2), "bayer": (3.0, 0.1)}), group)[0] == "tie"
     similar = {"kind": "similar", "metric": "delta-e76", "demosaic": "bilinear", "cfas": ["rgbw1", "bayer"],
                "max_range": 0.5}
-    assert paper_data.judge(run({"rgbw1": (2.0, 0.1), "bayer": (2.4, 0.1)}), similar)[0] == "holds"
-    assert paper_data.judge(run({"rgbw1": (2.0, 0.1), "bayer": (2.6, 0.1)}), similar)[0] == "differs"
+    assert paper_data.judge(run({"rgbw1": (2.0, 0.01), "bayer": (2.4, 0.01)}), similar)[0] == "holds"
+    assert paper_data.judge(run({"rgbw1": (2.0, 0.1), "bayer": (2.4, 0.1)}), similar)[0] == "tie"
+    assert paper_data.judge(run({"rgbw1": (2.0, 0.01), "bayer": (2.6, 0.01)}), similar)[0] == "differs"
     at_most = {"kind": "at_most", "metric": "delta-e76", "demosaic": "bilinear", "cfas": ["rgbw1", "bayer"],
                "max_value": 1.0}
     assert paper_data.judge(run({"rgbw1": (0.5, 0.1), "bayer": (0.8, 0.1)}), at_most)[0] == "holds"
-    assert paper_data.judge(run({"rgbw1": (0.5, 0.1), "bayer": (0.95, 0.1)}), at_most)[0] == "differs"
+    assert paper_data.judge(run({"rgbw1": (0.5, 0.1), "bayer": (0.95, 0.1)}), at_most)[0] == "tie"
+    assert paper_data.judge(run({"rgbw1": (0.5, 0.1), "bayer": (1.2, 0.1)}), at_most)[0] == "differs"
 
 
 def test_paper_values_are_placed_once_per_cfa_and_metric():

@@ -245,3 +245,32 @@ def test_dask_cluster_gives_identical_results_despite_a_killed_worker(quick, das
     assert "Dask cluster" in stderr
     assert (out / "metrics.csv").read_bytes() == (ref / "metrics.csv").read_bytes()
     assert (out / "scores.csv").read_bytes() == (ref / "scores.csv").read_bytes()
+
+
+def test_decisions_name_exactly_the_cfas_whose_rank_interval_contains_one(quick):
+    """decisions.csv (issue 24): the overall row is Table 3's rank intervals, the rule is the same for
+    every aspect, the report's cards follow it, and policies.csv's totals for the study's policy are scores.csv's."""
+    import re
+
+    out, _, _ = quick
+    d = pd.read_csv(out / "decisions.csv", keep_default_na=False)
+    assert list(d.columns) == ["aspect", "cfas", "verdict", "detail"]
+    assert list(d["aspect"]) == ["colour", "sharpness", "moire", "low light", "overall"]
+    s = pd.read_csv(out / "scores.csv").drop_duplicates("cfa")
+    overall = d[d["aspect"] == "overall"].iloc[0]
+    assert set(overall["cfas"].split()) == set(s[s["total_rank_best"] == 1]["cfa"])
+    one = s[(s["total_rank_best"] == 1) & (s["total_rank_worst"] == 1)]
+    assert overall["verdict"] == ("winner" if len(one) == 1 else "tie")
+    for r in d.itertuples():
+        assert r.verdict in ("winner", "tie", "unmeasured")
+        assert (r.verdict == "winner") == (len(r.cfas.split()) == 1 and "lies above every other" in r.detail)
+    low = d[d["aspect"] == "low light"].iloc[0]
+    assert low["verdict"] != "unmeasured" and "12 cd/m^2" in low["detail"]  # the quick sweep's 12 cd/m^2
+    # the report's cards name a best CFA only when its rank interval is exactly 1
+    html = (out / "report.html").read_text()
+    named = re.findall(r'<div class="k">Best CFA overall</div><div class="v">(?:<span[^>]*></span>)?([\w-]+)<', html)
+    assert named == list(one["cfa"]), named
+    pol = pd.read_csv(out / "policies.csv")
+    ideal = pol[(pol["scope"] == "rank") & (pol["policy"] == "ideal")].set_index("cfa")
+    np.testing.assert_allclose(ideal.loc[s["cfa"], "total_score"].to_numpy(), s["total_score"].to_numpy(), rtol=1e-9)
+    assert (ideal.loc[s["cfa"], "total_rank"].to_numpy() == s["total_rank"].to_numpy()).all()

@@ -34,8 +34,9 @@ def test_unmeasurable_metric_goes_to_failures_csv(tmp_path):
     renders.mkdir()
     _frame_exr(renders / "frame.exr", ["moire", "mtf", "ssim"])
     out = tmp_path / "out"
+    # one realisation: this frame's noise decides whether an "edge" is found in it, realisation by realisation
     proc = run_cli("evaluate", "--renders", renders, "--cfa", "bayer,rgbw1", "--demosaic", "bilinear,pocs",
-                   "--luminance", "100", "--out", out, "--quiet")
+                   "--luminance", "100", "--seeds", "1", "--out", out, "--quiet")
     assert proc.returncode == 0, proc.stderr
     assert "Traceback" not in proc.stderr and "could not be measured" in proc.stderr
     failures = pd.read_csv(out / "failures.csv")
@@ -92,3 +93,22 @@ def test_unreachable_scheduler_is_refused_before_anything_is_written(tmp_path, m
         run_study(load_config(REPO / "configs" / "quick.toml"), out, scheduler="tcp://127.0.0.1:1",
                   progress=False, log=lambda m: None)
     assert list(out.iterdir()) == []
+
+
+def test_evaluate_seeds_gives_real_intervals(tmp_path):
+    """``evaluate --seeds N`` (issue 24): N noise realisations per capture, so every value has
+    n = N and an interval of non-zero width; a failure is listed once, not once per realisation;
+    --seeds 0 is one line and exit 2."""
+    renders = tmp_path / "renders"
+    renders.mkdir()
+    _frame_exr(renders / "frame.exr", ["ssim", "mtf"])
+    out = tmp_path / "out"
+    proc = run_cli("evaluate", "--renders", renders, "--cfa", "bayer", "--demosaic", "bilinear",
+                   "--luminance", "20", "--seeds", "2", "--out", out, "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    m = pd.read_csv(out / "metrics.csv")
+    assert (m["n"] == 2).all() and (m["ci_high"] > m["ci_low"]).all()
+    assert len(pd.read_csv(out / "failures.csv")) == 1  # mtf: no edge, once
+    bad = run_cli("evaluate", "--renders", renders, "--cfa", "bayer", "--demosaic", "bilinear",
+                  "--seeds", "0", "--out", tmp_path / "bad")
+    assert bad.returncode == 2 and "--seeds must be at least 1" in bad.stderr and "Traceback" not in bad.stderr

@@ -11,7 +11,7 @@ cycles per degree with the chirp's own frequency map.
 
 from __future__ import annotations
 
-__all__ = ["RECORDS", "moire", "block_chroma"]
+__all__ = ["RECORDS", "moire", "block_chroma", "msp_column"]
 
 import numpy as np
 
@@ -42,6 +42,26 @@ def block_chroma(xyz, white_xyz, *, row: int, block: int = 15) -> tuple[np.ndarr
     if h:
         bm[-h:] = np.nan
     return c[h], bm
+
+
+def msp_column(frequency_cy_per_deg, block_mean, threshold: float, block: int = 15) -> tuple[int, bool]:
+    """(column, passed): the first column, in ascending frequency, whose
+    block-mean C*ab exceeds ``threshold``; when none does, the column of the
+    top frequency and ``passed`` False (the MSP is then a lower bound).
+    Columns within ``block // 2`` of the sides have no block mean.
+
+    >>> msp_column([1.0, 2.0, 3.0, 4.0, 5.0], [0.0, 10.0, 30.0, 22.0, 40.0], 25.0, block=1)
+    (2, True)
+    >>> msp_column([1.0, 2.0, 3.0, 4.0, 5.0], [0.0, 10.0, 30.0, 22.0, 40.0], 50.0, block=1)
+    (4, False)
+    """
+    freq = np.asarray(frequency_cy_per_deg, dtype=float).reshape(-1)
+    bm = np.asarray(block_mean, dtype=float).reshape(-1)
+    half = int(block) // 2
+    cols = np.arange(half, freq.size - half)
+    order = cols[np.argsort(freq[cols], kind="stable")]
+    hits = order[bm[order] > threshold]
+    return (int(hits[0]), True) if hits.size else (int(order[-1]), False)
 
 
 def moire(reference_xyz, test_xyz, white_xyz, *, frequency_cy_per_deg, row: int | None = None,
@@ -104,11 +124,7 @@ def moire(reference_xyz, test_xyz, white_xyz, *, frequency_cy_per_deg, row: int 
 
     c_t, bm_t = block_chroma(test, white, row=row, block=block)
     c_r, bm_r = block_chroma(ref, white, row=row, block=block)
-    cols = np.arange(half, w - half)
-    order = cols[np.argsort(freq[cols], kind="stable")]
-    hits = order[bm_t[order] > threshold]
-    passed = hits.size > 0
-    col = int(hits[0]) if passed else int(order[-1])
+    col, passed = msp_column(freq, bm_t, threshold, block)
     details = {
         "msp_px": col, "passed": bool(passed), "censored": not passed,
         "frequency_cy_per_deg": freq,

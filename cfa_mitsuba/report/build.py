@@ -28,9 +28,14 @@ def _figure_functions(res: Results, thumbnails: bool):
     from . import figures_scores as fs
     from . import low_light, tiles
 
-    yield fs.radar_per_demosaic
-    yield fs.radar_per_cfa
-    yield fs.rank_chart
+    from . import figures_ranks as fr
+
+    if len(res.cfas) > fr.HEATMAP_ABOVE:  # a radar of more polygons cannot be read
+        yield fr.score_heatmap
+    else:
+        yield fs.radar_per_demosaic
+        yield fs.radar_per_cfa
+    yield fr.rank_chart
     yield tiles.tiles_by_family
     yield fd.patch_ab
     yield fd.patch_xy
@@ -76,7 +81,7 @@ def _draw(res: Results, thumbnails: bool, log) -> tuple[list, list]:
 
 
 def _section_of(name: str) -> str:
-    for key, sec in (("radar", "scores"), ("rank", "scores"), ("patch", "colour"), ("scielab", "scielab"),
+    for key, sec in (("radar", "scores"), ("heatmap", "scores"), ("rank", "scores"), ("patch", "colour"), ("scielab", "scielab"),
                      ("mtf", "mtf"), ("moire", "moire"), ("gray", "achromatic"), ("sweep", "sweep"),
                      ("thumb", "outputs"), ("sensor", "sensor")):
         if key in name:
@@ -130,25 +135,18 @@ def _write(path: Path, data) -> None:
             tmp.write_text(data, encoding="utf-8")
 
 
+def _moire_sensitivity(res: Results):
+    from .moire_sensitivity import sensitivity_table
+
+    return sensitivity_table(res)
+
+
 def _facts(res: Results) -> dict:
     facts: dict = {}
     s = res.scores
     lum = res.primary_luminance
     if s is not None and lum is not None and len(s):
-        sl = s[s["luminance"] == lum]
-        per = sl.drop_duplicates(["cfa", "demosaic"])
-        if "total_score" in per.columns and len(per):
-            tot = per.drop_duplicates("cfa").set_index("cfa")["total_score"].astype(float)
-            best = tot.idxmax()
-            facts["best_total"] = (best, float(tot[best]))
-        if len(res.demosaics) > 1:
-            bpd = {}
-            for d in res.demosaics:
-                g = per[per["demosaic"] == d]
-                if len(g):
-                    r = g.loc[g["mean_score"].astype(float).idxmax()]
-                    bpd[d] = (str(r["cfa"]), float(r["mean_score"]))
-            facts["best_per_demosaic"] = bpd
+        # the cards (who is first, by the rank-interval rule) are decision_panel.summary_cards
         if "out_of_range" in s.columns:
             lines = []
             from .style import fmt_value, metric_display
@@ -186,7 +184,10 @@ def _facts(res: Results) -> dict:
         if p:
             parts = [f"{k[:-2]} {float(v):.1f} s" for k, v in p.items() if k.endswith("_s") and k != "total_s"]
             total = p.get("total_s")
-            text = (f"{float(total):.1f} s in all" if total is not None else "") + (
+            # built inside a study the phases have no report_s yet: the total then stops before the report,
+            # and timing.json's total (written after it) adds the report's own time
+            whole = "in all" if "report_s" in p else "before this report (timing.json's total adds the report's time)"
+            text = (f"{float(total):.1f} s {whole}" if total is not None else "") + (
                 f" ({', '.join(parts)})" if parts else "")
             renders = t.get("renders") or {}
             if renders:
@@ -264,6 +265,7 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
         "ranges": tables.ranges_table(res),
         "policies": tables.policy_table(res),
         "low_light": low_light_tables(res),
+        "moire_thresholds": _moire_sensitivity(res),
     }
     text = page.render_page(res, figures=figures, absents=absents, embeds=embeds, tables=tabs, facts=_facts(res))
     # figures/: this build's files only (a rebuild must not leave figures of CFAs no longer in the

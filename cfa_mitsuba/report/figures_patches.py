@@ -84,7 +84,10 @@ def _patch_panels(res, kind, title, scene, lum, shown, sub, lims, colours, cst, 
         st = cst[c]
         ax.plot([0.0], [1.06], transform=ax.transAxes, marker=st["marker"], color=st["color"], markersize=7,
                 clip_on=False, linestyle="none")
-        ax.set_title(f"   {c}  (ΔE00 {fmt_value('delta-e', det.get('value'))})", loc="left", x=0.03)
+        # the title gives Table 1's number (the mean over the noise realisations); the dots are the first one's
+        mean = res.value(scene, c, shown, lum, "delta-e")
+        ax.set_title(f"   {c}  (ΔE00 {fmt_value('delta-e', mean if mean is not None else det.get('value'))})",
+                     loc="left", x=0.03)
         ax.set_xlim(lo[0], hi[0])
         ax.set_ylim(lo[1], hi[1])
         ax.set_aspect("equal", adjustable="box")
@@ -101,7 +104,9 @@ def _patch_panels(res, kind, title, scene, lum, shown, sub, lims, colours, cst, 
     cap = (f"The 24 ColorChecker patches ({scene}, {lum:g} cd/m², demosaic {shown}) in {what}: large circles "
            f"filled with the patch's colour are the ideal sensor; the small black dot is the camera "
            f"(mean-matched to the ideal), joined to its ideal by a line whose length is the error (true scale). "
-           f"All panels share one scale; the marker before each title is the CFA's in the other figures.")
+           f"All panels share one scale; the marker before each title is the CFA's in the other figures. "
+           f"The dots are the first noise realisation; the ΔE00 in each title is the mean over the "
+           f"realisations, as in Table 1.")
     if not is_ab:
         cap += " The grey curve is the spectral locus, + the D65 white."
     return ReportFigure(f"{kind}-{shown}", "colour", title, cap, fig, group=shown)

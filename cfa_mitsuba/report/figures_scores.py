@@ -6,7 +6,6 @@ from __future__ import annotations
 
 __all__ = ["radar_per_cfa", "radar_per_demosaic", "rank_chart", "luminance_sweep"]
 
-import math
 
 import numpy as np
 
@@ -212,61 +211,10 @@ def radar_per_demosaic(res: Results):
 
 
 def rank_chart(res: Results):
-    """Mean normalised score and rank of each CFA, one panel per demosaic and
-    one for the total (the paper's Fig 17 a-e and Table 3)."""
-    title = "CFA ranks per demosaicing method and in total (paper Fig 17)"
-    s = res.scores
-    if s is None or res.primary_luminance is None or not len(s):
-        return Absent("scores", title, "no scores")
-    s = s[s["luminance"] == res.primary_luminance]
-    per = s.drop_duplicates(["cfa", "demosaic"])
-    dems = [d for d in res.demosaics if d in set(per["demosaic"])]
-    panels = [(d, per[per["demosaic"] == d].set_index("cfa")["mean_score"].astype(float)) for d in dems]
-    if "total_score" in per.columns and len(dems) > 1:
-        tot = per.drop_duplicates("cfa").set_index("cfa")["total_score"].astype(float)
-        panels.append(("total (mean over demosaics)", tot))
-    cst = cfa_styles(res.cfas)
-    n_cfa = max(len(p[1]) for p in panels)
-    cols = min(len(panels), 5)
-    rows = math.ceil(len(panels) / cols)
-    fig, axes = panel_grid(rows, cols, 2.3, 0.2 * n_cfa + 0.25, left=0.15, right=0.1, top=0.3, bottom=0.45,
-                           wspace=0.25, hspace=0.75, n=len(panels))
-    vmax = max(1.0, max(float(p[1].max()) for p in panels))
-    vmin = min(0.0, min(float(p[1].min()) for p in panels))
-    for ax, (label, ser) in zip(axes, panels):
-        ser = ser.sort_values(ascending=False, kind="stable")
-        ranks = ser.rank(ascending=False, method="min").astype(int)
-        y = np.arange(len(ser))
-        ax.barh(y, ser.to_numpy(), color=[cst[c]["color"] for c in ser.index], edgecolor="#333333",
-                linewidth=0.4, height=0.72)
-        for yy, (cfa, v) in zip(y, ser.items()):
-            ax.text(vmin + 0.01 * (vmax - vmin), yy, f"{ranks[cfa]}. {cfa}", va="center", ha="left", fontsize=7.5,
-                    color="white" if _dark(cst[cfa]["color"]) and v > 0.35 * vmax else "black",
-                    clip_on=True)
-            ax.text(v + 0.01 * (vmax - vmin), yy, f"{v:.3f}", va="center", ha="left", fontsize=7)
-        ax.set_axisbelow(True)
-        ax.set_yticks([])
-        ax.set_ylim(len(ser) - 0.5, -0.5)
-        ax.set_xlim(vmin, vmax * 1.18)
-        ax.set_xlabel("mean normalised score")
-        ax.set_title(label)
-        ax.grid(axis="y", visible=False)
-    cap = (f"Bars: the mean of a CFA's normalised metric scores for each demosaicing method (Table 3 rows) "
-           f"and their mean over the methods (Table 3 'Total'), at {res.primary_luminance:g} cd/m²; "
-           "sorted, with the rank in front of the name (1 = best; ties share the lower rank).")
-    if "n_metrics" in per.columns and per["n_metrics"].nunique() > 1:
-        cap += " Not every CFA has the same number of metrics here: compare only those that do (Table 3)."
-    return ReportFigure("ranks", "scores", title, cap, fig)
+    """The rank chart with score and rank intervals (:func:`.figures_ranks.rank_chart`)."""
+    from .figures_ranks import rank_chart as chart
 
-
-def _dark(hex_colour: str) -> bool:
-    """True when white text reads better than black on this colour (WCAG contrast)."""
-    from ..colorimetry import srgb_to_linear
-
-    h = hex_colour.lstrip("#")
-    lin = srgb_to_linear(np.array([int(h[i:i + 2], 16) / 255 for i in (0, 2, 4)]))
-    y = 0.2126 * lin[0] + 0.7152 * lin[1] + 0.0722 * lin[2]
-    return (1.05 / (y + 0.05)) > ((y + 0.05) / 0.05)
+    return chart(res)
 
 
 def luminance_sweep(res: Results):
@@ -308,6 +256,10 @@ def luminance_sweep(res: Results):
                 st = cst[cfa]
                 ax.plot(gc["luminance"], gc["value"], color=st["color"], marker=st["marker"],
                         linestyle=st["linestyle"], linewidth=1.2, markersize=3.5)
+                if {"ci_low", "ci_high"} <= set(gc.columns):  # the 95 % interval over the noise realisations
+                    ax.errorbar(gc["luminance"], gc["value"], yerr=np.vstack([gc["value"] - gc["ci_low"],
+                                                                             gc["ci_high"] - gc["value"]]),
+                                fmt="none", ecolor=st["color"], elinewidth=0.9, capsize=2.0)
                 if cfa not in cfas_drawn:
                     cfas_drawn.append(cfa)
             ax.set_xscale("log")
@@ -319,7 +271,8 @@ def luminance_sweep(res: Results):
             label_sweep_panel(ax, r, c, rows, d, "scene luminance (cd/m²)", info, scene)
     cfa_legend(fig, cst, [c for c in res.cfas if c in cfas_drawn], ncol=ncol)
     cap = ("Each metric that was measured at several luminances, against the scene's mean luminance "
-           "(log axis; the dotted line is the luminance the scores use). The exposure is the one chosen at the "
+           "(log axis; the dotted line is the luminance the scores use); whiskers: the 95 % interval over the "
+           "noise realisations. The exposure is the one chosen at the "
            "reference luminance (capture.reference_luminance_cd_m2, 100 cd/m² by default) at every level, so "
            "darker scenes give fewer photons and more visible noise, and scenes brighter than the reference can "
            "saturate pixels.")

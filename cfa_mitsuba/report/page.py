@@ -75,6 +75,7 @@ table.data th.metric,table.data td.scene{font-weight:normal}
 table.data tr.group-start>*{border-top:2px solid var(--rule)}
 table.data tr.total>*{border-top:2px solid #8c959f;font-weight:600}
 table.data td.best{outline:2px solid var(--best);outline-offset:-2px;font-weight:700}
+table.data td.besttie{outline:2px dashed var(--best);outline-offset:-2px}
 table.data td.na{color:#aab}
 table.data td.oor{color:var(--warn)}
 table.data td.warn{color:var(--warn);font-weight:600}
@@ -174,12 +175,11 @@ def _summary(res: Results, facts: dict, not_run: list) -> str:
     cst = cfa_styles(res.cfas)
     parts = []
     cards = []
-    if facts.get("best_total"):
-        c, v = facts["best_total"]
-        sub = "mean of the per-demosaic scores" if len(res.demosaics) > 1 else "mean normalised score"
-        cards.append(("Best CFA overall", c, f"{v:.4f} ({sub})", cst.get(c, {}).get("color")))
-    for d, (c, v) in facts.get("best_per_demosaic", {}).items():
-        cards.append((f"Best with {d}", c, f"score {v:.4f}", cst.get(c, {}).get("color")))
+    from .decision_panel import decision_panel, summary_cards, sweep_lines
+
+    parts.append(decision_panel(res.root))
+    for label, c, sub in summary_cards(res.scores, res.primary_luminance, res.demosaics):
+        cards.append((label, c, sub, cst.get(c, {}).get("color")))
     if cards:
         parts.append('<div class="cards">')
         for k, v, s, colour in cards:
@@ -205,12 +205,7 @@ def _summary(res: Results, facts: dict, not_run: list) -> str:
     rows.append(("Demosaicing", f"{len(res.demosaics)}: " + ", ".join(res.demosaics)))
     lums = ", ".join(f"{v:g}" for v in res.base_luminances) or "—"
     rows.append(("Luminance", f"{lums} cd/m² (every metric)"))
-    sweeps = []
-    for sw in cfg.get("sweeps") or []:
-        if isinstance(sw, dict):
-            sweeps.append(f"{', '.join(metric_display(m).short for m in sw.get('metrics') or [])} on "
-                          f"{sw.get('scene')} at {', '.join(f'{float(v):g}' for v in sw.get('luminances') or [])}"
-                          " cd/m²")
+    sweeps = sweep_lines(cfg, lambda m: metric_display(m).short)
     if sweeps:
         rows.append(("Sweeps", "; ".join(sweeps)))
     n_eval = len(res.metrics.drop_duplicates(["scene", "cfa", "demosaic", "luminance"])) if len(res.metrics) else 0
@@ -316,7 +311,9 @@ def _tables_section(res: Results, tables: dict) -> str:
              'patches <span class="paper">(paper Table 1)</span></h3>')
     if tables.get("table1"):
         t.append(f'<div class="tablewrap">{tables["table1"]}</div>')
-        t.append(f'<p class="note">ColorChecker at {lum:g} cd/m². Boxed: the lowest value in the row.</p>')
+        t.append(f'<p class="note">ColorChecker at {lum:g} cd/m². Each value ± half its 95 % interval over the noise '
+                 "realisations. Boxed: the lowest value in the row when its interval overlaps no other's; dashed: "
+                 "the lowest value, tied within the intervals.</p>")
     else:
         t.append('<div class="absent"><b>Not available:</b> no ColorChecker (macbeth) scene in this study.</div>')
     for L, tab in tables.get("table2", []):
@@ -326,7 +323,8 @@ def _tables_section(res: Results, tables: dict) -> str:
         if tab:
             t.append(f'<div class="tablewrap">{tab}</div>')
             t.append('<p class="note">Boxed: the best value of the metric for the demosaic (the paper\'s red '
-                     "boxes). ↑ higher / ↓ lower is better; † outside the metric's score range (see below); ≥ an "
+                     "boxes) when its 95 % interval overlaps no other CFA's; dashed: the best value, but inside "
+                     "another CFA's interval (a tie). Each value ± half its 95 % interval. ↑ higher / ↓ lower is better; † outside the metric's score range (see below); ≥ an "
                      "MSP where no moiré was found up to the chirp's top frequency. Hover a cell for its score and "
                      "rank.</p>")
     if not tables.get("table2"):
@@ -340,14 +338,22 @@ def _tables_section(res: Results, tables: dict) -> str:
             t.append('<p class="note">Each cell: the mean of the CFA\'s normalised metric scores for that method, '
                      "± half its 95 % interval over the noise realisations, and its rank in brackets (1 = best); "
                      "a range such as (1–3) is a rank interval: CFAs whose score intervals overlap are tied, "
-                     "and a tie is not a ranking. 'Total' is the mean over the methods. Boxed: rank 1. Shading "
-                     "follows the score.</p>")
+                     "and a tie is not a ranking. 'Total' is the mean over the methods; rows are sorted by it. Boxed: "
+                     "a rank interval of exactly 1 (first beyond the intervals). Shading follows the score. The "
+                     "intervals cover sensor noise (the noise realisations); the renders are fixed.</p>")
     if not tables.get("table3"):
         t.append('<div class="absent"><b>Not available:</b> nothing was scored.</div>')
     if tables.get("other"):
         t.append('<details class="more"><summary>Measurements reported but not scored (ΔE*ab, grey ΔL, '
                  "interior S-CIELAB)</summary>")
         t.append(f'<div class="tablewrap">{tables["other"]}</div></details>')
+    if tables.get("moire_thresholds"):
+        t.append('<details class="more"><summary>Moiré starting point at C*ab thresholds 20, 25 and 30 (how much '
+                 "the MSP ranking turns on the paper's threshold)</summary>")
+        t.append(f'<div class="tablewrap">{tables["moire_thresholds"]}</div><p class="note">From each camera\'s '
+                 "block-mean chroma curve (first noise realisation), by the metric's own rule; ≥: no moiré up to "
+                 "the chirp's top frequency (a bound); shaded rows move by more than 10 % between 20 and 30.</p>"
+                 "</details>")
     if tables.get("sweep"):
         t.append('<details class="more"><summary>The luminance sweep\'s values</summary>')
         t.append(f'<div class="tablewrap">{tables["sweep"]}</div></details>')

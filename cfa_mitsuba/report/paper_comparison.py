@@ -27,6 +27,7 @@ from pathlib import Path
 
 from ..errors import CfaMitsubaError
 from ..metrics import get_metric
+from .claim_verdicts import spearman_interval
 from .paper_data import Run, cfa_label, claims, isetcam_values, judge, load_run, paper_values
 
 #: (paper metric, heading, our metrics shown beside it), in the paper's order.
@@ -43,7 +44,7 @@ SECTIONS = (
 )
 CFAS = ("bayer", "rgb1", "rgb2", "rgb3", "rgb4", "rgb5", "cmy1", "cmy2", "cmy3", "rgbw1", "rgbw2", "rgbw3")
 DEMOSAICS = ("bilinear", "laplacian", "adaptive-laplacian", "pocs", "total")
-_MARK = {"holds": "**holds**", "differs": "**differs**", "unresolved": "unresolved", "not measured": "not measured"}
+_MARK = {"holds": "**holds**", "differs": "**differs**", "tie": "tie", "not measured": "not measured"}
 
 
 def _table(header, rows) -> list[str]:
@@ -100,8 +101,8 @@ def _claim_lines(claim: dict, runs) -> list[str]:
     out = [f"*Claim* ({'the paper' if claim['source'] == 'paper' else 'ISETCam'}): {claim['text']}", ""]
     for run in runs:
         verdict, detail = judge(run, claim)
-        why = claim.get({"holds": "why_holds", "differs": "why_differs", "unresolved": "why_unresolved"}.get(
-            verdict, ""), "")
+        why = claim.get({"holds": "why_holds", "differs": "why_differs", "tie": "why_tie"}.get(
+            verdict, ""), "the run's 95 % intervals cannot tell the compared values apart" if verdict == "tie" else "")
         out.append(f"- {run.label}: {_MARK[verdict]}. Measured: {detail}." + (f" Why: {why}" if why else ""))
     return out + [""]
 
@@ -184,20 +185,15 @@ def _table3(runs, paper) -> list[str]:
         for run, got in zip(runs, ours):
             both = [c for c in pv if c in got]
             if len(both) >= 5:
-                rho = _spearman([pv[c][0] for c in both], [got[c][0] for c in both])
-                out.append(f"- {run.label}: Spearman rank correlation with the paper over {len(both)} CFAs: "
-                           f"{rho:+.2f}.")
+                rho, lo, hi, n = spearman_interval([pv[c][0] for c in both], [got[c][0] for c in both])
+                out.append(f"- {run.label}: Spearman rank correlation with the paper over {n} CFAs: "
+                           f"{rho:+.2f} (95 % interval {lo:+.2f} to {hi:+.2f}; two runs' correlations are "
+                           "told apart only where their intervals do not overlap).")
         out.append("")
         for claim in claims():
             if claim["kind"] == "best" and claim["demosaic"] == demosaic:
                 out += _claim_lines(claim, runs)
     return out
-
-
-def _spearman(a, b) -> float:
-    import pandas as pd
-
-    return float(pd.Series(a).rank().corr(pd.Series(b).rank()))
 
 
 def _runs_table(runs) -> list[str]:
@@ -241,6 +237,15 @@ def comparison_markdown(runs) -> str:
            "reason alone: the verdicts test the paper's *claims* (orders, groups, winners), each in "
            "data/paper/claims.toml with the reason printed for its verdict.", "",
            "## The runs", ""] + _runs_table(runs)
+    out += ["## How a verdict is reached", "",
+            "Each claim makes comparisons, and each comparison is judged on the run's 95 % intervals "
+            "(cfa_mitsuba/report/claim_verdicts.py): a claim **holds** only when every comparison it makes is "
+            "separated (the intervals do not overlap) in the claimed direction; it is a **tie** when none is "
+            "reversed but some intervals overlap; it **differs** when one is separated the other way. Group "
+            "claims are judged pairwise, every CFA of a group against every CFA of the other, never on group "
+            "means. \"X has the best score\" holds only when X's rank interval is exactly 1. A spread or a "
+            "bound is compared with the intervals' ends. Spearman correlations carry their 95 % interval "
+            "(Fisher z). tests/test_claim_verdicts.py recomputes every verdict from the committed CSVs.", ""]
     out += ["## Verdicts at a glance", ""] + _glance(runs)
     # a claim the data marks as physically wrong is listed when every run contradicts it
     wrong = [c for c in claims() if c.get("wrong") and all(judge(run, c)[0] == "differs" for run in runs)]

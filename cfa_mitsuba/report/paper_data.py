@@ -7,10 +7,11 @@ the numbers in the text of Bae 2020, each with its table and status),
 table, research/isetcam-paper-check.md) and ``claims.toml`` (the claims,
 with the reason to print for each verdict).
 
-Verdicts (``claims.toml`` says how each kind is read): a claim *holds*
-when every step it makes is reproduced beyond the 95 % intervals of the
-run, *differs* when a step is reversed beyond them, and is *unresolved*
-when no step is reversed but some cannot be told apart.
+Verdicts (:mod:`.claim_verdicts` states the rule): a claim *holds* when
+every comparison it makes is separated in the claimed direction by the
+run's 95 % intervals, *differs* when one is separated the other way, and
+is a *tie* when none is reversed but some intervals overlap.  Group claims
+are judged pairwise, CFA against CFA.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ import numpy as np
 
 from ..errors import CfaMitsubaError
 from ..metrics import get_metric
+from .claim_verdicts import at_most_verdict, best_verdict, order_verdict, spread_verdict
 
 PAPER_DIR = Path(__file__).resolve().parents[1] / "data" / "paper"
 _FAMILIES = (("rgbw", "RGBW"), ("cmy", "CMY"), ("rgb", "RGB"), ("bayer", "RGB"))
@@ -167,32 +169,22 @@ def _fmt(v: float, decimals: int) -> str:
 
 
 def _order(run: Run, claim: dict) -> tuple[str, str]:
+    """Every CFA of an earlier group against every CFA of each later one (:mod:`.claim_verdicts`)."""
     metric, demosaic = claim["metric"], claim["demosaic"]
     hib = get_metric(metric).higher_is_better
     dec = get_metric(metric).decimals + 1
     groups = [_group(run, metric, demosaic, g) for g in claim["groups"]]
     if any(not g for g in groups):
         return "not measured", "a group has no value in this run"
-    better = (lambda a, b: a > b) if hib else (lambda a, b: a < b)
-    ends, parts = [], []
+    parts = []
     for names, g in zip(claim["groups"], groups):
-        if claim.get("strict"):  # every member counts: the group's best and worst member
-            ranked = sorted(g, key=lambda r: r[1], reverse=hib)
-            ends.append((ranked[0][1:], ranked[-1][1:]))
-            parts.append(f"{_group_name(names)} from {cfa_label(ranked[0][0])} {_fmt(ranked[0][1], dec)} "
-                         f"to {cfa_label(ranked[-1][0])} {_fmt(ranked[-1][1], dec)}")
-        else:  # the group's mean, with the mean of its members' interval ends
-            mean = tuple(float(np.mean([r[k] for r in g])) for k in (1, 2, 3))
-            ends.append((mean, mean))
-            parts.append(f"{_group_name(names)} {_fmt(mean[0], dec)} [{_fmt(mean[1], dec)}, {_fmt(mean[2], dec)}]")
-    steps = []
-    for (_, a), (b, _) in zip(ends, ends[1:]):  # the earlier group's worse end, the later one's better end
-        apart = a[2] < b[1] or b[2] < a[1]
-        steps.append("tie" if not apart else "ok" if better(a[0], b[0]) else "reversed")
-    detail = "; ".join(parts) + f" ({'higher' if hib else 'lower'} is better; steps: {', '.join(steps)})"
-    if "reversed" in steps:
-        return "differs", detail
-    return ("holds" if all(s == "ok" for s in steps) else "unresolved"), detail
+        ranked = sorted(g, key=lambda r: r[1], reverse=hib)
+        parts.append(f"{_group_name(names)} from {cfa_label(ranked[0][0])} {_fmt(ranked[0][1], dec)} "
+                     f"to {cfa_label(ranked[-1][0])} {_fmt(ranked[-1][1], dec)}" if len(g) > 1 else
+                     f"{cfa_label(g[0][0])} {_fmt(g[0][1], dec)} [{_fmt(g[0][2], dec)}, {_fmt(g[0][3], dec)}]")
+    labelled = [[(cfa_label(r[0]), *r[1:]) for r in g] for g in groups]
+    verdict, words = order_verdict(labelled, hib)
+    return verdict, "; ".join(parts) + f" ({'higher' if hib else 'lower'} is better; {words})"
 
 
 def _similar(run: Run, claim: dict) -> tuple[str, str]:
@@ -204,8 +196,9 @@ def _similar(run: Run, claim: dict) -> tuple[str, str]:
     spread = max(vals) - min(vals)
     lo_c, hi_c = min(g, key=lambda r: r[1])[0], max(g, key=lambda r: r[1])[0]
     detail = (f"{_fmt(min(vals), dec)} ({cfa_label(lo_c)}) to {_fmt(max(vals), dec)} ({cfa_label(hi_c)}): "
-              f"spread {_fmt(spread, dec)} against at most {claim['max_range']:g}")
-    return ("holds" if spread <= claim["max_range"] else "differs"), detail
+              f"spread {_fmt(spread, dec)} (intervals' outer ends {_fmt(max(r[3] for r in g) - min(r[2] for r in g), dec)}, "
+              f"inner ends {_fmt(max(r[2] for r in g) - min(r[3] for r in g), dec)}) against at most {claim['max_range']:g}")
+    return spread_verdict(g, claim["max_range"]), detail
 
 
 def _at_most(run: Run, claim: dict) -> tuple[str, str]:
@@ -216,7 +209,7 @@ def _at_most(run: Run, claim: dict) -> tuple[str, str]:
     top = max(g, key=lambda r: r[3])
     detail = (f"every CFA's interval below {_fmt(top[3], dec)} (the highest: {cfa_label(top[0])} "
               f"{_fmt(top[1], dec)}) against at most {claim['max_value']:g}")
-    return ("holds" if top[3] <= claim["max_value"] else "differs"), detail
+    return at_most_verdict(g, claim["max_value"]), detail
 
 
 def _best(run: Run, claim: dict) -> tuple[str, str]:
@@ -224,10 +217,10 @@ def _best(run: Run, claim: dict) -> tuple[str, str]:
     if claim["cfa"] not in got:
         return "not measured", "no score in this run"
     s = got[claim["cfa"]]
-    first = sorted((r[3], c) for c, r in got.items())[0][1]
+    can_be_first = [cfa_label(c) for c, r in sorted(got.items(), key=lambda kv: -kv[1][0]) if r[4] == 1]
     detail = (f"{cfa_label(claim['cfa'])} rank {s[3]} (interval {s[4]}-{s[5]}) of {len(got)}, score {s[0]:.4f}; "
-              f"first: {cfa_label(first)} {got[first][0]:.4f}")
-    return ("holds" if s[4] == 1 else "differs"), detail
+              f"rank interval containing 1: {', '.join(can_be_first)}")
+    return best_verdict(s[4], s[5]), detail
 
 
 def judge(run: Run, claim: dict) -> tuple[str, str]:

@@ -3,8 +3,9 @@ and table of the report, so that a CFA has one colour and one marker
 everywhere.
 
 Colours are Paul Tol's colour-blind-safe qualitative schemes (Tol 2021,
-"Colour schemes", SRON/EPS/TN/09-002): 'bright' for the demosaicing methods
-and 'muted' plus 'light' for the CFAs; the ideal sensor is always a broad
+"Colour schemes", SRON/EPS/TN/09-002): 'muted' plus 'light' for the CFAs;
+the demosaicing methods are greys with line styles and line-only markers,
+so a method is never read as a CFA; the ideal sensor is always a broad
 grey line.  Past nine CFAs colour alone no longer separates them for every
 reader, so each CFA also has its own marker and, from the tenth on, a
 dashed line.
@@ -21,8 +22,10 @@ from dataclasses import dataclass
 _CFA_COLOURS = ("#332288", "#CC6677", "#117733", "#DDCC77", "#88CCEE", "#882255", "#44AA99", "#999933",
                 "#AA4499", "#EE8866", "#77AADD", "#BBCC33")
 _CFA_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*", "h", "<", ">", "p")
-#: Tol 'bright' for the (at most a handful of) demosaicing methods.
-_DEMOSAIC_COLOURS = ("#4477AA", "#EE6677", "#228833", "#CCBB44", "#66CCEE", "#AA3377", "#BBBBBB")
+#: Demosaicing methods are coded apart from the CFAs: greys (never a CFA's colour), each with its own line
+#: style and an unfilled marker shape that no CFA uses.
+_DEMOSAIC_COLOURS = ("#1a1a1a", "#5a5a5a", "#8c8c8c", "#b0b0b0", "#3d3d3d", "#737373", "#a0a0a0")
+_DEMOSAIC_MARKERS = ("1", "2", "3", "4", "+", "x", "|")
 _DEMOSAIC_LINES = ("-", "--", "-.", ":", (0, (5, 1, 1, 1)), (0, (3, 1, 1, 1, 1, 1)), (0, (1, 1)))
 
 
@@ -76,7 +79,7 @@ def cfa_styles(cfas) -> dict:
 
 def demosaic_styles(demosaics) -> dict:
     """``{demosaic: dict(color, linestyle, marker)}`` in the study's order."""
-    marks = ("o", "s", "^", "D", "v", "P", "X")
     return {d: dict(color=_DEMOSAIC_COLOURS[i % len(_DEMOSAIC_COLOURS)],
-                    linestyle=_DEMOSAIC_LINES[i % len(_DEMOSAIC_LINES)], marker=marks[i % len(marks)])
+                    linestyle=_DEMOSAIC_LINES[i % len(_DEMOSAIC_LINES)],
+                    marker=_DEMOSAIC_MARKERS[i % len(_DEMOSAIC_MARKERS)])
             for i, d in enumerate(demosaics)}

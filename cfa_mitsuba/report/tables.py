@@ -5,8 +5,9 @@
 - Table 2: every scored metric per CFA per demosaic, the best value per
   metric and demosaic boxed (the paper's red boxes; by value, as clipped
   scores tie at 1 beyond a range's best end);
-- Table 3: mean normalised score per demosaic and their mean ('total'),
-  with ranks (:func:`cfa_mitsuba.study.scoring.rank_table`).
+- Table 3: mean normalised score per CFA (rows, by total score) and
+  demosaic, their mean ('total'), with intervals and rank intervals
+  (:mod:`.table3`).
 
 Every value cell carries the full-precision number from the CSV in
 ``data-value`` and its score and rank in a tooltip.
@@ -72,6 +73,36 @@ def _best(values: dict, higher: bool, decimals: int | None = None) -> set:
     return {k for k, v in finite.items() if v == target}
 
 
+def _intervals(res: Results) -> dict:
+    """{(scene, cfa, demosaic, luminance, metric): (ci_low, ci_high)} of metrics.csv's base rows."""
+    m = res.metrics
+    if m is None or not len(m) or "ci_low" not in m.columns:
+        return {}
+    return {(r.scene, r.cfa, r.demosaic, float(r.luminance), r.metric): (float(r.ci_low), float(r.ci_high))
+            for r in m.itertuples(index=False)}
+
+
+def _pm(ci, metric: str) -> str:
+    """``±half`` of a 95 % interval, small, on a line of its own under the value
+    (the column stays as wide as the values), one decimal more than the value."""
+    if ci is None or not all(np.isfinite(ci)):
+        return ""
+    return f'<br><span class="ci">±{(ci[1] - ci[0]) / 2:.{metric_display(metric).decimals + 1}f}</span>'
+
+
+def _separated(best: set, cis: dict) -> set:
+    """The best-valued keys whose 95 % interval overlaps no other key's: only
+    those are boxed as best; a best value inside another's interval is a tie."""
+    out = set()
+    for k in best:
+        mine = cis.get(k)
+        if mine is None or len(best) > 1:
+            continue
+        if all(o is None or o[1] < mine[0] or o[0] > mine[1] for j, o in cis.items() if j != k):
+            out.add(k)
+    return out
+
+
 def table1(res: Results) -> str | None:
     """Mean dE00 (and dE*ab) over the 24 patches and mean |dL*| of the 6 grey
     patches, per CFA, one row group per demosaic (the paper's Table 1)."""
@@ -82,11 +113,14 @@ def table1(res: Results) -> str | None:
     rows_metrics = [m for m in ("delta-e", "delta-e76", "delta-l") if res.has_metric(m, lum)]
     cfas = [c for c in res.cfas if any(res.value(scene, c, d, lum, "delta-e") is not None for d in res.demosaics)]
     out = ['<table class="data">', _head(res, cfas, ["demosaic", "measure"]), "<tbody>"]
+    ints = _intervals(res)
     for d in res.demosaics:
         present = [m for m in rows_metrics if any(res.value(scene, c, d, lum, m) is not None for c in cfas)]
         for i, m in enumerate(present):
             vals = {c: res.value(scene, c, d, lum, m) for c in cfas}
-            best = _best(vals, higher=False, decimals=metric_display(m).decimals)
+            cis = {c: ints.get((scene, c, d, float(lum), m)) for c in cfas}
+            by_value = _best(vals, higher=False, decimals=metric_display(m).decimals)
+            best = _separated(by_value, cis)
             row = [_tr(i)]
             if i == 0:
                 row.append(f'<th rowspan="{len(present)}" class="rowgroup">{_e(d)}</th>')
@@ -96,8 +130,8 @@ def table1(res: Results) -> str | None:
                 if v is None:
                     row.append('<td class="na">—</td>')
                     continue
-                klass = "best" if c in best and len(cfas) > 1 else ""
-                row.append(f'<td class="{klass}" data-value="{_num(v)}">{fmt_value(m, v)}</td>')
+                klass = ("best" if c in best else "besttie" if c in by_value else "") if len(cfas) > 1 else ""
+                row.append(f'<td class="{klass}" data-value="{_num(v)}">{fmt_value(m, v)}{_pm(cis[c], m)}</td>')
             row.append("</tr>")
             out.append("".join(row))
     out.append("</tbody></table>")
@@ -127,16 +161,19 @@ def table2(res: Results, luminance: float) -> str | None:
                 row.append(f'<th rowspan="{len(present)}" class="rowgroup">{_e(d)}</th>')
             row.append(f'<th class="metric">{_metric_label(m, res)}</th>')
             # the best value, not metric_rank 1: clipped scores tie at 1 for every value beyond the best end
-            best = _best({c: float(by[(c, d, m)].value) for c in cfas if (c, d, m) in by}, _direction(m, res),
-                         metric_display(m).decimals)
+            by_value = _best({c: float(by[(c, d, m)].value) for c in cfas if (c, d, m) in by},
+                             _direction(m, res), metric_display(m).decimals)
+            cis = {c: (float(by[(c, d, m)].ci_low), float(by[(c, d, m)].ci_high))
+                   if (c, d, m) in by and hasattr(by[(c, d, m)], "ci_low") else None for c in cfas}
+            best = _separated(by_value, cis)
             for c in cfas:
                 r = by.get((c, d, m))
                 if r is None:
                     row.append('<td class="na">—</td>')
                     continue
                 klass = []
-                if c in best and n_cfa > 1:
-                    klass.append("best")
+                if c in by_value and n_cfa > 1:
+                    klass.append("best" if c in best else "besttie")
                 oor = bool(getattr(r, "out_of_range", False))
                 if oor:
                     klass.append("oor")
@@ -149,7 +186,7 @@ def table2(res: Results, luminance: float) -> str | None:
                     ge = "≥"
                     tip += "; no moiré up to the chirp's top frequency: a lower bound"
                 row.append(f'<td class="{" ".join(klass)}" data-value="{_num(r.value)}" title="{_e(tip)}">'
-                           f"{ge}{fmt_value(m, r.value)}{mark}</td>")
+                           f"{ge}{fmt_value(m, r.value)}{mark}{_pm(cis[c], m)}</td>")
             row.append("</tr>")
             out.append("".join(row))
     out.append("</tbody></table>")
@@ -193,80 +230,17 @@ def _table2_from_metrics(res: Results, luminance: float) -> str | None:
     return "".join(out)
 
 
-def _heat(score: float, lo: float, hi: float) -> str:
-    """A light background for a score between the table's lowest and highest
-    (white to Tol blue); dark text stays readable."""
-    t = float(np.clip((score - lo) / (hi - lo), 0.0, 1.0)) * 0.55 if hi > lo else 0.3
-    r, g, b = (int(round(255 + (c - 255) * t)) for c in (0x44, 0x77, 0xAA))
-    return f"background:#{r:02x}{g:02x}{b:02x}"
-
-
 def table3(res: Results, luminance: float) -> str | None:
-    """Mean normalised score per demosaic (rows) and CFA (columns), their mean
-    over demosaics ('total'), each with its rank (the paper's Table 3 and
-    Fig 17)."""
-    from ..study.scoring import rank_table
+    """Mean normalised score per CFA (rows, sorted by total score) and
+    demosaic (columns), their mean over demosaics ('total'), each with its
+    interval and rank interval (the paper's Table 3 and Fig 17;
+    :mod:`.table3`)."""
+    from .table3 import table3_rows
 
     s = res.scores
     if s is None or not len(s[s["luminance"] == luminance]):
         return None
-    mean = rank_table(s, luminance=luminance, value="mean_score")
-    rank = rank_table(s, luminance=luminance, value="demosaic_rank")
-    per = s[s["luminance"] == luminance].drop_duplicates(["cfa", "demosaic"])
-    nmet = {(r.cfa, r.demosaic): int(r.n_metrics) for r in per.itertuples(index=False)} \
-        if "n_metrics" in per.columns else {}
-    spans = _rank_spans(per)
-    cfas = [c for c in res.cfas if c in mean.columns]
-    rows = [d for d in res.demosaics if d in mean.index] + ["total"]
-    uneven = len(set(nmet.values())) > 1
-    finite = mean.to_numpy(dtype=float)
-    finite = finite[np.isfinite(finite)]
-    lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
-    out = ['<table class="data scores">', _head(res, cfas, ["demosaic"]), "<tbody>"]
-    for d in rows:
-        cls = ' class="total"' if d == "total" else ""
-        label = "Total (mean over demosaics)" if d == "total" else d
-        row = [f"<tr{cls}><th class=\"rowgroup\">{_e(label)}</th>"]
-        for c in cfas:
-            v = mean.at[d, c] if c in mean.columns else np.nan
-            k = rank.at[d, c] if c in rank.columns else np.nan
-            if v is None or not np.isfinite(v):
-                row.append('<td class="na">—</td>')
-                continue
-            klass = "best" if np.isfinite(k) and int(k) == 1 and len(cfas) > 1 else ""
-            n = nmet.get((c, d))
-            ci, (b, w) = spans.get((c, d), (None, (int(k), int(k))))
-            tip = f"rank {int(k)} of {len(cfas)}" + (f"; mean of {n} metric score(s)" if n is not None else "")
-            if ci is not None:
-                tip += f"; 95 % interval {ci[0]:.4f} … {ci[1]:.4f}; rank interval {b}–{w}"
-            flag = '<sup class="oor-mark">*</sup>' if uneven and n is not None and n != max(nmet.values()) else ""
-            rank_text = f"{int(k)}" if b == w else f"{b}–{w}"
-            if b != w:
-                klass += " tie"
-            pm = f' <span class="ci">±{(ci[1] - ci[0]) / 2:.4f}</span>' if ci is not None else ""
-            row.append(f'<td class="{klass.strip()}" style="{_heat(v, lo, hi)}" data-value="{_num(v)}" '
-                       f'title="{_e(tip)}">{v:.4f}{pm}{flag} <span class="rank">({rank_text})</span></td>')
-        row.append("</tr>")
-        out.append("".join(row))
-    out.append("</tbody></table>")
-    if uneven:
-        out.append('<p class="note">* averages fewer metrics than the others (a metric is missing for this CFA '
-                   "and demosaic): its mean and rank are not comparable with the rest.</p>")
-    return "".join(out)
-
-
-def _rank_spans(per) -> dict:
-    """{(cfa, demosaic or 'total'): ((ci_low, ci_high) or None, (best rank, worst rank))}
-    from scores.csv's interval columns (absent in results made before them)."""
-    out = {}
-    if "demosaic_rank_best" not in per.columns:
-        return out
-    for r in per.itertuples(index=False):
-        out[(r.cfa, r.demosaic)] = ((float(r.mean_score_ci_low), float(r.mean_score_ci_high)),
-                                    (int(r.demosaic_rank_best), int(r.demosaic_rank_worst)))
-        out[(r.cfa, "total")] = ((float(r.total_score_ci_low), float(r.total_score_ci_high)),
-                                 (int(r.total_rank_best), int(r.total_rank_worst)))
-    return out
+    return table3_rows(s, luminance, res.cfas, res.demosaics)
 
 
 def policy_table(res: Results) -> str | None:
@@ -353,6 +327,7 @@ def sweep_table(res: Results) -> str | None:
     if not parts:
         return None
     cfas = [c for c in res.cfas if c in set(m["cfa"])]
+    ints = _intervals(res)
     out = ['<table class="data">', _head(res, cfas, ["metric", "demosaic", "cd/m²"]), "<tbody>"]
     for scene, metric, g in parts:
         for d in res.demosaics:
@@ -367,8 +342,9 @@ def sweep_table(res: Results) -> str | None:
                 row.append(f'<td class="lum">{lum:g}</td>')
                 for c in cfas:
                     v = res.value(scene, c, d, lum, metric)
+                    ci = ints.get((scene, c, d, float(lum), metric))
                     row.append('<td class="na">—</td>' if v is None else
-                               f'<td data-value="{_num(v)}">{fmt_value(metric, v)}</td>')
+                               f'<td data-value="{_num(v)}">{fmt_value(metric, v)}{_pm(ci, metric)}</td>')
                 row.append("</tr>")
                 out.append("".join(row))
     out.append("</tbody></table>")

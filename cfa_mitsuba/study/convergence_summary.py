@@ -310,9 +310,10 @@ def format_table(result: ConvergenceResult) -> str:
                        f"{_fmt(c['cfa_difference_deviation'])} {c['unit']} rms (common shift "
                        f"{_fmt(c['cfa_common_shift'])}) vs the smallest gap {_fmt(c['cfa_smallest_gap'])}: "
                        + ("below" if c["difference_below_smallest_gap"] else "NOT below"))
-        out.append(f"check {m}: render-induced deviation at {p.default_spp} spp (rms of {c['renders']} renders) "
-                   f"{_fmt(c['render_deviation_at_default'])}"
-                   f" {c['unit']} vs CFA spread {_fmt(c['cfa_spread'])} (smallest gap {_fmt(c['cfa_smallest_gap'])}, "
+        measured = (f"(rms of {c['renders']} renders) {_fmt(c['render_deviation_at_default'])} {c['unit']}"
+                    if c["render_deviation_at_default"] is not None and c.get("renders") else "not measured")
+        out.append(f"check {m}: render-induced deviation at {p.default_spp} spp {measured}"
+                   f" vs CFA spread {_fmt(c['cfa_spread'])} (smallest gap {_fmt(c['cfa_smallest_gap'])}, "
                    f"sensor-noise std {_fmt(c['sensor_noise_std'])}): {verdict}")
     for m, c in s.get("pocs_checks", {}).items():
         if c.get("cfa_spread") is None:

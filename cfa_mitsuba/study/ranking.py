@@ -145,9 +145,14 @@ def score_realisations(rows, ranges: dict, *, clip: bool = True, constant=()):
     return pd.DataFrame(out)
 
 
-def policy_summary(means, paper: dict, ideal: dict, clip: bool = True):
+def policy_summary(means, paper: dict, ideal: dict, clip: bool = True, realisations=None):
     """For every policy: per metric how many scores are clipped and whether
     the metric is constant, and each CFA's overall rank (per luminance).
+
+    With ``realisations`` (the scored rows per noise realisation) the totals
+    are scored per realisation and averaged, as scores.csv's are, so the
+    study's own policy gives scores.csv's totals and ranks exactly; without
+    them, the mean values are scored.
 
     Returns (clipping table, rank table) as DataFrames: ``policy, metric,
     scores, clipped, constant`` and ``policy, cfa, luminance, total_score,
@@ -166,7 +171,11 @@ def policy_summary(means, paper: dict, ideal: dict, clip: bool = True):
             clip_rows.append((policy, metric, len(g), int(np.sum((raw < -1e-9) | (raw > 1 + 1e-9))), False))
         if kept.empty:
             continue
-        s = score(kept, ranges, clip=clip)
+        if realisations is not None and len(realisations):
+            cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
+            s = score_realisations(realisations[cols], ranges, clip=clip, constant=constant)
+        else:
+            s = score(kept, ranges, clip=clip)
         for _, r in s.drop_duplicates(["cfa", "luminance"]).iterrows():
             rank_rows.append((policy, r["cfa"], float(r["luminance"]), float(r["total_score"]), int(r["total_rank"])))
     return (pd.DataFrame(clip_rows, columns=["policy", "metric", "scores", "clipped", "constant"]),

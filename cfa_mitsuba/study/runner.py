@@ -355,13 +355,14 @@ def timing_summary(result: StudyResult) -> str:
 
 
 def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,), seed: int = 0,
-                     workers: int | None = None, progress: bool = True, log=None):
+                     workers: int | None = None, progress: bool = True, log=None, realisations: int = 3):
     """``cfa-mitsuba evaluate``: every spectral EXR in ``renders_dir`` (as
     written by ``cfa-mitsuba render``) through the given CFAs and demosaics,
     with the default optics, sensor and processing.  Each EXR feeds the
     metrics its sidecar declares (a bare JCGT EXR: the image metrics).
-    ``luminances`` None keeps each render's own luminance.  Writes
-    ``metrics.csv``; returns the table.
+    ``luminances`` None keeps each render's own luminance; ``realisations``
+    noise realisations per capture (the mean and its 95 % interval, as in a
+    study).  Writes ``metrics.csv``; returns the table.
     """
     from .. import io
     from .chain import ChainSettings
@@ -391,7 +392,7 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
                 tasks.append(EvaluationTask(
                     source={"kind": "exr", "path": str(exr.resolve())}, scene=scene,
                     condition=chain.base_condition(luminance=level, seed=seed), cfa=cfa, cfa_label=_cfa_label(cfa),
-                    demosaics=tuple(demosaics), metrics=tuple(metrics), chain=chain))
+                    demosaics=tuple(demosaics), metrics=tuple(metrics), chain=chain, realisations=realisations))
     rows, failures = [], []
 
     def got(task, result):
@@ -409,5 +410,9 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
     write_cfa_facts(out, cfas, order["cfa"], chain, chain.base_condition())
     with atomic_output(out / "metrics.csv") as tmp:
         metrics.to_csv(tmp, index=False, float_format="%.10g")
-    _write_failures(out, failures, log)
+    # a metric that cannot be measured fails in every realisation: list it once, with the first one's reason
+    once: dict = {}
+    for f in failures:
+        once.setdefault(tuple(sorted((k, str(v)) for k, v in f.items() if k not in ("realisation", "error"))), f)
+    _write_failures(out, list(once.values()), log)
     return metrics

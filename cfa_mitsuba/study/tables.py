@@ -7,6 +7,8 @@
                                the ``ideal`` range policy)
     scores.csv                 the scored rows under the study's range policy, with
                                score and rank intervals (:mod:`.ranking`)
+    decisions.csv              per aspect the CFA(s) that can rank first, ``winner`` or
+                               ``tie`` (:mod:`.decisions`)
     policies.csv               for each range policy: per metric the scores clipped and
                                whether it is constant across the CFAs, and each CFA's rank
 """
@@ -132,6 +134,21 @@ def _ideal_values(ideal, scored) -> dict:
     return out
 
 
+def _measured(scores, means):
+    """scores.csv with the measured means and intervals in ``value``, ``ci_low``, ``ci_high`` and the
+    ``censored`` flag (the scores may have been computed from a bound's scoring value)."""
+    if scores.empty:
+        return scores
+    keys = ["scene", "cfa", "demosaic", "luminance", "metric"]
+    m = means[keys + ["value", "ci_low", "ci_high", "censored"]].copy()
+    m["luminance"] = m["luminance"].astype(float)
+    out = scores.drop(columns=["value", "ci_low", "ci_high"]).assign(luminance=scores["luminance"].astype(float))
+    out = out.merge(m, on=keys, how="left")
+    cols = list(scores.columns)
+    cols.insert(cols.index("unit") + 1 if "unit" in cols else len(cols), "censored")
+    return out[cols]
+
+
 def write_tables(out_dir: Path, realisations, ideal, *, paper_ranges: dict, overrides: dict, policy: str,
                  clip: bool, builtin_scenes) -> tuple:
     """Write every table of the module docstring atomically; returns
@@ -161,10 +178,17 @@ def write_tables(out_dir: Path, realisations, ideal, *, paper_ranges: dict, over
             if m in constant and worst != best:
                 constant.remove(m)
         cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
-        scores = score_realisations(scored_real[cols], ranges, clip=clip, constant=constant)
-        clipping, ranks = policy_summary(scored_mean, paper_ranges, ideal_vals, clip)
+        from .censored import values_for_scoring
+
+        scored_real = values_for_scoring(scored_real, ranges)  # a bound scores by the stated rule (censored.py)
+        scores = _measured(score_realisations(scored_real[cols], ranges, clip=clip, constant=constant), scored_mean)
+        clipping, ranks = policy_summary(scored_mean, paper_ranges, ideal_vals, clip, realisations=scored_real)
         clipping["scope"] = "clipping"
         ranks["scope"] = "rank"
         save("policies.csv", pd.concat([clipping, ranks], ignore_index=True))
     save("scores.csv", scores)
+    if len(scored_real) and len(scores):
+        from .decisions import write_decisions
+
+        write_decisions(out_dir, realisations, scored_real, scores, ranges, clip=clip, constant=constant)
     return metrics, scores, ranges, constant

@@ -1,0 +1,182 @@
+"""Generated blocks of README.md and docs/*.md (``<!--= @NAME ARGS -->``).
+
+Each generator reads a results directory (relative to the repository root)
+and returns Markdown.  Sentences that name a first CFA follow the decision
+rule (:func:`cfa_mitsuba.study.decisions.decide`): "first" only for a rank
+interval of exactly 1, otherwise the tied set.
+"""
+
+from __future__ import annotations
+
+__all__ = ["GENERATORS", "rank_table", "rank_summary", "timing_sentence", "decisions_table_md", "spearman_sentence",
+           "claims_sentence"]
+
+import json
+from pathlib import Path
+
+from ..errors import CfaMitsubaError
+
+
+def _scores(repo: Path, results: str):
+    import pandas as pd
+
+    path = repo / results / "scores.csv"
+    if not path.is_file():
+        raise CfaMitsubaError(f"{results}/scores.csv not found")
+    return pd.read_csv(path)
+
+
+def _rank(best: int, worst: int) -> str:
+    return f"{best}" if best == worst else f"{best}–{worst}"
+
+
+def _names(names: list[str]) -> str:
+    names = [f"`{n}`" for n in names]
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+
+
+def rank_table(repo: Path, results: str) -> str:
+    """Table 3 as Markdown: per CFA (sorted by total score) each demosaic's
+    mean score ± half its 95 % interval with the rank interval, and the
+    mean over methods."""
+    s = _scores(repo, results)
+    lum = sorted(s["luminance"].unique())[0]
+    s = s[s["luminance"] == lum]
+    demosaics = list(dict.fromkeys(s["demosaic"]))
+    per = s.drop_duplicates(["cfa", "demosaic"]).set_index(["cfa", "demosaic"])
+    tot = s.drop_duplicates("cfa").sort_values("total_score", ascending=False, kind="stable")
+    head = ["rank", "CFA", *demosaics, "mean over methods"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in tot.itertuples(index=False):
+        cells = [_rank(r.total_rank_best, r.total_rank_worst), f"`{r.cfa}`"]
+        for d in demosaics:
+            p = per.loc[(r.cfa, d)]
+            half = (p.mean_score_ci_high - p.mean_score_ci_low) / 2
+            cells.append(f"{p.mean_score:.3f} ±{half:.3f} ({_rank(p.demosaic_rank_best, p.demosaic_rank_worst)})")
+        half = (r.total_score_ci_high - r.total_score_ci_low) / 2
+        cells.append(f"**{r.total_score:.4f}** ±{half:.4f}")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n\n" + "\n".join(lines) + "\n\n"
+
+
+def _first(group, score: str, best: str, worst: str) -> str:
+    top = group[group[best] == 1].sort_values(score, ascending=False)
+    if len(top) == 1 and int(top[worst].iloc[0]) == 1:
+        return f"{_names(top['cfa'].tolist())} is first"
+    ranks = ", ".join(f"{_rank(int(b), int(w))}" for b, w in zip(top[best], top[worst]))
+    return f"{_names(top['cfa'].tolist())} tie for first (rank intervals {ranks})"
+
+
+def rank_summary(repo: Path, results: str) -> str:
+    """One sentence: who is first overall and with each demosaic, by the rule."""
+    s = _scores(repo, results)
+    lum = sorted(s["luminance"].unique())[0]
+    s = s[s["luminance"] == lum]
+    tot = s.drop_duplicates("cfa")
+    parts = [_first(tot, "total_score", "total_rank_best", "total_rank_worst") + " overall"]
+    per = s.drop_duplicates(["cfa", "demosaic"])
+    for d, g in per.groupby("demosaic", sort=False):
+        parts.append(_first(g, "mean_score", "demosaic_rank_best", "demosaic_rank_worst") + f" with {d}")
+    return "; ".join(parts)
+
+
+def timing_sentence(repo: Path, results: str) -> str:
+    """The study's run time from its timing.json."""
+    path = repo / results / "timing.json"
+    if not path.is_file():
+        raise CfaMitsubaError(f"{results}/timing.json not found")
+    t = json.loads(path.read_text())
+    p = t.get("phases") or {}
+    renders = t.get("renders") or {}
+    reused = sum(1 for r in renders.values() if r.get("reused"))
+    parts = [f"{k[:-2]} {float(v):.1f} s" for k, v in p.items() if k.endswith("_s") and k != "total_s"]
+    return (f"{float(p['total_s']):.1f} s in all ({', '.join(parts)}; {len(renders) - reused} scene render(s) made, "
+            f"{reused} reused from the cache)")
+
+
+def decisions_table_md(repo: Path, results: str) -> str:
+    """decisions.csv of a results directory as a Markdown table."""
+    import pandas as pd
+
+    path = repo / results / "decisions.csv"
+    if not path.is_file():
+        raise CfaMitsubaError(f"{results}/decisions.csv not found")
+    d = pd.read_csv(path, dtype=str, keep_default_na=False)
+    lines = ["| aspect | CFA(s) that can rank first | verdict |", "|---|---|---|"]
+    for r in d.itertuples(index=False):
+        lines.append(f"| {r.aspect} | {_names(r.cfas.split()) if r.cfas else '—'} | {r.verdict} |")
+    return "\n\n" + "\n".join(lines) + "\n\n"
+
+
+def spearman_sentence(repo: Path, results: str, demosaic: str = "bilinear") -> str:
+    """The rank correlation of a run's Table 3 column with the paper's, with its 95 % interval."""
+    from .claim_verdicts import spearman_interval
+    from .paper_data import load_run, paper_values
+
+    run = load_run(repo / results, "run", "run")
+    pv = paper_values()
+    pv = pv[(pv["metric"] == "score") & (pv["demosaic"] == demosaic)]
+    paper = dict(zip(pv["cfa"], pv["number"]))
+    got = run.scores_of(demosaic)
+    both = [c for c in paper if c in got]
+    rho, lo, hi, n = spearman_interval([paper[c] for c in both], [got[c][0] for c in both])
+    return f"Spearman {rho:+.2f} (95 % interval {lo:+.2f} to {hi:+.2f}, {n} CFAs)"
+
+
+def claims_sentence(repo: Path, results: str) -> str:
+    """Which of the paper's claims hold, tie and differ in a run, by the rule of claim_verdicts."""
+    from .paper_data import claims, judge, load_run
+
+    run = load_run(repo / results, "run", "run")
+    by: dict = {}
+    for c in claims():
+        if c["source"] == "paper":
+            by.setdefault(judge(run, c)[0], []).append(c["id"])
+    return "; ".join(f"{v}: {len(by[v])} ({', '.join(by[v])})" for v in ("holds", "tie", "differs", "not measured")
+                     if v in by)
+
+
+def design_table(repo: Path, results: str) -> str:
+    """A design run's fullchain.csv as Markdown: each CFA's objectives with 95 % intervals and what dominates it."""
+    import pandas as pd
+
+    path = repo / results / "fullchain.csv"
+    if not path.is_file():
+        raise CfaMitsubaError(f"{results}/fullchain.csv not found")
+    f = pd.read_csv(path, keep_default_na=False)
+    objectives = [c for c in f.columns if "@" in c and not c.endswith((" low", " high", " n"))]
+    head = ["CFA", "tile", *[o.replace("/bilinear", "") for o in objectives], "dominated by"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in f.to_dict("records"):
+        name = f"**{r['cfa']}**" if str(r["pareto"]) == "True" else r["cfa"]
+        cells = [name, r["tile_text"]] + [f"{float(r[o]):.4g} [{float(r[o + ' low']):.4g}, {float(r[o + ' high']):.4g}]"
+                                          for o in objectives]
+        dom = r["dominated_by"] or ("— (Pareto)" if str(r["pareto"]) == "True" else "—")
+        lines.append("| " + " | ".join([*cells, dom]) + " |")
+    return "\n\n" + "\n".join(lines) + "\n\n"
+
+
+def design_front(repo: Path, results: str) -> str:
+    """How many candidates a design run put on the Pareto front, of how many run through the full chain."""
+    import pandas as pd
+
+    f = pd.read_csv(repo / results / "fullchain.csv", keep_default_na=False)
+    cand = f[f["kind"] == "candidate"]
+    n_front = int((cand["pareto"].astype(str) == "True").sum())
+    named = f[f["kind"] == "named"]
+    beaten = sorted({d for d in cand["dominated_by"] if d})
+    return (f"{n_front} Pareto candidate(s) of {len(cand)} run through the full chain beside "
+            f"{', '.join(named['cfa'])}" + (f"; candidates dominated by {', '.join(beaten)}" if beaten else ""))
+
+
+#: {name: function(repo, *args) -> Markdown}
+GENERATORS = {
+    "rank-table": rank_table,
+    "rank-summary": rank_summary,
+    "timing": timing_sentence,
+    "decisions": decisions_table_md,
+    "spearman": spearman_sentence,
+    "claims": claims_sentence,
+    "design-table": design_table,
+    "design-front": design_front,
+}

@@ -1,0 +1,162 @@
+"""decisions.csv: which CFA to pick for each aspect, and how sure that is.
+
+One row per aspect (``aspect``, ``cfas``, ``verdict``, ``detail``):
+
+- ``colour``: the mean score of ΔE00 (Macbeth) and S-CIELAB (puppy);
+- ``sharpness``: MTF50 (slanted edge);
+- ``moire``: the moire starting point (chirp);
+- ``low light``: S-CIELAB and SSIM at the study's lowest luminance below
+  its base one (the luminance sweep), scored with the study's ranges;
+- ``overall``: the total score of Table 3 (scores.csv's ``total_rank``).
+
+Each aspect's score of a CFA is the mean, over the study's demosaics and
+the aspect's metrics, of its scores, computed per noise realisation; its
+95 % interval is the Student-t interval over realisations and its rank
+interval follows (:func:`.intervals.rank_interval`).  The rule, the same
+everywhere the project names a best CFA: ``cfas`` lists every CFA whose
+rank interval contains 1; ``verdict`` is ``winner`` only when that is one
+CFA with rank interval exactly 1 (its interval lies wholly above every
+other's), else ``tie``; ``unmeasured`` when the study has no value for the
+aspect (no luminance below the base: no low-light row).
+"""
+
+from __future__ import annotations
+
+__all__ = ["ASPECTS", "VERDICTS", "decide", "decisions_table", "write_decisions"]
+
+from pathlib import Path
+
+import numpy as np
+
+from .intervals import rank_interval, t_interval
+
+#: (aspect, the scored metrics it averages); ``low light`` reads the sweep's lowest luminance.
+ASPECTS = (("colour", ("delta-e", "scielab")), ("sharpness", ("mtf",)), ("moire", ("moire",)),
+           ("low light", ("scielab", "ssim")), ("overall", ()))
+VERDICTS = ("winner", "tie", "unmeasured")
+COLUMNS = ["aspect", "cfas", "verdict", "detail"]
+
+
+def decide(cfas, scores, lows, highs) -> tuple[list[str], str, str]:
+    """(the CFAs whose rank interval contains 1, verdict, plain-words detail).
+
+    ``scores``, ``lows``, ``highs``: each CFA's score (higher is better) and
+    its 95 % interval.
+
+    >>> decide(["a", "b", "c"], [0.9, 0.85, 0.5], [0.88, 0.80, 0.45], [0.92, 0.89, 0.55])[:2]
+    (['a', 'b'], 'tie')
+    >>> decide(["a", "b"], [0.9, 0.5], [0.88, 0.45], [0.92, 0.55])[:2]
+    (['a'], 'winner')
+    """
+    cfas = list(cfas)
+    s, lo, hi = (np.asarray(x, dtype=float) for x in (scores, lows, highs))
+    _, best, worst = rank_interval(s, lo, hi)
+    order = [i for i in np.argsort(-s, kind="stable") if best[i] == 1]
+    top = [cfas[i] for i in order]
+    verdict = "winner" if len(order) == 1 and worst[order[0]] == 1 else "tie"
+
+    def one(i):
+        rank = f"rank {best[i]}" if best[i] == worst[i] else f"ranks {best[i]}-{worst[i]}"
+        return f"{cfas[i]} {s[i]:.3f} [{lo[i]:.3f}, {hi[i]:.3f}] ({rank})"
+
+    if verdict == "winner":
+        detail = f"{one(order[0])}: its interval lies above every other CFA's"
+    else:
+        detail = f"{len(order)} CFA(s) can rank first within their 95 % intervals: " + "; ".join(one(i) for i in order)
+    return top, verdict, detail
+
+
+def _aspect_rows(aspect, metrics, scored_every, lowlight_every):
+    if aspect == "low light":
+        rows = lowlight_every
+    else:
+        rows = scored_every[scored_every["metric"].isin(metrics)]
+    if rows is None or rows.empty:
+        return None
+    per = rows.groupby(["cfa", "realisation"], sort=False)["score"].mean().reset_index()
+    cfas, s, lo, hi = [], [], [], []
+    for cfa, g in per.groupby("cfa", sort=False):
+        mean, low, high, _, _ = t_interval(g["score"])
+        cfas.append(cfa), s.append(mean), lo.append(low), hi.append(high)
+    return cfas, s, lo, hi
+
+
+def decisions_table(scores, scored_every, lowlight_every=None, lowlight_luminance=None):
+    """decisions.csv as a DataFrame.
+
+    ``scores``: scores.csv; ``scored_every``: the scored rows per
+    realisation (``cfa``, ``metric``, ``realisation``, ``score``), at the
+    base luminance; ``lowlight_every``: the same for the low-light rows
+    (None: the study has none) at ``lowlight_luminance`` cd/m^2.
+    """
+    import pandas as pd
+
+    out = []
+    for aspect, metrics in ASPECTS:
+        if aspect == "overall":
+            if scores is None or scores.empty:
+                out.append((aspect, "", "unmeasured", "no scores"))
+                continue
+            tot = scores.drop_duplicates("cfa")
+            cfas, verdict, detail = decide(tot["cfa"], tot["total_score"], tot["total_score_ci_low"],
+                                           tot["total_score_ci_high"])
+            # the rank intervals of scores.csv are the same computation: keep them the one source
+            top = tot[tot["total_rank_best"] == 1].sort_values("total_score", ascending=False)["cfa"].tolist()
+            assert sorted(top) == sorted(cfas), (top, cfas)
+            out.append((aspect, " ".join(top), verdict, "Table 3's total score: " + detail))
+            continue
+        got = _aspect_rows(aspect, metrics, scored_every, lowlight_every)
+        if got is None:
+            why = ("no luminance below the base one" if aspect == "low light"
+                   else f"the study measured none of {', '.join(metrics)}")
+            out.append((aspect, "", "unmeasured", why))
+            continue
+        cfas, verdict, detail = decide(*got)
+        what = {"colour": "mean score of dE00 and S-CIELAB", "sharpness": "MTF50 score",
+                "moire": "moire starting point score",
+                "low light": f"mean score of S-CIELAB and SSIM at {lowlight_luminance:g} cd/m^2"
+                if lowlight_luminance is not None else ""}[aspect]
+        out.append((aspect, " ".join(cfas), verdict, f"{what}, over the demosaics: {detail}"))
+    return pd.DataFrame(out, columns=COLUMNS)
+
+
+def _lowlight(realisations, ranges, clip, scored_metrics_):
+    """(per-realisation scored rows at the lowest swept luminance, that luminance) or (None, None)."""
+    from .scoring import normalise
+
+    if realisations is None or realisations.empty or "base" not in realisations:
+        return None, None
+    base = realisations[realisations["base"].astype(bool)]
+    if base.empty:
+        return None, None
+    base_lum = float(base["luminance"].astype(float).min())
+    metrics = [m for m in ("scielab", "ssim") if m in ranges and m in scored_metrics_]
+    low = realisations[realisations["metric"].isin(metrics)
+                       & (realisations["luminance"].astype(float) < base_lum)]
+    if low.empty:
+        return None, None
+    lum = float(low["luminance"].astype(float).min())
+    low = low[low["luminance"].astype(float) == lum]
+    # only the other axes at their base values: a sweep over luminance alone
+    low = low.drop_duplicates(["scene", "cfa", "demosaic", "metric", "realisation"])
+    cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
+    import pandas as pd
+
+    parts = [normalise(g[cols].drop(columns="realisation"), ranges, clip=clip).assign(realisation=r)
+             for r, g in low.groupby("realisation", sort=True)]
+    return pd.concat(parts, ignore_index=True), lum
+
+
+def write_decisions(out_dir: Path, realisations, scored_real, scores, ranges, *, clip: bool, constant=()) -> None:
+    """Write ``out_dir/decisions.csv`` (atomically) from a study's rows."""
+    from ..io import atomic_output
+    from ..metrics import scored_metrics
+    from .ranking import _realisation_scores
+
+    cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
+    kept = scored_real[~scored_real["metric"].isin(list(constant))]
+    every = _realisation_scores(kept[cols], ranges, clip) if len(kept) else kept
+    low, lum = _lowlight(realisations, ranges, clip, set(scored_metrics()) - set(constant))
+    table = decisions_table(scores, every, low, lum)
+    with atomic_output(Path(out_dir) / "decisions.csv") as tmp:
+        table.to_csv(tmp, index=False)
