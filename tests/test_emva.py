@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from cfa_mitsuba.sensor import get_sensor_preset, list_sensor_presets
-from cfa_mitsuba.sensor.emva import EmvaSettings, photon_transfer_peak, simulate_emva
+from cfa_mitsuba.sensor.emva import EmvaSettings, measured_sensor, photon_transfer_peak, simulate_emva
 from cfa_mitsuba.sensor.emva_analysis import analyse_channel, parameter_rows
 
 from conftest import REPO, assert_one_line_error, run_cli
@@ -43,9 +43,11 @@ def test_round_trip_recovers_the_set_values_within_2_percent(name, tmp_path):
             assert r["set_value"] > 0
             assert abs(r["relative_error"]) < 0.02, (name, s.channel, key, r["measured"], r["set_value"])
         # the set values themselves, from the pixel's numbers
-        assert s.expected["K"] == pytest.approx(sensor.dn_per_electron * s.expected["analog_gain"]
-                                                / sensor.analog_gain)
-        assert s.expected["QE"] == pytest.approx(100 * preset.cfa().sensitivities()[
+        measured = measured_sensor(sensor)  # a 32-bit (unquantised) ADC is measured through 16 bits
+        assert s.expected["K"] == pytest.approx(measured.dn_per_electron * s.expected["analog_gain"]
+                                                / measured.analog_gain)
+        # EMVA 1288's QE is per pixel area: the photodiode's fill factor is in it
+        assert s.expected["QE"] == pytest.approx(100 * sensor.fill_factor * preset.cfa().sensitivities()[
             preset.cfa().channels.index(s.channel), s.band_index])
         assert s.expected["sigma_d"] == sensor.read_noise_e
         # the standard's saturation lies just below the clip (the PTC maximum)

@@ -257,8 +257,9 @@ def luminance_sweep(res: Results):
                 ax.plot(gc["luminance"], gc["value"], color=st["color"], marker=st["marker"],
                         linestyle=st["linestyle"], linewidth=1.2, markersize=3.5)
                 if {"ci_low", "ci_high"} <= set(gc.columns):  # the 95 % interval over the noise realisations
-                    ax.errorbar(gc["luminance"], gc["value"], yerr=np.vstack([gc["value"] - gc["ci_low"],
-                                                                             gc["ci_high"] - gc["value"]]),
+                    # (clipped at 0: a mean rounded in metrics.csv can sit a hair outside its interval)
+                    ax.errorbar(gc["luminance"], gc["value"], yerr=np.maximum(np.vstack([gc["value"] - gc["ci_low"],
+                                                                                        gc["ci_high"] - gc["value"]]), 0),
                                 fmt="none", ecolor=st["color"], elinewidth=0.9, capsize=2.0)
                 if cfa not in cfas_drawn:
                     cfas_drawn.append(cfa)

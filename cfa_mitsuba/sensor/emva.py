@@ -277,6 +277,19 @@ class _Camera:
             self.count += 1
 
 
+def measured_sensor(sensor):
+    """The sensor as measured: EMVA 1288 images are at most 16 bits, so a
+    wider (or, as ISETCam's, unquantised: ``isetcam-default``'s 32 bits)
+    ADC is measured through a 16-bit one, with a black level of at least six
+    dark-noise sigmas so that the dark images' noise is not cut at code 0.
+    K, QE and the electron-domain parameters do not depend on it."""
+    if sensor.adc_bits <= 16:
+        return sensor
+    sixteen = sensor.with_(adc_bits=16, black_level_dn=0.0)
+    pedestal = float(np.ceil(6.0 * np.hypot(sensor.read_noise_e, sensor.dsnu_e) * sixteen.dn_per_electron))
+    return sixteen.with_(black_level_dn=max(float(sensor.black_level_dn), pedestal))
+
+
 def simulate_emva(sensor: SensorParams, cfa, out_dir, settings: EmvaSettings | None = None,
                   progress=None) -> list[ChannelSeries]:
     """Take and write the EMVA 1288 image series of every channel.
@@ -296,7 +309,7 @@ def simulate_emva(sensor: SensorParams, cfa, out_dir, settings: EmvaSettings | N
     settings = settings or EmvaSettings()
     require(sensor.readout == "full", f"sensor emva measures the native pixel: readout must be 'full', "
                                       f"got {sensor.readout!r}")
-    require(sensor.adc_bits <= 16, f"sensor emva writes 16-bit PNG images; the ADC has {sensor.adc_bits} bits")
+    sensor = measured_sensor(sensor)
     cfa = with_ir_cut(get_cfa(cfa), sensor.ir_cut)
     wl = np.asarray(_spectra.DEFAULT_WAVELENGTHS, dtype=np.float64)
     qe = cfa.sensitivities(wl)

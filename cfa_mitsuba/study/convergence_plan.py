@@ -172,7 +172,7 @@ def make_plan(scene, *, width=None, height=None, spp=None, reference_spp=None, p
     Raises :class:`CfaMitsubaError` naming the first bad setting.
     """
     from .. import render
-    from ..metrics import metrics_for_scene
+    from ..metrics import get_metric, metrics_for_scene
     from ..isp.demosaic import get_demosaic
     from ..sensor import get_cfa
     from ..sensor.params import NOISE_MODES
@@ -221,7 +221,8 @@ def make_plan(scene, *, width=None, height=None, spp=None, reference_spp=None, p
         raise CfaMitsubaError(f"--default-seeds must be a whole number >= 0, got {default_seeds!r}")
     return ConvergencePlan(
         scene=str(scene), name=sc.name, width=cfg.width, height=cfg.height, oversample=k, size_note=note,
-        metrics=metrics_for_scene(sc.kind), is_3d=sc.is_3d, default_spp=_square_up(sc.spp), spp_levels=levels,
+        metrics=tuple(m for m in metrics_for_scene(sc.kind) if get_metric(m).scored),  # the scored ones
+        is_3d=sc.is_3d, default_spp=_square_up(sc.spp), spp_levels=levels,
         reference_spp=ref, pocs_iterations=its, pocs_reference_iterations=pocs_ref, cfa=str(cfa),
         demosaic=str(demosaic), seed=cfg.seed, luminance_cd_m2=cfg.luminance_cd_m2, render_noise=render_noise,
         repeat=repeat, compare_cfas=tuple(compare_cfas), noise_seeds=noise_seeds,
