@@ -119,10 +119,11 @@ def optics(name):
 
 @functools.lru_cache(maxsize=None)
 def sweep(luminance):
-    """The whole chain at one luminance (auto exposure chosen at 100 cd/m^2
-    and kept, as in a study): macbeth -> bayer -> bilinear -> metrics."""
+    """The whole chain at one luminance, with the exposure chosen at 100 cd/m^2
+    and kept (the 'reference' policy: a fixed camera, so that the bright rows
+    clip and the dim ones starve): macbeth -> bayer -> bilinear -> metrics."""
     oi, geo = optics("macbeth")
-    raw = cm.sensor.capture(oi, "bayer", luminance_cd_m2=luminance, seed=1)
+    raw = cm.sensor.capture(oi, "bayer", luminance_cd_m2=luminance, seed=1, exposure_policy="reference")
     img = cm.isp.process(raw, "bilinear")
     ideal = cm.isp.process(cm.sensor.capture_ideal(oi, luminance_cd_m2=luminance))
     cam = M.mean_match(img.xyz, ideal.xyz, border=2)
@@ -139,7 +140,8 @@ def sweep(luminance):
     # MTF on the slanted edge, as the study measures it (the ideal's edge line
     # as fallback when noise hides the edge's position)
     oi_e, geo_e = optics("slanted-edge")
-    e_img = cm.isp.process(cm.sensor.capture(oi_e, "bayer", luminance_cd_m2=luminance, seed=1), "bilinear")
+    e_img = cm.isp.process(cm.sensor.capture(oi_e, "bayer", luminance_cd_m2=luminance, seed=1,
+                                             exposure_policy="reference"), "bilinear")
     e_ideal = cm.isp.process(cm.sensor.capture_ideal(oi_e, luminance_cd_m2=luminance))
     lin = M.colourspace.xyz_to_linear(e_img.xyz, scale=e_ideal.white_xyz[1])
     ref = M.colourspace.xyz_to_linear(e_ideal.xyz, scale=e_ideal.white_xyz[1])
