@@ -135,9 +135,10 @@ def _parameters(fn) -> dict:
 def metric_parameters(name: str) -> dict[str, inspect.Parameter]:
     """The options a study or the command line may set for a metric: its
     function's keyword-only parameters that the adapter does not fill."""
-    return {k: p for k, p in _parameters(get_metric(name).function).items()
+    r = get_metric(name)
+    return {k: p for k, p in _parameters(r.function).items()
             if p.kind is inspect.Parameter.KEYWORD_ONLY and (k not in GEOMETRY_KEYWORDS or k in SETTABLE_GEOMETRY)
-            and k != _reference_keyword(get_metric(name))}
+            and k != _reference_keyword(r)}
 
 
 def _reference_keyword(r: MetricRecord) -> str | None:

@@ -13,7 +13,7 @@ __all__ = ["axis_sweep", "axis_rows"]
 
 import numpy as np
 
-from ..study.conditions import AXES, AXIS_UNITS
+from ..study.axes import AXES, axis_unit
 from .figure import Absent, ReportFigure, cfa_legend, label_sweep_panel, legend_rows, panel_grid
 from .results import SCORED_METRICS, Results
 from .style import cfa_styles, metric_display
@@ -60,7 +60,7 @@ def axis_sweep(res: Results, axis: str):
                            width=6.0)
     numeric = axis not in ("exposure", "spectra", "readout") or (axis == "exposure" and not (m[axis].astype(str) == "auto").any())
     drawn = []
-    unit = AXIS_UNITS.get(axis, "")
+    unit = axis_unit(axis)
     for r, (scene, metric) in enumerate(pairs):
         info = metric_display(metric)
         g = m[(m["scene"] == scene) & (m["metric"] == metric)]

@@ -13,24 +13,11 @@ lists of axis values (:func:`cross`).
 
 from __future__ import annotations
 
-__all__ = ["AXES", "AXIS_UNITS", "Condition", "cross"]
+__all__ = ["AXES", "Condition", "cross"]
 
 import itertools
 
-from .axes import AXES, axis_unit
-
-
-class _Units(dict):
-    """{axis: unit} of the registered axes, read live (a registered axis shows)."""
-
-    def get(self, key, default=""):
-        return axis_unit(key) if key in AXES else default
-
-    def __getitem__(self, key):
-        return axis_unit(key)
-
-
-AXIS_UNITS = _Units()
+from .axes import AXES
 
 
 class Condition:
