@@ -9,7 +9,7 @@ interval of exactly 1, otherwise the tied set.
 from __future__ import annotations
 
 __all__ = ["GENERATORS", "rank_table", "rank_summary", "timing_sentence", "decisions_table_md", "spearman_sentence",
-           "claims_sentence", "monotone_table", "low_light_table"]
+           "claims_sentence", "monotone_table", "low_light_table", "axis_table"]
 
 import json
 from pathlib import Path
@@ -236,6 +236,37 @@ def low_light_table(repo: Path, folder: str) -> str:
     return "\n\n" + "\n".join(lines) + "\n\n"
 
 
+def axis_table(repo: Path, results: str, axis: str, *scene_metrics: str) -> str:
+    """A swept axis as a Markdown table from a study's metrics.csv: one row
+    per ``SCENE:METRIC`` given, CFA and demosaic, one column per value of
+    ``axis``; each cell the mean over the realisations with half its 95 %
+    interval in brackets."""
+    import pandas as pd
+
+    path = repo / results / "metrics.csv"
+    if not path.is_file():
+        raise CfaMitsubaError(f"{results}/metrics.csv not found")
+    m = pd.read_csv(path)
+    if axis not in m.columns:
+        raise CfaMitsubaError(f"{results}/metrics.csv has no column {axis!r}")
+    values = sorted(m[axis].unique())
+    lines = ["| CFA, demosaic | " + " | ".join(f"{axis} {v:g}" for v in values) + " |",
+             "|---|" + "---|" * len(values)]
+    for sm in scene_metrics:
+        scene, metric = sm.split(":")
+        rows = m[(m["scene"] == scene) & (m["metric"] == metric)]
+        if rows.empty:
+            raise CfaMitsubaError(f"{results}/metrics.csv has no {metric!r} rows on {scene!r}")
+        unit = rows["unit"].iloc[0]
+        unit = f" ({unit})" if isinstance(unit, str) and unit else ""
+        for (cfa, dem), g in rows.groupby(["cfa", "demosaic"], sort=False):
+            g = g.drop_duplicates(axis).set_index(axis)
+            cells = [f"{g.loc[v, 'value']:.4g} ({(g.loc[v, 'ci_high'] - g.loc[v, 'ci_low']) / 2:.2g})"
+                     if v in g.index else "—" for v in values]
+            lines.append(f"| {cfa}, {dem}: {scene} {metric}{unit} | " + " | ".join(cells) + " |")
+    return "\n\n" + "\n".join(lines) + "\n\n"
+
+
 #: {name: function(repo, *args) -> Markdown}
 GENERATORS = {
     "rank-table": rank_table,
@@ -248,4 +279,5 @@ GENERATORS = {
     "design-front": design_front,
     "monotone-table": monotone_table,
     "low-light-table": low_light_table,
+    "axis-table": axis_table,
 }
