@@ -2,6 +2,13 @@
 speed against colour-demosaicing on a 636 x 720 Bayer mosaic.
 
     python benchmarks/bench_demosaic.py [--quick] [--repeat N] [--new-layouts-only] [--scielab-only]
+        [--bayer-only] [--json PATH]
+
+``--json PATH`` also writes the measured numbers (PSNR per CFA, method and
+photograph, the speed table, load average, code commit) to PATH: README.md
+takes its demosaicing numbers from the committed docs/data/bench_demosaic.json
+(``python benchmarks/bench_demosaic.py --bayer-only --json
+docs/data/bench_demosaic.json``, about a minute).
 
 Images: scikit-image's bundled photographs (astronaut, coffee, chelsea,
 rocket), 8-bit sRGB values / 255 taken as the scene, as the demosaicing
@@ -72,6 +79,10 @@ def photos(quick):
     return imgs
 
 
+#: what --json writes: filled by the tables as they print
+RESULTS: dict = {"psnr_db": {}, "time_per_image_s": {}, "speed_s": {}}
+
+
 def quality_table(cfas, imgs, repeat, rgb: bool):
     print(f"| CFA | method | {' | '.join(imgs)} | mean PSNR (dB) | time per image (s) |")
     print("|---|---|" + "---|" * len(imgs) + "---|---|")
@@ -87,6 +98,8 @@ def quality_table(cfas, imgs, repeat, rgb: bool):
                 times.append(best_time(lambda: cm.isp.demosaic(raws[n], cfa, method), repeat))
             print(f"| {name} | {method} | " + " | ".join(f"{v:.2f}" for v in vals)
                   + f" | {np.mean(vals):.2f} | {np.mean(times):.3f} |")
+            RESULTS["psnr_db"].setdefault(name, {})[method] = {**dict(zip(imgs, vals)), "mean": float(np.mean(vals))}
+            RESULTS["time_per_image_s"].setdefault(name, {})[method] = float(np.mean(times))
         if name == "bayer" and rgb:
             import colour_demosaicing as cdm
 
@@ -142,6 +155,10 @@ def speed_table(repeat):
     t = {k: best_time(f, repeat) for k, f in rows.items()}
     info = {}
     cm.isp.demosaic(raw, "bayer", "pocs", info=info)
+    RESULTS["speed_s"] = t
+    RESULTS["speedup"] = {k: t[v] / t[k] for k, v in (("bilinear", "colour-demosaicing bilinear"),
+                                                       ("laplacian", "colour-demosaicing Malvar2004"))}
+    RESULTS["pocs_iterations"] = info["iterations"]
     print("| 636 x 720 Bayer mosaic | time (s) | ratio |")
     print("|---|---|---|")
     pairs = {"bilinear": "colour-demosaicing bilinear", "laplacian": "colour-demosaicing Malvar2004"}
@@ -159,12 +176,20 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--new-layouts-only", action="store_true", help="only the layouts of today's sensors")
     ap.add_argument("--scielab-only", action="store_true", help="only S-CIELAB of the four methods on Bayer")
+    ap.add_argument("--bayer-only", action="store_true", help="only the speed table and Bayer's PSNR (no S-CIELAB)")
+    ap.add_argument("--json", metavar="PATH", help="also write the measured numbers to PATH (JSON)")
     args = ap.parse_args()
     repeat = 1 if args.quick else args.repeat
     load = os.getloadavg() if hasattr(os, "getloadavg") else ("?",)
     print(f"# bench_demosaic: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load average {load[0]:.2f} at start; numpy {np.__version__}\n")
     imgs = photos(args.quick)
+    if args.bayer_only:
+        print("## Speed (Bayer)\n")
+        speed_table(repeat)
+        print("\n## Bayer: PSNR on R, G, B\n")
+        quality_table(("bayer",), imgs, repeat, rgb=True)
+        return write_json(args, repeat)
     print("## S-CIELAB on the photographs (Bayer; rank 4/4 = worst)\n")
     scielab_table(imgs)
     if args.scielab_only:
@@ -180,8 +205,31 @@ def main():
     quality_table(NEW_RGB_CFAS, imgs, repeat, rgb=True)
     print("\n## Layouts of today's sensors, others: PSNR on the CFA's own white-balanced channels\n")
     quality_table(NEW_OTHER_CFAS, imgs, repeat, rgb=False)
+    write_json(args, repeat)
+
+
+def write_json(args, repeat):
+    """Print the load average; with --json, write RESULTS and how they were measured."""
+    import json
+    import subprocess
+    from datetime import datetime, timezone
+    from pathlib import Path
+
     load = os.getloadavg() if hasattr(os, "getloadavg") else ("?",)
     print(f"\nload average {load[0]:.2f} at the end")
+    if not args.json:
+        return
+    try:
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                                cwd=Path(__file__).parent).stdout.strip()
+    except OSError:
+        commit = ""
+    out = {**RESULTS, "photos": list(PHOTOS), "quick": args.quick, "repeat": repeat, "cpus": os.cpu_count(),
+           "load_average_end": load[0], "date": datetime.now(timezone.utc).strftime("%Y-%m-%d"), "commit": commit}
+    tmp = Path(args.json).with_suffix(".tmp")
+    tmp.write_text(json.dumps(out, indent=1) + "\n")
+    tmp.replace(args.json)
+    print(f"wrote {args.json}")
 
 
 if __name__ == "__main__":
