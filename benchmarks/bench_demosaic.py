@@ -106,6 +106,7 @@ def quality_table(cfas, imgs, repeat, rgb: bool):
             for label, fn in (("colour-demosaicing Malvar2004", cdm.demosaicing_CFA_Bayer_Malvar2004),
                               ("colour-demosaicing Menon2007", cdm.demosaicing_CFA_Bayer_Menon2007)):
                 vals = [psnr(im, fn(raws[n], "GRBG")) for n, im in imgs.items()]
+                RESULTS.setdefault("library_psnr_db", {})[label] = {**dict(zip(imgs, vals)), "mean": float(np.mean(vals))}
                 print(f"| {name} | *{label}* | " + " | ".join(f"{v:.2f}" for v in vals) + f" | {np.mean(vals):.2f} | |")
 
 

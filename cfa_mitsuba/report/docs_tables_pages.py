@@ -8,12 +8,21 @@
 - ``@censored RESULTS METRIC``: how many of a metric's values are bounds,
   and which (CFA, demosaic);
 - ``@above-ideal RESULTS METRIC``: the camera outputs whose value exceeds
-  the ideal sensor's (ideal.csv).
+  the ideal sensor's (ideal.csv);
+- ``@by-demosaic PATH.csv SCENE CFA LUMINANCE METRIC...``: a tidy CSV
+  (metrics.csv, quick_expected.csv) as one row per metric and one column per
+  demosaic, each value with its 95 % interval where the CSV has one;
+- ``@worst-demosaic PATH.csv SCENE CFA LUMINANCE METRIC...``: per metric
+  the worst demosaic and whether its 95 % interval is apart from every
+  other's (last) or overlaps some (tied last);
+- ``@demosaic-speed PATH.json`` and ``@demosaic-psnr PATH.json CFA...``:
+  ``benchmarks/bench_demosaic.py --json`` output as its speed and PSNR tables.
 """
 
 from __future__ import annotations
 
-__all__ = ["GENERATORS", "bench_table", "metric_table", "censored_sentence", "above_ideal_sentence"]
+__all__ = ["GENERATORS", "bench_table", "metric_table", "censored_sentence", "above_ideal_sentence", "demosaic_speed",
+           "demosaic_psnr", "by_demosaic", "worst_demosaic"]
 
 import json
 from pathlib import Path
@@ -97,10 +106,107 @@ def above_ideal_sentence(repo: Path, results: str, metric: str) -> str:
     return f"the ideal sensor's {ref:.1f}; above it: " + (names or "none")
 
 
+def _bench(repo: Path, path: str) -> dict:
+    file = repo / path
+    if not file.is_file():
+        raise CfaMitsubaError(f"{path} not found (run benchmarks/bench_demosaic.py --json {path})")
+    return json.loads(file.read_text())
+
+
+def _how(d: dict) -> str:
+    return (f"best of {d.get('repeat')} runs on {d.get('cpus')} shared cores at load average "
+            f"{d.get('load_average_end', float('nan')):.1f}, {d.get('date', '?')}, commit {d.get('commit', '?')}")
+
+
+def demosaic_speed(repo: Path, path: str) -> str:
+    """The Bayer speed table of bench_demosaic: time per method and the ratios to colour-demosaicing."""
+    d = _bench(repo, path)
+    pairs = {"bilinear": "colour-demosaicing bilinear", "laplacian": "colour-demosaicing Malvar2004"}
+    lines = ["| 636 x 720 Bayer mosaic | time (s) | ratio |", "|---|---|---|"]
+    for k, t in d["speed_s"].items():
+        ratio = f"{d['speedup'][k]:.1f}x faster than {pairs[k]}" if k in pairs else ""
+        if k == "pocs":
+            ratio = f"{d['pocs_iterations']} iterations to tolerance 1e-3"
+        lines.append(f"| {k} | {t:.4f} | {ratio} |")
+    return "\n\n" + "\n".join(lines) + f"\n\n({_how(d)}.)\n\n"
+
+
+def demosaic_psnr(repo: Path, path: str, *cfas: str) -> str:
+    """bench_demosaic's PSNR rows (dB per photograph, mean, time per image) of the CFAs given."""
+    d = _bench(repo, path)
+    photos = d["photos"]
+    lines = [f"| CFA | method | {' | '.join(photos)} | mean PSNR (dB) | time per image (s) |",
+             "|---|---|" + "---|" * len(photos) + "---|---|"]
+    for cfa in cfas:
+        if cfa not in d["psnr_db"]:
+            raise CfaMitsubaError(f"{path} holds no PSNR of {cfa!r}")
+        for method, v in d["psnr_db"][cfa].items():
+            lines.append(f"| {cfa} | {method} | " + " | ".join(f"{v[n]:.2f}" for n in photos)
+                         + f" | {v['mean']:.2f} | {d['time_per_image_s'][cfa][method]:.3f} |")
+        if cfa == "bayer":  # the library's Bayer methods on the same mosaics, PSNR only
+            for label, v in d.get("library_psnr_db", {}).items():
+                lines.append(f"| {cfa} | *{label}* | " + " | ".join(f"{v[n]:.2f}" for n in photos) + f" | {v['mean']:.2f} | |")
+    return "\n\n" + "\n".join(lines) + f"\n\n({_how(d)}.)\n\n"
+
+
+LABEL = {"ssim": "SSIM", "haarpsi": "HaarPSI", "mdsi": "MDSI", "scielab": "S-CIELAB (dE00)",
+         "scielab-interior": "S-CIELAB interior (dE00)"}
+
+
+def by_demosaic(repo: Path, path: str, scene: str, cfa: str, luminance: str, *metrics: str) -> str:
+    """Metrics (rows) against demosaics (columns) for one scene, CFA and luminance of a tidy CSV."""
+    import pandas as pd
+
+    file = repo / path
+    if not file.is_file():
+        raise CfaMitsubaError(f"{path} not found")
+    m = pd.read_csv(file, comment="#")
+    m = m[(m["scene"] == scene) & (m["cfa"] == cfa) & (m["luminance"] == float(luminance))]
+    demosaics = list(dict.fromkeys(m["demosaic"]))
+    lines = ["| metric | " + " | ".join(demosaics) + " |", "|---|" + "---|" * len(demosaics)]
+    for metric in metrics:
+        rows = m[m["metric"] == metric].set_index("demosaic")
+        if rows.empty:
+            raise CfaMitsubaError(f"{path} has no {metric!r} of {cfa} on {scene} at {luminance} cd/m^2")
+        digits = ".3f" if metric.startswith("scielab") else ".4f"
+        cells = [f"{rows.loc[d, 'value']:{digits}}" + (f" [{rows.loc[d, 'ci_low']:{digits}}, {rows.loc[d, 'ci_high']:{digits}}]"
+                                                       if "ci_low" in rows.columns else "") for d in demosaics]
+        lines.append(f"| {LABEL.get(metric, metric)} | " + " | ".join(cells) + " |")
+    return "\n\n" + "\n".join(lines) + "\n\n"
+
+
+HIGHER_IS_BETTER = {"ssim": True, "haarpsi": True, "mdsi": False, "scielab": False, "scielab-interior": False}
+
+
+def worst_demosaic(repo: Path, path: str, scene: str, cfa: str, luminance: str, *metrics: str) -> str:
+    """Per metric: the demosaic with the worst mean, and whether its interval is apart from all others."""
+    import pandas as pd
+
+    m = pd.read_csv(repo / path, comment="#")
+    m = m[(m["scene"] == scene) & (m["cfa"] == cfa) & (m["luminance"] == float(luminance))]
+    parts = []
+    for metric in metrics:
+        rows = m[m["metric"] == metric].set_index("demosaic")
+        if rows.empty or metric not in HIGHER_IS_BETTER:
+            raise CfaMitsubaError(f"{path}: no {metric!r} of {cfa} on {scene} at {luminance} cd/m^2 (or no direction)")
+        worst = rows["value"].idxmin() if HIGHER_IS_BETTER[metric] else rows["value"].idxmax()
+        w = rows.loc[worst]
+        others = rows.drop(index=worst)
+        overlap = [d for d, r in others.iterrows() if r["ci_low"] <= w["ci_high"] and w["ci_low"] <= r["ci_high"]]
+        name = LABEL.get(metric, metric).split(" (")[0]
+        parts.append(f"{name}: {worst} last, its interval apart from every other method's" if not overlap else
+                     f"{name}: {worst} lowest-scoring but tied with {', '.join(overlap)} (overlapping intervals)")
+    return "; ".join(parts)
+
+
 #: {name: function(repo, *args) -> Markdown}
 GENERATORS = {
     "bench-table": bench_table,
     "metric-table": metric_table,
     "censored": censored_sentence,
     "above-ideal": above_ideal_sentence,
+    "demosaic-speed": demosaic_speed,
+    "demosaic-psnr": demosaic_psnr,
+    "by-demosaic": by_demosaic,
+    "worst-demosaic": worst_demosaic,
 }
