@@ -45,7 +45,7 @@ if __name__ == "__main__":  # the measured outcomes for docs/stability.md
         t = time.perf_counter()
         out = fn()
         # temporary folders differ per run: "…/" in their place
-        outcomes[row] = re.sub(r"(?:/[\\w.-]+)*/tmp\\w{6,}/", "…/", str(out)).replace("|", "\\|")
+        outcomes[row] = re.sub(r"(?:/[\w.-]+)*/tmp\w{6,}/", "…/", str(out)).replace("|", "\\|")
         print(f"| {row} | {out} | {time.perf_counter() - t:.2f} s |", flush=True)
     if out_path:
         data = {"rows": len(CASES), "date": datetime.now(timezone.utc).strftime("%Y-%m-%d"), "outcomes": outcomes}
