@@ -2,13 +2,16 @@
 speed against colour-demosaicing on a 636 x 720 Bayer mosaic.
 
     python benchmarks/bench_demosaic.py [--quick] [--repeat N] [--new-layouts-only] [--scielab-only]
-        [--bayer-only] [--json PATH]
+        [--bayer-only] [--cfas A,B,...] [--json PATH]
 
 ``--json PATH`` also writes the measured numbers (PSNR per CFA, method and
 photograph, the speed table, load average, code commit) to PATH: README.md
 takes its demosaicing numbers from the committed docs/data/bench_demosaic.json
 (``python benchmarks/bench_demosaic.py --bayer-only --json
-docs/data/bench_demosaic.json``, about a minute).
+docs/data/bench_demosaic.json``, about a minute); ``--cfas A,B,...`` (PSNR
+tables of those CFAs only) and ``--scielab-only`` add their numbers to an
+existing PATH, so the full tables of docs/isp.md are filled in runs of a
+few minutes each.
 
 Images: scikit-image's bundled photographs (astronaut, coffee, chelsea,
 rocket), 8-bit sRGB values / 255 taken as the scene, as the demosaicing
@@ -129,6 +132,8 @@ def scielab_table(imgs):
     for spd in (23, 72):
         table = {m: [float(scielab(r, o, white, samples_per_degree=spd).value) for r, o in zip(refs, outs[m])]
                  for m in METHODS}
+        RESULTS.setdefault("scielab_de00", {})[str(spd)] = {m: {**dict(zip(imgs, v)), "mean": float(np.mean(v))}
+                                                            for m, v in table.items()}
         ranks = [1 + sum(table[m][k] < table["bilinear"][k] for m in METHODS) for k in range(len(refs))]
         for method in METHODS:
             vals = table[method]
@@ -178,6 +183,7 @@ def main():
     ap.add_argument("--new-layouts-only", action="store_true", help="only the layouts of today's sensors")
     ap.add_argument("--scielab-only", action="store_true", help="only S-CIELAB of the four methods on Bayer")
     ap.add_argument("--bayer-only", action="store_true", help="only the speed table and Bayer's PSNR (no S-CIELAB)")
+    ap.add_argument("--cfas", metavar="A,B,...", help="only the PSNR tables of these CFAs (added to --json's file)")
     ap.add_argument("--json", metavar="PATH", help="also write the measured numbers to PATH (JSON)")
     args = ap.parse_args()
     repeat = 1 if args.quick else args.repeat
@@ -191,10 +197,16 @@ def main():
         print("\n## Bayer: PSNR on R, G, B\n")
         quality_table(("bayer",), imgs, repeat, rgb=True)
         return write_json(args, repeat)
+    if args.cfas:
+        for name in args.cfas.split(","):
+            rgb = name in RGB_CFAS + NEW_RGB_CFAS
+            print(f"\n## {name}: PSNR on {'R, G, B' if rgb else 'its own white-balanced channels'}\n")
+            quality_table((name,), imgs, repeat, rgb=rgb)
+        return write_json(args, repeat, merge=True)
     print("## S-CIELAB on the photographs (Bayer; rank 4/4 = worst)\n")
     scielab_table(imgs)
     if args.scielab_only:
-        return
+        return write_json(args, repeat, merge=True)
     if not args.new_layouts_only:
         print("## Speed (Bayer)\n")
         speed_table(repeat)
@@ -209,8 +221,9 @@ def main():
     write_json(args, repeat)
 
 
-def write_json(args, repeat):
-    """Print the load average; with --json, write RESULTS and how they were measured."""
+def write_json(args, repeat, merge=False):
+    """Print the load average; with --json, write RESULTS and how they were measured (``merge``: added
+    to the tables already in the file, whose speed table and header stay; each run listed in ``runs``)."""
     import json
     import subprocess
     from datetime import datetime, timezone
@@ -225,8 +238,15 @@ def write_json(args, repeat):
                                 cwd=Path(__file__).parent).stdout.strip()
     except OSError:
         commit = ""
-    out = {**RESULTS, "photos": list(PHOTOS), "quick": args.quick, "repeat": repeat, "cpus": os.cpu_count(),
-           "load_average_end": load[0], "date": datetime.now(timezone.utc).strftime("%Y-%m-%d"), "commit": commit}
+    run = {"load_average_end": load[0], "date": datetime.now(timezone.utc).strftime("%Y-%m-%d"), "commit": commit,
+           "cfas": args.cfas or ("scielab" if args.scielab_only else "bayer, speed" if args.bayer_only else "all")}
+    out = {**RESULTS, "photos": list(PHOTOS), "quick": args.quick, "repeat": repeat, "cpus": os.cpu_count(), **run,
+           "runs": [run]}
+    if merge and Path(args.json).is_file():
+        out = json.loads(Path(args.json).read_text())
+        for key in ("psnr_db", "time_per_image_s", "library_psnr_db", "scielab_de00"):
+            out.setdefault(key, {}).update(RESULTS.get(key, {}))
+        out["runs"] = [*out.get("runs", []), run]
     tmp = Path(args.json).with_suffix(".tmp")
     tmp.write_text(json.dumps(out, indent=1) + "\n")
     tmp.replace(args.json)

@@ -15,14 +15,16 @@
 - ``@worst-demosaic PATH.csv SCENE CFA LUMINANCE METRIC...``: per metric
   the worst demosaic and whether its 95 % interval is apart from every
   other's (last) or overlaps some (tied last);
-- ``@demosaic-speed PATH.json`` and ``@demosaic-psnr PATH.json CFA...``:
-  ``benchmarks/bench_demosaic.py --json`` output as its speed and PSNR tables.
+- ``@demosaic-speed PATH.json``, ``@demosaic-psnr PATH.json CFA...``,
+  ``@demosaic-scielab PATH.json`` and ``@psnr-exceptions PATH.json CFA...``:
+  ``benchmarks/bench_demosaic.py --json`` output as its speed, PSNR and
+  S-CIELAB tables, and where a method falls below a simpler one.
 """
 
 from __future__ import annotations
 
 __all__ = ["GENERATORS", "bench_table", "metric_table", "censored_sentence", "above_ideal_sentence", "demosaic_speed",
-           "demosaic_psnr", "by_demosaic", "worst_demosaic"]
+           "demosaic_psnr", "by_demosaic", "worst_demosaic", "demosaic_scielab", "psnr_exceptions"]
 
 import json
 from pathlib import Path
@@ -114,8 +116,12 @@ def _bench(repo: Path, path: str) -> dict:
 
 
 def _how(d: dict) -> str:
-    return (f"best of {d.get('repeat')} runs on {d.get('cpus')} shared cores at load average "
-            f"{d.get('load_average_end', float('nan')):.1f}, {d.get('date', '?')}, commit {d.get('commit', '?')}")
+    runs = d.get("runs") or [d]
+    loads = [r.get("load_average_end", float("nan")) for r in runs]
+    load = f"{min(loads):.1f}" if len(runs) == 1 else f"{min(loads):.1f}-{max(loads):.1f}"
+    return (f"times: best of {d.get('repeat')} on {d.get('cpus')} shared cores at load average {load}, "
+            f"{', '.join(sorted({r.get('date', '?') for r in runs}))}, commit "
+            f"{', '.join(sorted({r.get('commit', '?') for r in runs}))}")
 
 
 def demosaic_speed(repo: Path, path: str) -> str:
@@ -199,6 +205,47 @@ def worst_demosaic(repo: Path, path: str, scene: str, cfa: str, luminance: str, 
     return "; ".join(parts)
 
 
+def demosaic_scielab(repo: Path, path: str) -> str:
+    """Mean S-CIELAB dE00 of the four methods on the photographs at each viewing geometry, with bilinear's ranks."""
+    d = _bench(repo, path)
+    tables = d.get("scielab_de00")
+    if not tables:
+        raise CfaMitsubaError(f"{path} holds no S-CIELAB table (run bench_demosaic.py --scielab-only --json {path})")
+    spds = list(tables)
+    methods = list(tables[spds[0]])
+    lines = ["| method | " + " | ".join(f"{spd} samples/deg" for spd in spds) + " |", "|---|" + "---|" * len(spds)]
+    for m in methods:
+        cells = []
+        for spd in spds:
+            t = tables[spd]
+            cell = f"{t[m]['mean']:.3f}"
+            if m == "bilinear":
+                worst = sum(all(t[m][ph] >= t[o][ph] for o in methods) for ph in d["photos"])
+                best = sum(all(t[m][ph] <= t[o][ph] for o in methods) for ph in d["photos"])
+                cell = f"**{cell}** (worst on {worst} of {len(d['photos'])} photographs; best on {best})"
+            cells.append(cell)
+        lines.append(f"| {m} | " + " | ".join(cells) + " |")
+    return "\n\n" + "\n".join(lines) + "\n\n"
+
+
+def psnr_exceptions(repo: Path, path: str, *cfas: str) -> str:
+    """Bullets: where a cross-channel method's PSNR falls below bilinear on a photograph, adaptive below
+    laplacian on the mean, or POCS below laplacian on the mean (the expected order reversed)."""
+    d = _bench(repo, path)
+    out = []
+    for cfa in cfas:
+        if cfa not in d["psnr_db"]:
+            raise CfaMitsubaError(f"{path} holds no PSNR of {cfa!r}")
+        p = d["psnr_db"][cfa]
+        found = [f"{m} below bilinear on {ph} ({p[m][ph]:.2f} vs {p['bilinear'][ph]:.2f} dB)"
+                 for m in ("laplacian", "adaptive-laplacian") for ph in d["photos"] if p[m][ph] < p["bilinear"][ph]]
+        found += [f"{m} below laplacian on the mean ({p[m]['mean']:.2f} vs {p['laplacian']['mean']:.2f} dB)"
+                  for m in ("adaptive-laplacian", "pocs") if p[m]["mean"] < p["laplacian"]["mean"]]
+        if found:
+            out.append(f"* {cfa}: " + "; ".join(found) + ".")
+    return "\n\n" + ("\n".join(out) or "* none: every CFA keeps bilinear < laplacian <= adaptive, POCS.") + "\n\n"
+
+
 #: {name: function(repo, *args) -> Markdown}
 GENERATORS = {
     "bench-table": bench_table,
@@ -207,6 +254,8 @@ GENERATORS = {
     "above-ideal": above_ideal_sentence,
     "demosaic-speed": demosaic_speed,
     "demosaic-psnr": demosaic_psnr,
+    "demosaic-scielab": demosaic_scielab,
+    "psnr-exceptions": psnr_exceptions,
     "by-demosaic": by_demosaic,
     "worst-demosaic": worst_demosaic,
 }
