@@ -18,13 +18,17 @@
 - ``@demosaic-speed PATH.json``, ``@demosaic-psnr PATH.json CFA...``,
   ``@demosaic-scielab PATH.json`` and ``@psnr-exceptions PATH.json CFA...``:
   ``benchmarks/bench_demosaic.py --json`` output as its speed, PSNR and
-  S-CIELAB tables, and where a method falls below a simpler one.
+  S-CIELAB tables, and where a method falls below a simpler one;
+- ``@colour-fit-table PATH.json CFA...`` and ``@colour-pipeline-table
+  PATH.json CFA...``: ``benchmarks/bench_colour.py --json`` output as its two
+  tables (CFAs whose rows are equal as printed share one row).
 """
 
 from __future__ import annotations
 
 __all__ = ["GENERATORS", "bench_table", "metric_table", "censored_sentence", "above_ideal_sentence", "demosaic_speed",
-           "demosaic_psnr", "by_demosaic", "worst_demosaic", "demosaic_scielab", "psnr_exceptions"]
+           "demosaic_psnr", "by_demosaic", "worst_demosaic", "demosaic_scielab", "psnr_exceptions",
+           "colour_fit_table", "colour_pipeline_table"]
 
 import json
 from pathlib import Path
@@ -246,6 +250,49 @@ def psnr_exceptions(repo: Path, path: str, *cfas: str) -> str:
     return "\n\n" + ("\n".join(out) or "* none: every CFA keeps bilinear < laplacian <= adaptive, POCS.") + "\n\n"
 
 
+def _colour(repo: Path, path: str, table: str, cfas) -> list:
+    file = repo / path
+    if not file.is_file():
+        raise CfaMitsubaError(f"{path} not found (run benchmarks/bench_colour.py --json {path})")
+    rows = [r for r in json.loads(file.read_text())[table] if r["cfa"] in cfas]
+    missing = set(cfas) - {r["cfa"] for r in rows}
+    if missing:
+        raise CfaMitsubaError(f"{path} holds no {table} row of {', '.join(sorted(missing))}")
+    return rows
+
+
+def _grouped(rows: list[tuple[str, str]]) -> list[str]:
+    """(cfa, printed cells) -> one line per distinct cells, its CFAs joined, in first-seen order."""
+    by: dict = {}
+    for cfa, cells in rows:
+        by.setdefault(cells, []).append(cfa)
+    return [f"| {', '.join(names)} | {cells} |" for cells, names in by.items()]
+
+
+def colour_fit_table(repo: Path, path: str, *cfas: str) -> str:
+    """CIEDE2000 of each CFA's colour matrix fitted on one reflectance set and tested on the other."""
+    rows = []
+    for r in _colour(repo, path, "spectral", cfas):
+        t, c = r["fit_train"], r["fit_chart"]
+        rows.append((r["cfa"], f"{r['channels']} | {r['fit']} | {r['condition_number']:.2f} | "
+                     + ", ".join(f"{g:.2f}" for g in r["noise_gain_xyz"])
+                     + f" | {t['own_mean']:.2f} / {t['own_max']:.2f} | **{t['other_mean']:.2f}** / {t['other_max']:.2f}"
+                     + f" | {c['own_mean']:.2f} / {c['own_max']:.2f} | **{c['other_mean']:.2f}** / {c['other_max']:.2f}"))
+    head = ("| CFA | N | fit | cond | noise gain X, Y, Z | fitted on train: train mean/max | -> chart mean/max "
+            "| fitted on chart: chart mean/max | -> train mean/max |\n|---|---|---|---|---|---|---|---|---|")
+    return "\n\n" + head + "\n" + "\n".join(_grouped(rows)) + "\n\n"
+
+
+def colour_pipeline_table(repo: Path, path: str, *cfas: str) -> str:
+    """CIEDE2000 of the whole pipeline (noise off) against the ideal sensor per CFA and demosaic."""
+    methods = ("bilinear", "laplacian", "adaptive-laplacian", "pocs")
+    rows = [(r["cfa"], " | ".join(f"{r[m]['mean']:.2f} / {r[m]['max']:.2f}" for m in methods)
+             + f" | {r['grey_max_bilinear']:.2f}") for r in _colour(repo, path, "pipeline", cfas)]
+    head = ("| CFA | " + " | ".join(f"{m} mean / max" for m in methods) + " | grey row (patches 19-24) max, bilinear |"
+            "\n|---|" + "---|" * len(methods) + "---|")
+    return "\n\n" + head + "\n" + "\n".join(_grouped(rows)) + "\n\n"
+
+
 #: {name: function(repo, *args) -> Markdown}
 GENERATORS = {
     "bench-table": bench_table,
@@ -256,6 +303,8 @@ GENERATORS = {
     "demosaic-psnr": demosaic_psnr,
     "demosaic-scielab": demosaic_scielab,
     "psnr-exceptions": psnr_exceptions,
+    "colour-fit-table": colour_fit_table,
+    "colour-pipeline-table": colour_pipeline_table,
     "by-demosaic": by_demosaic,
     "worst-demosaic": worst_demosaic,
 }
