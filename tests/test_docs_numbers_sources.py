@@ -3,7 +3,7 @@
 tests/test_docs_numbers.py shows it for the example report's scores.csv and
 timing.json; here for the other sources: the convergence runs'
 CSV (docs/convergence.md), the stability matrix's JSON (docs/stability.md),
-the benchmarks' JSON (README.md, docs/isp.md, docs/metrics.md) and the
+the benchmarks' JSON (README.md, docs/isp.md) and the
 paper study's metrics.csv through a generated table (docs/metrics.md).
 And no link in README.md or docs/*.md leaves the repository: inline,
 reference-style and HTML links alike, web addresses included.
@@ -46,6 +46,13 @@ def _change_bench(repo: Path) -> None:
     path.write_text(json.dumps(d))
 
 
+def _change_colour(repo: Path) -> None:
+    path = repo / "docs/data/bench_colour.json"
+    d = json.loads(path.read_text())
+    d["pipeline"][0]["bilinear"]["mean"] += 0.5  # the first CFA's mean dE00 with bilinear
+    path.write_text(json.dumps(d))
+
+
 def _change_moire(repo: Path) -> None:
     path = repo / "docs/example-report/metrics.csv"
     df = pd.read_csv(path, keep_default_na=False, dtype=str)
@@ -58,8 +65,9 @@ def _change_moire(repo: Path) -> None:
     (_bump_convergence_wall_time, "docs/convergence.md"),
     (_change_stability_outcome, "docs/stability.md"),
     (_change_bench, "README.md"),
+    (_change_colour, "docs/isp.md"),
     (_change_moire, "docs/metrics.md"),
-], ids=["convergence-csv", "stability-json", "bench-json", "metrics-csv"])
+], ids=["convergence-csv", "stability-json", "bench-json", "colour-json", "metrics-csv"])
 def test_changing_one_committed_value_fails_the_check(tmp_path, change, doc):
     repo = _copy_docs(tmp_path)
     files = [repo / doc]
