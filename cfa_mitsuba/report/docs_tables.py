@@ -281,3 +281,15 @@ GENERATORS = {
     "low-light-table": low_light_table,
     "axis-table": axis_table,
 }
+
+
+def _register_more() -> None:
+    """Generators kept in modules of their own (one per page), under the same names space."""
+    from .docs_tables_convergence import GENERATORS as convergence
+    from .docs_tables_pages import GENERATORS as pages
+
+    GENERATORS.update(convergence)
+    GENERATORS.update(pages)
+
+
+_register_more()
