@@ -87,9 +87,9 @@ def path_traced(scene) -> bool:
     slanted-edge and chirp renders that differ by at most 1.6e-7 of their
     range, float32 rounding; the puppy's differ by 19 % rms per pixel), so
     they are rendered once; a measured image is not rendered at all."""
-    from .. import render
+    from ..render.measured import is_measured_image
 
-    if render.is_measured_image(scene.file or scene.name):
+    if is_measured_image(scene.file or scene.name):
         return False
     return _is_3d(scene)
 
