@@ -139,3 +139,25 @@ def test_tiny_study_pairs_realisations_and_reports_the_render_share(tmp_path):
     keys = ["scene", "cfa", "demosaic", "metric", "realisation"]
     both = one.merge(every, on=keys, suffixes=("_1", "_2"))
     assert len(both) == len(one) and np.allclose(both["value_1"], both["value_2"], rtol=1e-9)
+
+
+def test_render_noise_generator_on_the_tiny_study(tmp_path):
+    """The docs generator (report/render_noise.py): its rescoring path gives
+    scores.csv's totals back from every realisation, and its table names
+    every path-traced metric."""
+    from cfa_mitsuba.report.render_noise import half_width_ratios, render_noise_md, sensor_only_ranks
+    from cfa_mitsuba.study.runner import run_study
+
+    run_study(_config(tmp_path), tmp_path / "out", workers=1, progress=False, log=lambda m: None)
+    out = tmp_path / "out"
+    again = sensor_only_ranks(out, render_seed=None).set_index("cfa")
+    scores = pd.read_csv(out / "scores.csv").drop_duplicates("cfa").set_index("cfa")
+    assert np.allclose(again.loc[scores.index, "total_score"], scores["total_score"], rtol=1e-9)
+    assert (again.loc[scores.index, "total_rank_worst"] == scores["total_rank_worst"]).all()
+    r = half_width_ratios(out).set_index("metric")
+    assert {"scielab", "ssim", "mdsi", "haarpsi"} <= set(r.index) and "delta-e" not in r.index
+    means = pd.read_csv(out / "metrics.csv").query("scene == 'puppy' and metric == 'mdsi'")
+    ratio = ((means["ci_high"] - means["ci_low"]) / 2 / means["sensor_half_width"]).median()
+    assert r.loc["mdsi", "median_ratio"] == pytest.approx(ratio)
+    md = render_noise_md(tmp_path, "out")
+    assert "| `bayer` |" in md and "sensor noise only" in md

@@ -9,7 +9,7 @@ interval of exactly 1, otherwise the tied set.
 from __future__ import annotations
 
 __all__ = ["GENERATORS", "rank_table", "rank_summary", "timing_sentence", "decisions_table_md", "spearman_sentence",
-           "claims_sentence"]
+           "claims_sentence", "render_noise"]
 
 import json
 from pathlib import Path
@@ -169,6 +169,13 @@ def design_front(repo: Path, results: str) -> str:
             f"{', '.join(named['cfa'])}" + (f"; candidates dominated by {', '.join(beaten)}" if beaten else ""))
 
 
+def render_noise(repo: Path, results: str, baseline: str | None = None) -> str:
+    """Render noise's share of the intervals and its effect on the ranking (:mod:`.render_noise`)."""
+    from .render_noise import render_noise_md
+
+    return render_noise_md(repo, results, baseline)
+
+
 #: {name: function(repo, *args) -> Markdown}
 GENERATORS = {
     "rank-table": rank_table,
@@ -179,4 +186,5 @@ GENERATORS = {
     "claims": claims_sentence,
     "design-table": design_table,
     "design-front": design_front,
+    "render-noise": render_noise,
 }
