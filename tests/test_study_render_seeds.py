@@ -59,7 +59,8 @@ def test_default_is_one_render_and_the_shipped_configs_say_theirs(tmp_path):
 
 
 def test_plan_renders_the_puppy_per_seed_and_the_chart_once(tmp_path):
-    from cfa_mitsuba.study.runner import path_traced, plan_study
+    from cfa_mitsuba.study.render_seeds import path_traced
+    from cfa_mitsuba.study.runner import plan_study
 
     cfg = _config(tmp_path)
     assert [path_traced(s) for s in cfg.scenes] == [False, True]

@@ -46,6 +46,7 @@ from .cfa_facts import write_cfa_facts
 from .sensor_curves import write_sensor_curves
 from .tables import mean_table, order_rows, write_tables
 from .snr import write_snr_tables
+from .render_seeds import is_3d as _is_3d, path_traced, render_seeded
 from .tasks import EvaluationTask, evaluate_task, render_task
 
 #: Metrics that enter the scores (the paper's eight); other rows in
@@ -76,29 +77,6 @@ def _source(scene, render_common: dict, cond=None) -> dict:
     if scene.file:
         src["file"] = scene.file
     return src
-
-
-def path_traced(scene) -> bool:
-    """Whether a study renders ``scene`` with several sampler seeds
-    (``render_seeds``): the scenes that path-trace (3D: the puppy and every
-    user Mitsuba scene with bounces).  The charts are seen directly and
-    their renders are deterministic (measured at the quick study's sizes,
-    16 spp: seeds 0 and 1 give identical Macbeth and gray-bar renders, and
-    slanted-edge and chirp renders that differ by at most 1.6e-7 of their
-    range, float32 rounding; the puppy's differ by 19 % rms per pixel), so
-    they are rendered once; a measured image is not rendered at all."""
-    from ..render.measured import is_measured_image
-
-    if is_measured_image(scene.file or scene.name):
-        return False
-    return _is_3d(scene)
-
-
-def _is_3d(scene) -> bool:
-    from .. import render
-
-    access = {k: scene.render[k] for k in ("allow_outside_paths", "defines", "asset_root") if k in scene.render}
-    return bool(render.get_scene(scene.file or scene.name, **access).is_3d)
 
 
 def _cfa_label(cfa: str) -> str:
@@ -137,16 +115,6 @@ def scene_conditions(config: StudyConfig, scene) -> dict:
     return {c: ([m for m in scene.metrics if m in plan[c][0]], plan[c][1]) for c in ordered}
 
 
-def _render_seeded(src: dict, r: int) -> dict:
-    """The source of render seed index ``r``: the sampler seed moved by r
-    (r = 0 is the scene's own render, the one a study with one render seed uses)."""
-    if r == 0:
-        return src
-    settings = dict(src["settings"])
-    settings["seed"] = int(settings.get("seed") or 0) + r
-    return {**src, "settings": settings}
-
-
 def plan_study(config: StudyConfig, details_dir: str | None) -> tuple[list[dict], list[dict]]:
     """The render sources and the evaluation tasks of a study, in a fixed order.
 
@@ -169,7 +137,7 @@ def plan_study(config: StudyConfig, details_dir: str | None) -> tuple[list[dict]
             plain = _source(scene, render_common, cond)
             tag = cond.label(config.base_condition(cond.luminance))
             for r in range(n_render if seeded else 1):
-                src = _render_seeded(plain, r)
+                src = render_seeded(plain, r)
                 if src not in sources:
                     sources.append(src)
                 per_task = config.seeds if seeded else config.seeds * n_render

@@ -150,7 +150,7 @@ def study_size(config, workers: int | None, scheduler: str | None = None) -> Stu
     """Count and estimate a study (module docstring) from its config."""
     from ..io import limits
     from .budget import _bands
-    from .runner import path_traced
+    from .render_seeds import path_traced
 
     n_workers = int(workers) if workers else min(2, _cores())
     bands = _bands(config.render)
