@@ -325,8 +325,8 @@ def _tables_section(res: Results, tables: dict) -> str:
         if tab:
             t.append(f'<div class="tablewrap">{tab}</div>')
             t.append('<p class="note">Boxed: the best value of the metric for the demosaic (the paper\'s red '
-                     "boxes) when its 95 % interval overlaps no other CFA's; dashed: the best value, but inside "
-                     "another CFA's interval (a tie). Each value ± half its 95 % interval. ↑ higher / ↓ lower is better; † outside the metric's score range (see below); ≥ an "
+                     "boxes) when its paired difference with every other CFA is separated (rank interval exactly 1); "
+                     "dashed: the best value, but tied with another CFA. Each value ± half its 95 % interval. ↑ higher / ↓ lower is better; † outside the metric's score range (see below); ≥ an "
                      "MSP where no moiré was found up to the chirp's top frequency. Hover a cell for its score and "
                      "rank.</p>")
     if not tables.get("table2"):
