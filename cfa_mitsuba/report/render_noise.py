@@ -143,16 +143,22 @@ def render_noise_md(repo: Path, results: str, baseline: str | None = None) -> st
 
 
 def main(argv=None) -> int:
-    args = list(sys.argv[1:] if argv is None else argv)
-    if not 1 <= len(args) <= 2 or args[0].startswith("-"):
-        print("usage: python3 -m cfa_mitsuba.report.render_noise RESULTS [BASELINE]", file=sys.stderr)
-        return 2
+    """``python3 -m cfa_mitsuba.report.render_noise RESULTS [BASELINE]``: print the Markdown; 2 on bad input."""
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python3 -m cfa_mitsuba.report.render_noise",
+                                 description="Render noise's share of a study's intervals and its effect on the ranking.")
+    ap.add_argument("results", type=Path, help="a finished study's results folder (render_seeds > 1)")
+    ap.add_argument("baseline", type=Path, nargs="?", help="a study with one render seed to compare the ranks with "
+                    "(default: render seed 0 of RESULTS/metrics_realisations.csv)")
+    args = ap.parse_args(argv)
+    root = args.results.resolve()
+    baseline = str(args.baseline.resolve()) if args.baseline else None
     try:
-        root = Path(args[0]).resolve()
-        print(render_noise_md(root.parent, root.name, str(Path(args[1]).resolve()) if len(args) > 1 else None))
-    except CfaMitsubaError as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
+        text = render_noise_md(root.parent, root.name, baseline)
+    except CfaMitsubaError as exc:
+        ap.exit(2, f"{ap.prog}: error: {exc}\n")
+    print(text)
     return 0
 
 
