@@ -67,7 +67,8 @@ def decide(cfas, scores, lows, highs, ranks=None) -> tuple[list[str], str, str]:
         return f"{cfas[i]} {s[i]:.3f} [{lo[i]:.3f}, {hi[i]:.3f}] ({rank})"
 
     if verdict == "winner":
-        detail = f"{one(order[0])}: its paired difference with every other CFA lies above 0"
+        detail = (f"{one(order[0])}: its score lies above every other CFA's (paired differences, 95 % intervals "
+                  "above 0)" if ranks is not None else f"{one(order[0])}: its interval lies above every other CFA's")
     else:
         detail = f"{len(order)} CFA(s) can rank first within their 95 % intervals: " + "; ".join(one(i) for i in order)
     return top, verdict, detail
