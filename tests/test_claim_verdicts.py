@@ -153,3 +153,33 @@ def test_the_page_is_what_the_committed_runs_generate(tmp_path):
     out = write_comparison(tmp_path / "page.md", default=committed.get("ours, defaults"),
                            isetcam=committed.get("ours, ISETCam procedure"))
     assert out.read_text() == PAGE.read_text()
+
+
+def test_order_claims_use_paired_differences_where_the_run_has_them():
+    """Marginal intervals overlap (a tie), the paired difference is separated:
+    with paired differences the claim holds; reversed, it differs."""
+    from cfa_mitsuba.report.claim_verdicts import order_verdict
+
+    groups = [[("a", 2.0, 1.0, 3.0)], [("b", 1.9, 0.9, 2.9)]]
+    assert order_verdict(groups, True)[0] == "tie"
+    verdict, words = order_verdict(groups, True, lambda x, y: (0.05, 0.15))
+    assert verdict == "holds" and "paired differences" in words
+    assert order_verdict(groups, False, lambda x, y: (0.05, 0.15))[0] == "differs"
+    assert order_verdict(groups, True, lambda x, y: (-0.05, 0.15))[0] == "tie"
+    assert order_verdict(groups, True, lambda x, y: None)[0] == "tie"  # no realisations: the marginal rule
+
+
+def test_run_pairs_realisations_by_index(tmp_path):
+    import pandas as pd
+
+    from cfa_mitsuba.report.paper_data import load_run
+
+    rows = [dict(scene="macbeth", cfa=c, demosaic="bilinear", luminance=100, base=True, metric="delta-e", value=v,
+                 ci_low=v - 1, ci_high=v + 1, unit="", realisation=k, render_seed=0)
+            for c, vals in (("bayer", (2.0, 3.0, 4.0)), ("rgb4", (2.1, 3.1, 4.1))) for k, v in enumerate(vals)]
+    pd.DataFrame(rows).to_csv(tmp_path / "metrics_realisations.csv", index=False)
+    pd.DataFrame(rows).drop_duplicates("cfa").to_csv(tmp_path / "metrics.csv", index=False)
+    run = load_run(tmp_path, "k", "label")
+    lo, hi = run.paired("delta-e", "bilinear", "bayer", "rgb4")
+    assert lo == pytest.approx(-0.1) and hi == pytest.approx(-0.1)
+    assert run.paired("delta-e", "pocs", "bayer", "rgb4") is None

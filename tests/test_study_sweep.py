@@ -122,8 +122,12 @@ def test_mtf50_falls_by_the_diffraction_amount(swept):
     freq, mtf28, v28 = _edge_curve(out, "bayer/bilinear", "L100_f2.8")
     assert v28 == pytest.approx(f28)
     pred = _predicted_mtf50(freq, mtf28)
-    print(f"camera MTF50 f/2.8 {f28:.1f}, f/8 measured {f8:.1f}, predicted {pred:.1f} cy/mm")
-    assert f8 == pytest.approx(pred, rel=0.02)  # measured 0.7 % apart
+    print(f"camera MTF50 f/2.8 {f28:.1f}, f/8 measured {f8:.1f} (mean of {int(mean8.n)}: {mean8.value:.1f}), "
+          f"predicted {pred:.1f} cy/mm")
+    # against f/8's mean over the realisations: one realisation's MTF50 at f/8 scatters by 1.5 cy/mm (2.2 %,
+    # measured: 72.1, 70.1, 69.1), more than the 2 % asked, so a single realisation passes or fails by its
+    # noise seed; the mean's standard error is 0.9 % (measured 0.5 % from the prediction)
+    assert mean8.value == pytest.approx(pred, rel=0.02)
     # the ideal sensor (no demosaic): the same optics through the same analysis
     freq, ideal28, _ = _edge_curve(out, "ideal", "L100_f2.8")
     _, _, ideal8 = _edge_curve(out, "ideal", "L100_f8")

@@ -8,6 +8,12 @@ Every claim makes comparisons; each comparison is judged on the intervals:
 - *tie*: no comparison is reversed, but at least one pair of intervals
   overlaps, so the run cannot tell them apart.
 
+Where the run kept its realisations (metrics_realisations.csv), a
+comparison is judged on the paired difference of the two CFAs (the same
+render and sensor seeds, study/intervals.py ``paired_difference``):
+separated when its 95 % interval excludes 0, as the study's rank intervals
+are; otherwise on the two marginal intervals.
+
 Group claims are judged pairwise: "A, B better than C, D" makes the four
 comparisons A-C, A-D, B-C, B-D (and, for three groups, every earlier group
 against every later one), never a comparison of group means.  A "best"
@@ -30,25 +36,39 @@ import numpy as np
 VERDICTS = ("holds", "tie", "differs")
 
 
-def pairwise(better, worse, higher_is_better: bool) -> tuple[int, int, int, list]:
+def _separation(a, b, higher_is_better: bool, paired) -> int:
+    """+1: a better than b beyond the intervals, -1: b better, 0: a tie."""
+    diff = paired(a[0], b[0]) if paired is not None else None
+    if diff is not None:  # (lo, hi) of a - b over paired realisations
+        lo, hi = diff if higher_is_better else (-diff[1], -diff[0])
+        return 1 if lo > 0 else -1 if hi < 0 else 0
+    a_lo, a_hi, b_lo, b_hi = a[2], a[3], b[2], b[3]
+    if not higher_is_better:  # lower is better: flip to "higher is better"
+        a_lo, a_hi, b_lo, b_hi = -a_hi, -a_lo, -b_hi, -b_lo
+    return 1 if a_lo > b_hi else -1 if b_lo > a_hi else 0
+
+
+def pairwise(better, worse, higher_is_better: bool, paired=None) -> tuple[int, int, int, list]:
     """(separated as claimed, overlapping, separated the other way, reversed pairs).
 
     ``better``, ``worse``: [(name, value, lo, hi)] of the side the claim
-    says is better and of the other side.
+    says is better and of the other side; ``paired(name_a, name_b)``: the
+    95 % interval (lo, hi) of the paired difference a - b, or None where
+    there is none (then the marginal intervals decide).
 
     >>> pairwise([("a", 2.0, 1.9, 2.1)], [("b", 1.0, 0.9, 1.1)], True)[:3]
+    (1, 0, 0)
+    >>> pairwise([("a", 2.0, 1.0, 3.0)], [("b", 1.9, 0.9, 2.9)], True, lambda a, b: (0.05, 0.15))[:3]
     (1, 0, 0)
     """
     ok = tie = rev = 0
     reversed_pairs = []
     for a in better:
         for b in worse:
-            a_lo, a_hi, b_lo, b_hi = a[2], a[3], b[2], b[3]
-            if not higher_is_better:  # lower is better: flip to "higher is better"
-                a_lo, a_hi, b_lo, b_hi = -a_hi, -a_lo, -b_hi, -b_lo
-            if a_lo > b_hi:
+            sep = _separation(a, b, higher_is_better, paired)
+            if sep > 0:
                 ok += 1
-            elif b_lo > a_hi:
+            elif sep < 0:
                 rev += 1
                 reversed_pairs.append((a, b))
             else:
@@ -60,7 +80,7 @@ def _verdict(ok: int, tie: int, rev: int) -> str:
     return "differs" if rev else "tie" if tie else "holds"
 
 
-def order_verdict(groups, higher_is_better: bool) -> tuple[str, str]:
+def order_verdict(groups, higher_is_better: bool, paired=None) -> tuple[str, str]:
     """(verdict, counts in words) of "group 0 better than group 1 better than ...".
 
     >>> order_verdict([[("a", 2.0, 1.9, 2.1)], [("b", 1.0, 0.9, 1.1)]], True)[0]
@@ -72,11 +92,12 @@ def order_verdict(groups, higher_is_better: bool) -> tuple[str, str]:
     reversed_pairs = []
     for i in range(len(groups)):
         for j in range(i + 1, len(groups)):
-            o, t, r, rp = pairwise(groups[i], groups[j], higher_is_better)
+            o, t, r, rp = pairwise(groups[i], groups[j], higher_is_better, paired)
             ok, tie, rev = ok + o, tie + t, rev + r
             reversed_pairs += rp
     n = ok + tie + rev
-    words = f"pairwise: {ok} of {n} comparisons separated as claimed, {tie} overlapping, {rev} separated the other way"
+    how = " (paired differences)" if paired is not None else ""
+    words = f"pairwise{how}: {ok} of {n} comparisons separated as claimed, {tie} overlapping, {rev} separated the other way"
     if reversed_pairs:
         a, b = reversed_pairs[0]
         words += f" (e.g. {a[0]} {a[1]:.4g} [{a[2]:.4g}, {a[3]:.4g}] against {b[0]} {b[1]:.4g} [{b[2]:.4g}, {b[3]:.4g}])"

@@ -29,7 +29,23 @@ def read_decisions(root: Path):
     return pd.read_csv(path, dtype=str, keep_default_na=False)
 
 
-def decision_panel(root: Path) -> str:
+def intervals_cover(config: dict | None) -> str:
+    """The report's sentence on what the 95 % intervals cover, from the
+    study's config (``seeds``, ``render_seeds``; study/intervals.py)."""
+    cfg = config or {}
+    seeds, renders = int(cfg.get("seeds") or 1), int(cfg.get("render_seeds") or 1)
+    sensor = f"sensor noise ({seeds} noise seed{'s' if seeds != 1 else ''} per capture)"
+    if renders > 1:
+        cover = (f"{sensor} and render noise ({renders} independent renders of each path-traced scene; the "
+                 "charts render deterministically): metrics.csv's sensor_half_width is the part from sensor "
+                 "noise alone")
+    else:
+        cover = f"{sensor} only: each scene is rendered once (render_seeds = 1), so render noise is not in them"
+    return (f"The 95 % intervals cover {cover}. Rank intervals come from paired comparisons: the per-realisation "
+            "differences of two CFAs under the same render and sensor seeds, so that noise common to both cancels.")
+
+
+def decision_panel(root: Path, config: dict | None = None) -> str:
     """HTML: one row per aspect, the CFA(s) that can rank first and the verdict."""
     d = read_decisions(root)
     if d is None or d.empty:
@@ -49,20 +65,28 @@ def decision_panel(root: Path) -> str:
              "</style>")
     return (f'<section class="decisions">{style}<h3>Decisions (decisions.csv)</h3>'
             '<p class="note">A CFA is called first only when its rank interval is exactly 1; otherwise every CFA '
-            "whose rank interval contains 1 is listed as tied. Intervals are 95 % over the noise realisations "
-            "(sensor noise; the renders are fixed).</p>"
+            f"whose rank interval contains 1 is listed as tied. {_e(intervals_cover(config))}</p>"
             '<table class="data decisions"><thead><tr><th>aspect</th><th>verdict</th><th>detail</th></tr></thead>'
             f"<tbody>{''.join(rows)}</tbody></table></section>")
 
 
-def _card(label_win: str, label_tie: str, cfas, scores, lows, highs):
+def _card(label_win: str, label_tie: str, cfas, scores, lows, highs, ranks=None):
     from ..study.decisions import decide
 
-    top, verdict, _ = decide(cfas, scores, lows, highs)
+    top, verdict, _ = decide(cfas, scores, lows, highs, ranks=ranks)
     if verdict == "winner":
         i = list(cfas).index(top[0])
         return (label_win, top[0], f"{scores[i]:.4f} [{lows[i]:.4f}, {highs[i]:.4f}]")
     return (label_tie, ", ".join(top), "rank intervals contain 1: tied, no single best")
+
+
+def _ranks(table, prefix: str):
+    """(best, worst) ranks of scores.csv's ``prefix``_best / _worst columns
+    (paired comparisons), None when the table has none."""
+    cols = [f"{prefix}_best", f"{prefix}_worst"]
+    if not set(cols) <= set(table.columns):
+        return None
+    return tuple(table[c].astype(int).tolist() for c in cols)
 
 
 def summary_cards(scores, luminance, demosaics) -> list[tuple]:
@@ -76,7 +100,7 @@ def summary_cards(scores, luminance, demosaics) -> list[tuple]:
         tot = per.drop_duplicates("cfa")
         cards.append(_card("Best CFA overall", "Tied first overall", tot["cfa"].tolist(),
                            tot["total_score"].astype(float).tolist(), tot["total_score_ci_low"].astype(float).tolist(),
-                           tot["total_score_ci_high"].astype(float).tolist()))
+                           tot["total_score_ci_high"].astype(float).tolist(), _ranks(tot, "total_rank")))
     if len(demosaics) > 1 and {"mean_score_ci_low", "mean_score_ci_high"} <= set(per.columns):
         for d in demosaics:
             g = per[per["demosaic"] == d]
@@ -84,7 +108,7 @@ def summary_cards(scores, luminance, demosaics) -> list[tuple]:
                 cards.append(_card(f"Best with {d}", f"Tied first with {d}", g["cfa"].tolist(),
                                    g["mean_score"].astype(float).tolist(),
                                    g["mean_score_ci_low"].astype(float).tolist(),
-                                   g["mean_score_ci_high"].astype(float).tolist()))
+                                   g["mean_score_ci_high"].astype(float).tolist(), _ranks(g, "demosaic_rank")))
     return cards
 
 

@@ -9,7 +9,7 @@ interval of exactly 1, otherwise the tied set.
 from __future__ import annotations
 
 __all__ = ["GENERATORS", "rank_table", "rank_summary", "timing_sentence", "decisions_table_md", "spearman_sentence",
-           "claims_sentence", "monotone_table", "low_light_table", "axis_table"]
+           "claims_sentence", "monotone_table", "low_light_table", "axis_table", "render_noise"]
 
 import json
 from pathlib import Path
@@ -265,6 +265,11 @@ def axis_table(repo: Path, results: str, axis: str, *scene_metrics: str) -> str:
                      if v in g.index else "—" for v in values]
             lines.append(f"| {cfa}, {dem}: {scene} {metric}{unit} | " + " | ".join(cells) + " |")
     return "\n\n" + "\n".join(lines) + "\n\n"
+def render_noise(repo: Path, results: str, baseline: str | None = None) -> str:
+    """Render noise's share of the intervals and its effect on the ranking (:mod:`.render_noise`)."""
+    from .render_noise import render_noise_md
+
+    return render_noise_md(repo, results, baseline)
 
 
 #: {name: function(repo, *args) -> Markdown}
@@ -280,6 +285,7 @@ GENERATORS = {
     "monotone-table": monotone_table,
     "low-light-table": low_light_table,
     "axis-table": axis_table,
+    "render-noise": render_noise,
 }
 
 

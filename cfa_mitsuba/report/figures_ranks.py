@@ -91,11 +91,12 @@ def rank_chart(res: Results):
         ax.set_xlabel("mean normalised score")
         ax.set_title(label, fontsize=9)
         ax.grid(axis="y", visible=False)
+    from .decision_panel import intervals_cover
+
     cap = (f"Bars: the mean of a CFA's normalised metric scores for each demosaicing method (Table 3) and "
            f"their mean over the methods, at {res.primary_luminance:g} cd/m²; whiskers: the 95 % interval over "
-           "the noise realisations (sensor noise; the renders are fixed). The label gives the rank interval "
-           "before the name: CFAs whose intervals overlap share ranks (1–3) and are tied, whatever order the "
-           "bars are in.")
+           "the realisations. The label gives the rank interval before the name: CFAs that share ranks (1–3) "
+           "are tied, whatever order the bars are in. " + intervals_cover(res.config))
     return ReportFigure("ranks", "scores", title, cap, fig)
 
 

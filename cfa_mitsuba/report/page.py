@@ -177,7 +177,7 @@ def _summary(res: Results, facts: dict, not_run: list) -> str:
     cards = []
     from .decision_panel import decision_panel, summary_cards, sweep_lines
 
-    parts.append(decision_panel(res.root))
+    parts.append(decision_panel(res.root, res.config))
     for label, c, sub in summary_cards(res.scores, res.primary_luminance, res.demosaics):
         cards.append((label, c, sub, cst.get(c, {}).get("color")))
     if cards:
@@ -305,6 +305,8 @@ def render_page(res: Results, *, figures: list, absents: list, embeds: dict, tab
 
 def _tables_section(res: Results, tables: dict) -> str:
     """Tables 1-3 and the unscored and sweep tables."""
+    from .decision_panel import intervals_cover
+
     t = ['<section id="tables"><h2>Tables</h2>']
     lum = res.primary_luminance
     t.append('<h3 id="table1">Table 1. Mean colour error over the 24 patches and lightness error of the 6 grey '
@@ -323,8 +325,8 @@ def _tables_section(res: Results, tables: dict) -> str:
         if tab:
             t.append(f'<div class="tablewrap">{tab}</div>')
             t.append('<p class="note">Boxed: the best value of the metric for the demosaic (the paper\'s red '
-                     "boxes) when its 95 % interval overlaps no other CFA's; dashed: the best value, but inside "
-                     "another CFA's interval (a tie). Each value ± half its 95 % interval. ↑ higher / ↓ lower is better; † outside the metric's score range (see below); ≥ an "
+                     "boxes) when its paired difference with every other CFA is separated (rank interval exactly 1); "
+                     "dashed: the best value, but tied with another CFA. Each value ± half its 95 % interval. ↑ higher / ↓ lower is better; † outside the metric's score range (see below); ≥ an "
                      "MSP where no moiré was found up to the chirp's top frequency. Hover a cell for its score and "
                      "rank.</p>")
     if not tables.get("table2"):
@@ -337,10 +339,10 @@ def _tables_section(res: Results, tables: dict) -> str:
             t.append(f'<div class="tablewrap">{tab}</div>')
             t.append('<p class="note">Each cell: the mean of the CFA\'s normalised metric scores for that method, '
                      "± half its 95 % interval over the noise realisations, and its rank in brackets (1 = best); "
-                     "a range such as (1–3) is a rank interval: CFAs whose score intervals overlap are tied, "
-                     "and a tie is not a ranking. 'Total' is the mean over the methods; rows are sorted by it. Boxed: "
-                     "a rank interval of exactly 1 (first beyond the intervals). Shading follows the score. The "
-                     "intervals cover sensor noise (the noise realisations); the renders are fixed.</p>")
+                     "a range such as (1–3) is a rank interval: CFAs whose paired score difference interval contains 0 "
+                     "are tied, and a tie is not a ranking. 'Total' is the mean over the methods; rows are sorted by "
+                     "it. Boxed: a rank interval of exactly 1 (first beyond the intervals). Shading follows the "
+                     f"score. {_e(intervals_cover(res.config))}</p>")
     if not tables.get("table3"):
         t.append('<div class="absent"><b>Not available:</b> nothing was scored.</div>')
     if tables.get("other"):

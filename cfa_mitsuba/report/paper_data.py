@@ -82,6 +82,25 @@ class Run:
     config: dict
     timing: dict
     cfa_facts: dict = field(default_factory=dict)
+    realisations: object = None
+
+    def paired(self, metric: str, demosaic: str, a: str, b: str):
+        """(lo, hi) of the 95 % interval of CFA ``a``'s value minus ``b``'s over
+        paired realisations (study/intervals.py), None without realisations."""
+        r = self.realisations
+        if r is None or r.empty:
+            return None
+        from ..study.intervals import paired_difference
+
+        sel = r[(r["metric"] == metric) & (r["demosaic"] == demosaic)]
+        va = sel[sel["cfa"] == a].set_index("realisation")
+        vb = sel[sel["cfa"] == b].set_index("realisation")
+        common = va.index.intersection(vb.index)
+        if not len(common):
+            return None
+        groups = va.loc[common, "render_seed"] if "render_seed" in va.columns else None
+        _, lo, hi, n = paired_difference(va.loc[common, "value"], vb.loc[common, "value"], groups)
+        return (lo, hi) if n else None
 
     def value(self, metric: str, demosaic: str, cfa: str):
         """(value, ci_low, ci_high, unit) of one CFA, or None."""
@@ -144,8 +163,13 @@ def load_run(path, key: str, label: str) -> Run:
         f = p / name
         return json.loads(f.read_text()) if f.is_file() else {}
 
+    every = None
+    if (p / "metrics_realisations.csv").is_file():  # paired comparisons for the claims
+        every = pd.read_csv(p / "metrics_realisations.csv")
+        every = every[every["base"].astype(str).str.lower().isin(("true", "1"))]
+        every = every[every["luminance"] == every["luminance"].min()].reset_index(drop=True)
     return Run(key, label, p, base.reset_index(drop=True), scores, read("config.json"), read("timing.json"),
-               read("cfas.json"))
+               read("cfas.json"), every)
 
 
 def _group(run: Run, metric: str, demosaic: str, cfas) -> list[tuple]:
@@ -183,7 +207,12 @@ def _order(run: Run, claim: dict) -> tuple[str, str]:
                      f"to {cfa_label(ranked[-1][0])} {_fmt(ranked[-1][1], dec)}" if len(g) > 1 else
                      f"{cfa_label(g[0][0])} {_fmt(g[0][1], dec)} [{_fmt(g[0][2], dec)}, {_fmt(g[0][3], dec)}]")
     labelled = [[(cfa_label(r[0]), *r[1:]) for r in g] for g in groups]
-    verdict, words = order_verdict(labelled, hib)
+    cfa_of = {cfa_label(r[0]): r[0] for g in groups for r in g}
+    paired = None
+    if run.realisations is not None:
+        def paired(a, b):
+            return run.paired(metric, demosaic, cfa_of[a], cfa_of[b])
+    verdict, words = order_verdict(labelled, hib, paired)
     return verdict, "; ".join(parts) + f" ({'higher' if hib else 'lower'} is better; {words})"
 
 

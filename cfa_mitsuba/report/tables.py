@@ -166,6 +166,9 @@ def table2(res: Results, luminance: float) -> str | None:
             cis = {c: (float(by[(c, d, m)].ci_low), float(by[(c, d, m)].ci_high))
                    if (c, d, m) in by and hasattr(by[(c, d, m)], "ci_low") else None for c in cfas}
             best = _separated(by_value, cis)
+            if all(hasattr(by[(c, d, m)], "metric_rank_worst") for c in by_value):
+                # paired comparisons (scores.csv's metric rank interval): first against every other CFA
+                best = {c for c in by_value if len(by_value) == 1 and int(by[(c, d, m)].metric_rank_worst) == 1}
             for c in cfas:
                 r = by.get((c, d, m))
                 if r is None:

@@ -40,6 +40,9 @@ DEFAULT_EXPOSURE_POLICY = "program"
 #: Noise realisations of every capture unless a config says otherwise (each
 #: value is their mean with a 95 % interval: study/intervals.py).
 DEFAULT_SEEDS = 3
+#: Independent renders (sampler seeds) of every path-traced scene unless a
+#: config says otherwise (``render_seeds``; study/runner.py ``path_traced``).
+DEFAULT_RENDER_SEEDS = 1
 
 
 @dataclass(frozen=True)
@@ -69,6 +72,7 @@ class StudyConfig:
     workers: int | None
     metric_options: dict = field(default_factory=dict)
     demosaic_options: dict = field(default_factory=dict)
+    render_seeds: int = DEFAULT_RENDER_SEEDS
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -363,7 +367,7 @@ def _output(ck: _Checker, out_cfg) -> dict:
 
 _TOP_KEYS = ("name", "description", "seed", "scenes", "custom_scenes", "cfas", "demosaics", "luminances", "sweep",
              "render", "optics", "sensor", "isp", "mean_match", "normalisation", "output", "workers", "seeds",
-             "metrics")
+             "metrics", "render_seeds")
 
 
 def parse_config(data: dict, *, where: str = "config", base: Path | None = None) -> StudyConfig:
@@ -380,6 +384,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
             ck.fail(required, "missing (required)")
     name, description, seed, workers = ck.header(data)
     seeds = ck.integer(data.get("seeds", DEFAULT_SEEDS), "seeds", 1)
+    render_seeds = ck.integer(data.get("render_seeds", DEFAULT_RENDER_SEEDS), "render_seeds", 1)
     render_cfg = data.get("render", {})
     render_common = render_common_of(ck, render_cfg, [n for n, _ in render.list_scenes()])
     scenes = parse_scenes(ck, data, render_cfg, render_common, base)
@@ -403,7 +408,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         demosaics=demosaics, luminances=luminances, sweeps=sweeps, render=render_common,
         optics=optics, sensor=sensor_all, capture=capture, isp=isp_opts, mean_match=mean_match,
         ranges=ranges, clip_scores=clip, output=output, workers=workers, seeds=seeds, range_policy=policy,
-        metric_options=options, demosaic_options=demosaic_options,
+        metric_options=options, demosaic_options=demosaic_options, render_seeds=render_seeds,
     )
 
 

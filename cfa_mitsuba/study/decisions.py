@@ -10,9 +10,11 @@ One row per aspect (``aspect``, ``cfas``, ``verdict``, ``detail``):
 - ``overall``: the total score of Table 3 (scores.csv's ``total_rank``).
 
 Each aspect's score of a CFA is the mean, over the study's demosaics and
-the aspect's metrics, of its scores, computed per noise realisation; its
-95 % interval is the Student-t interval over realisations and its rank
-interval follows (:func:`.intervals.rank_interval`).  The rule, the same
+the aspect's metrics, of its scores, computed per realisation (render seed
+x sensor seed); its 95 % interval is :func:`.intervals.nested_interval`'s and
+its rank interval comes from paired comparisons: the per-realisation score
+differences of two CFAs under the same render and sensor seeds
+(:func:`.intervals.paired_rank_interval`).  The rule, the same
 everywhere the project names a best CFA: ``cfas`` lists every CFA whose
 rank interval contains 1; ``verdict`` is ``winner`` only when that is one
 CFA with rank interval exactly 1 (its interval lies wholly above every
@@ -28,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .intervals import rank_interval, t_interval
+from .intervals import nested_interval, rank_interval
 
 #: (aspect, the scored metrics it averages); ``low light`` reads the sweep's lowest luminance.
 ASPECTS = (("colour", ("delta-e", "scielab")), ("sharpness", ("mtf",)), ("moire", ("moire",)),
@@ -37,11 +39,13 @@ VERDICTS = ("winner", "tie", "unmeasured")
 COLUMNS = ["aspect", "cfas", "verdict", "detail"]
 
 
-def decide(cfas, scores, lows, highs) -> tuple[list[str], str, str]:
+def decide(cfas, scores, lows, highs, ranks=None) -> tuple[list[str], str, str]:
     """(the CFAs whose rank interval contains 1, verdict, plain-words detail).
 
     ``scores``, ``lows``, ``highs``: each CFA's score (higher is better) and
-    its 95 % interval.
+    its 95 % interval; ``ranks``: (best ranks, worst ranks) from paired
+    comparisons (:func:`.ranking.paired_ranks`); without them the rank
+    intervals follow from the marginal intervals (:func:`.intervals.rank_interval`).
 
     >>> decide(["a", "b", "c"], [0.9, 0.85, 0.5], [0.88, 0.80, 0.45], [0.92, 0.89, 0.55])[:2]
     (['a', 'b'], 'tie')
@@ -50,7 +54,10 @@ def decide(cfas, scores, lows, highs) -> tuple[list[str], str, str]:
     """
     cfas = list(cfas)
     s, lo, hi = (np.asarray(x, dtype=float) for x in (scores, lows, highs))
-    _, best, worst = rank_interval(s, lo, hi)
+    if ranks is None:
+        _, best, worst = rank_interval(s, lo, hi)
+    else:
+        best, worst = (np.asarray(x, dtype=int) for x in ranks)
     order = [i for i in np.argsort(-s, kind="stable") if best[i] == 1]
     top = [cfas[i] for i in order]
     verdict = "winner" if len(order) == 1 and worst[order[0]] == 1 else "tie"
@@ -60,25 +67,31 @@ def decide(cfas, scores, lows, highs) -> tuple[list[str], str, str]:
         return f"{cfas[i]} {s[i]:.3f} [{lo[i]:.3f}, {hi[i]:.3f}] ({rank})"
 
     if verdict == "winner":
-        detail = f"{one(order[0])}: its interval lies above every other CFA's"
+        detail = (f"{one(order[0])}: its score lies above every other CFA's (paired differences, 95 % intervals "
+                  "above 0)" if ranks is not None else f"{one(order[0])}: its interval lies above every other CFA's")
     else:
         detail = f"{len(order)} CFA(s) can rank first within their 95 % intervals: " + "; ".join(one(i) for i in order)
     return top, verdict, detail
 
 
 def _aspect_rows(aspect, metrics, scored_every, lowlight_every):
+    from .ranking import paired_ranks, realisation_renders
+
     if aspect == "low light":
         rows = lowlight_every
     else:
         rows = scored_every[scored_every["metric"].isin(metrics)]
     if rows is None or rows.empty:
         return None
+    renders = realisation_renders(rows)
     per = rows.groupby(["cfa", "realisation"], sort=False)["score"].mean().reset_index()
     cfas, s, lo, hi = [], [], [], []
     for cfa, g in per.groupby("cfa", sort=False):
-        mean, low, high, _, _ = t_interval(g["score"])
+        mean, low, high, _, _ = nested_interval(g["score"], g["realisation"].map(renders).fillna(0) if renders else None)
         cfas.append(cfa), s.append(mean), lo.append(low), hi.append(high)
-    return cfas, s, lo, hi
+    items, _, best, worst = paired_ranks(per, "cfa", "score", renders)
+    pos = [items.index(c) for c in cfas]
+    return cfas, s, lo, hi, (best[pos], worst[pos])
 
 
 def decisions_table(scores, scored_every, lowlight_every=None, lowlight_luminance=None):
@@ -99,7 +112,8 @@ def decisions_table(scores, scored_every, lowlight_every=None, lowlight_luminanc
                 continue
             tot = scores.drop_duplicates("cfa")
             cfas, verdict, detail = decide(tot["cfa"], tot["total_score"], tot["total_score_ci_low"],
-                                           tot["total_score_ci_high"])
+                                           tot["total_score_ci_high"],
+                                           ranks=(tot["total_rank_best"], tot["total_rank_worst"]))
             # the rank intervals of scores.csv are the same computation: keep them the one source
             top = tot[tot["total_rank_best"] == 1].sort_values("total_score", ascending=False)["cfa"].tolist()
             assert sorted(top) == sorted(cfas), (top, cfas)
@@ -140,6 +154,7 @@ def _lowlight(realisations, ranges, clip, scored_metrics_):
     # only the other axes at their base values: a sweep over luminance alone
     low = low.drop_duplicates(["scene", "cfa", "demosaic", "metric", "realisation"])
     cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
+    cols += ["render_seed"] if "render_seed" in low.columns else []
     import pandas as pd
 
     parts = [normalise(g[cols].drop(columns="realisation"), ranges, clip=clip).assign(realisation=r)
@@ -154,6 +169,7 @@ def write_decisions(out_dir: Path, realisations, scored_real, scores, ranges, *,
     from .ranking import _realisation_scores
 
     cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
+    cols += ["render_seed"] if "render_seed" in scored_real.columns else []
     kept = scored_real[~scored_real["metric"].isin(list(constant))]
     every = _realisation_scores(kept[cols], ranges, clip) if len(kept) else kept
     low, lum = _lowlight(realisations, ranges, clip, set(scored_metrics()) - set(constant))

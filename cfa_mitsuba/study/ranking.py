@@ -16,9 +16,12 @@ eq. 8 for each scored metric:
 
 Under any policy a metric whose values are the same for every CFA cannot
 rank them: it is reported as such (``constant``) and left out of the mean
-scores rather than scored as a tie of ones.  Each realisation (noise seed)
-is scored on its own; the tables carry the mean and 95 % interval over
-realisations, and rank intervals (:func:`.intervals.rank_interval`).
+scores rather than scored as a tie of ones.  Each realisation (render seed
+x sensor seed) is scored on its own; the tables carry the mean and 95 %
+interval over realisations (:func:`.intervals.nested_interval`), and rank
+intervals from paired comparisons: realisation k of every CFA has the same
+render and sensor seed, so two CFAs are compared through their
+per-realisation score differences (:func:`.intervals.paired_rank_interval`).
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ __all__ = ["POLICIES", "DEFAULT_POLICY", "policy_ranges", "score_realisations", 
 import numpy as np
 
 from ..errors import CfaMitsubaError
-from .intervals import aggregate, rank_interval
+from .intervals import aggregate, paired_rank_interval
 from .scoring import ScoreRange, score
 
 POLICIES = ("paper", "study", "ideal")
@@ -80,12 +83,51 @@ def policy_ranges(policy: str, means, paper: dict, ideal: dict) -> tuple[dict, l
 def _realisation_scores(rows, ranges, clip):
     import pandas as pd
 
+    if "render_seed" not in rows.columns:  # rows written before render seeds: one render
+        rows = rows.assign(render_seed=0)
     parts = []
     for r, g in rows.groupby("realisation", sort=True):
         s = score(g.drop(columns=["realisation"]), ranges, clip=clip)
         s["realisation"] = r
         parts.append(s)
     return pd.concat(parts, ignore_index=True)
+
+
+def realisation_renders(every) -> dict:
+    """{realisation: its render seed} of a study's scored rows: the highest
+    ``render_seed`` among its rows (a chart's rows say 0, as their render is
+    shared by every render seed; a path-traced scene's say which)."""
+    if "render_seed" not in every.columns:
+        return {}
+    return every.groupby("realisation")["render_seed"].max().astype(int).to_dict()
+
+
+def paired_ranks(frame, item: str, column: str, renders: dict, *, higher_is_better: bool = True):
+    """(items in ``frame``'s order, rank, best rank, worst rank) of ``item``
+    by the per-realisation ``column`` (one row per item and realisation),
+    from paired comparisons (:func:`.intervals.paired_rank_interval`)."""
+    wide = frame.pivot_table(index=item, columns="realisation", values=column, aggfunc="mean", sort=False)
+    items = list(dict.fromkeys(frame[item]))
+    wide = wide.reindex(index=items)
+    groups = [renders.get(k, 0) for k in wide.columns]
+    r, b, w = paired_rank_interval(wide.to_numpy(dtype=float), groups, higher_is_better=higher_is_better)
+    return items, r, b, w
+
+
+def _set_ranks(table, g, item, names, got, ranked_on=None):
+    """Write ``got`` = (items, rank, best, worst) into ``table`` at ``g``'s rows
+    under ``names``; the rank itself from ``ranked_on`` when given (the
+    unclipped score of a metric)."""
+    items, r, b, w = got
+    pos = {c: i for i, c in enumerate(items)}
+    idx = [pos[c] for c in g[item]]
+    if ranked_on is not None:
+        m = ranked_on.to_numpy(dtype=float)
+        r = np.array([1 + int(np.sum(m > x)) for x in m])
+        idx_r = list(range(len(m)))
+    else:
+        idx_r = idx
+    table.loc[g.index, names] = np.stack([np.asarray(r)[idx_r], np.asarray(b)[idx], np.asarray(w)[idx]], 1)
 
 
 def score_realisations(rows, ranges: dict, *, clip: bool = True, constant=()):
@@ -101,9 +143,11 @@ def score_realisations(rows, ranges: dict, *, clip: bool = True, constant=()):
     if rows.empty:
         return rows
     every = _realisation_scores(rows, ranges, clip)
-    out = aggregate(every, _KEYS, "value")
-    out = out.merge(aggregate(every, _KEYS, "score", prefix="score_").rename(columns={"score_score": "score"}),
-                    on=_KEYS)
+    renders = realisation_renders(every)
+    every["_render"] = every["realisation"].map(renders).fillna(0).astype(int)
+    out = aggregate(every, _KEYS, "value", groups="render_seed")
+    out = out.merge(aggregate(every, _KEYS, "score", prefix="score_", groups="render_seed").rename(
+        columns={"score_score": "score"}), on=_KEYS)
     first = every.drop_duplicates(_KEYS).set_index(_KEYS)[["unit", "worst", "best"]]
     out = out.join(first, on=_KEYS)
     raw = every.groupby(_KEYS, sort=False)["raw_score"].mean().rename("raw_score")
@@ -111,33 +155,35 @@ def score_realisations(rows, ranges: dict, *, clip: bool = True, constant=()):
     # past an end by more than rounding (a mean at an end of a fitted range is exactly there)
     out["out_of_range"] = (out["raw_score"] < -1e-9) | (out["raw_score"] > 1 + 1e-9)
     out = out.drop(columns=["std", "score_std", "score_n"])
-    # per metric: rank of the mean score, intervals from the score intervals
+    # per metric: rank of the mean unclipped score, intervals from the paired (clipped) score differences
     for col in ("metric_rank", "metric_rank_best", "metric_rank_worst"):
         out[col] = 0
-    for _, g in out.groupby(["demosaic", "luminance", "metric"], sort=False):
-        r, b, w = rank_interval(g["raw_score"], g["score_ci_low"], g["score_ci_high"])
-        out.loc[g.index, ["metric_rank", "metric_rank_best", "metric_rank_worst"]] = np.stack([r, b, w], 1)
+    for (d, lum, metric), g in out.groupby(["demosaic", "luminance", "metric"], sort=False):
+        sub = every[(every["demosaic"] == d) & (every["luminance"] == lum) & (every["metric"] == metric)]
+        _set_ranks(out, g, "cfa", ["metric_rank", "metric_rank_best", "metric_rank_worst"],
+                   paired_ranks(sub, "cfa", "score", renders), ranked_on=g["raw_score"])
     # per (cfa, demosaic, luminance): the mean score and its interval over realisations
     per = every.drop_duplicates(["cfa", "demosaic", "luminance", "realisation"])
-    per_agg = aggregate(per, ["cfa", "demosaic", "luminance"], "mean_score", prefix="mean_score_")
+    per_agg = aggregate(per, ["cfa", "demosaic", "luminance"], "mean_score", prefix="mean_score_", groups="_render")
     per_agg = per_agg.rename(columns={"mean_score_mean_score": "mean_score"}).drop(
         columns=["mean_score_std", "mean_score_n"])
     per_agg = per_agg.merge(per.groupby(["cfa", "demosaic", "luminance"])["n_metrics"].max().reset_index(),
                             on=["cfa", "demosaic", "luminance"])
     for col in ("demosaic_rank", "demosaic_rank_best", "demosaic_rank_worst"):
         per_agg[col] = 0
-    for _, g in per_agg.groupby(["demosaic", "luminance"], sort=False):
-        r, b, w = rank_interval(g["mean_score"], g["mean_score_ci_low"], g["mean_score_ci_high"])
-        per_agg.loc[g.index, ["demosaic_rank", "demosaic_rank_best", "demosaic_rank_worst"]] = np.stack([r, b, w], 1)
+    for (d, lum), g in per_agg.groupby(["demosaic", "luminance"], sort=False):
+        sub = per[(per["demosaic"] == d) & (per["luminance"] == lum)]
+        _set_ranks(per_agg, g, "cfa", ["demosaic_rank", "demosaic_rank_best", "demosaic_rank_worst"],
+                   paired_ranks(sub, "cfa", "mean_score", renders))
     tot = every.drop_duplicates(["cfa", "luminance", "realisation"])
-    tot_agg = aggregate(tot, ["cfa", "luminance"], "total_score", prefix="total_score_")
+    tot_agg = aggregate(tot, ["cfa", "luminance"], "total_score", prefix="total_score_", groups="_render")
     tot_agg = tot_agg.rename(columns={"total_score_total_score": "total_score"}).drop(
         columns=["total_score_std", "total_score_n"])
     for col in ("total_rank", "total_rank_best", "total_rank_worst"):
         tot_agg[col] = 0
-    for _, g in tot_agg.groupby("luminance", sort=False):
-        r, b, w = rank_interval(g["total_score"], g["total_score_ci_low"], g["total_score_ci_high"])
-        tot_agg.loc[g.index, ["total_rank", "total_rank_best", "total_rank_worst"]] = np.stack([r, b, w], 1)
+    for lum, g in tot_agg.groupby("luminance", sort=False):
+        _set_ranks(tot_agg, g, "cfa", ["total_rank", "total_rank_best", "total_rank_worst"],
+                   paired_ranks(tot[tot["luminance"] == lum], "cfa", "total_score", renders))
     out = out.merge(per_agg, on=["cfa", "demosaic", "luminance"], how="left")
     out = out.merge(tot_agg, on=["cfa", "luminance"], how="left")
     ints = [c for c in out.columns if c.endswith(("_rank", "_rank_best", "_rank_worst")) or c in ("n", "n_metrics")]
@@ -173,6 +219,7 @@ def policy_summary(means, paper: dict, ideal: dict, clip: bool = True, realisati
             continue
         if realisations is not None and len(realisations):
             cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
+            cols += ["render_seed"] if "render_seed" in realisations.columns else []
             s = score_realisations(realisations[cols], ranges, clip=clip, constant=constant)
         else:
             s = score(kept, ranges, clip=clip)

@@ -46,6 +46,7 @@ from .cfa_facts import write_cfa_facts
 from .sensor_curves import write_sensor_curves
 from .tables import mean_table, order_rows, write_tables
 from .snr import write_snr_tables
+from .render_seeds import is_3d as _is_3d, path_traced, render_seeded
 from .tasks import EvaluationTask, evaluate_task, render_task
 
 #: Metrics that enter the scores (the paper's eight); other rows in
@@ -76,13 +77,6 @@ def _source(scene, render_common: dict, cond=None) -> dict:
     if scene.file:
         src["file"] = scene.file
     return src
-
-
-def _is_3d(scene) -> bool:
-    from .. import render
-
-    access = {k: scene.render[k] for k in ("allow_outside_paths", "defines", "asset_root") if k in scene.render}
-    return bool(render.get_scene(scene.file or scene.name, **access).is_3d)
 
 
 def _cfa_label(cfa: str) -> str:
@@ -122,7 +116,13 @@ def scene_conditions(config: StudyConfig, scene) -> dict:
 
 
 def plan_study(config: StudyConfig, details_dir: str | None) -> tuple[list[dict], list[dict]]:
-    """The render sources and the evaluation tasks of a study, in a fixed order."""
+    """The render sources and the evaluation tasks of a study, in a fixed order.
+
+    Every value has ``render_seeds x seeds`` realisations, realisation
+    ``k = r x seeds + s`` the same render seed r and sensor seed for every
+    CFA: a path-traced scene (:func:`path_traced`) gets one render and one
+    task per render seed, a chart one render and one task with all the
+    realisations (its render does not depend on the seed)."""
     render_common = dict(config.render)
     labels = [_cfa_label(c) for c in config.cfas]
     if len(set(labels)) != len(labels):
@@ -130,17 +130,23 @@ def plan_study(config: StudyConfig, details_dir: str | None) -> tuple[list[dict]
         raise CfaMitsubaError(f"two CFAs of this study are both named {dup!r}")
     chain = config.chain_settings()
     sources, tasks = [], []
+    n_render = int(config.render_seeds)
     for scene in config.scenes:
+        seeded = n_render > 1 and path_traced(scene)
         for cond, (metrics, base) in scene_conditions(config, scene).items():
-            src = _source(scene, render_common, cond)
-            if src not in sources:
-                sources.append(src)
+            plain = _source(scene, render_common, cond)
             tag = cond.label(config.base_condition(cond.luminance))
-            for i, (cfa, label) in enumerate(zip(config.cfas, labels)):
-                tasks.append(EvaluationTask(
-                    source=src, scene=scene.name, condition=cond, base=base, cfa=cfa, cfa_label=label,
-                    demosaics=tuple(config.demosaics), metrics=tuple(metrics), chain=chain, details_dir=details_dir,
-                    details_tag=tag, realisations=config.seeds, ideal_rows=i == 0))
+            for r in range(n_render if seeded else 1):
+                src = render_seeded(plain, r)
+                if src not in sources:
+                    sources.append(src)
+                per_task = config.seeds if seeded else config.seeds * n_render
+                for i, (cfa, label) in enumerate(zip(config.cfas, labels)):
+                    tasks.append(EvaluationTask(
+                        source=src, scene=scene.name, condition=cond, base=base, cfa=cfa, cfa_label=label,
+                        demosaics=tuple(config.demosaics), metrics=tuple(metrics), chain=chain,
+                        details_dir=details_dir if r == 0 else None, details_tag=tag, realisations=per_task,
+                        ideal_rows=i == 0 and r == 0, realisation_offset=r * config.seeds, render_seed=r))
     return sources, tasks
 
 
@@ -160,9 +166,12 @@ def _progress(total: int, desc: str, enabled: bool):
 
 def _render_label(src: dict) -> str:
     """The name of a render in timing.json: the scene, with the f-number
-    when the condition set the render's aperture."""
-    f = src.get("settings", {}).get("f_number")
-    return src["scene"] if f is None else f"{src['scene']}@f{f:g}"
+    when the condition set the render's aperture and the sampler seed when
+    it is not the scene's own."""
+    settings = src.get("settings", {})
+    f, seed = settings.get("f_number"), settings.get("seed")
+    label = src["scene"] if f is None else f"{src['scene']}@f{f:g}"
+    return label if not seed else f"{label}#seed{seed}"
 
 
 def _paper_ranges(config: StudyConfig, render_info: dict) -> dict:

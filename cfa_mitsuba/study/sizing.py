@@ -7,8 +7,12 @@ them is a product, building them is 1.6 GB):
 * **conditions**: per scene, the base luminances plus, per sweep naming the
   scene, its luminances (else the base ones) times the product of its other
   axes' lengths (an upper bound: a condition two tables reach counts twice);
-* **tasks**: conditions x CFAs (one evaluation task each);
-* **captures**: tasks x ``seeds`` (noise realisations);
+* **tasks**: conditions x CFAs (one evaluation task each; x ``render_seeds`` for
+  a path-traced scene);
+* **captures**: tasks x ``seeds`` x ``render_seeds`` (the realisations:
+  sensor-noise seeds crossed with render seeds; a chart's render is shared
+  by its render seeds, a path-traced scene is rendered, and its optical
+  image computed, once per render seed);
 * **camera outputs**: captures x demosaics.
 
 The time is estimated from measured per-unit costs (``data/study_costs.toml``:
@@ -133,10 +137,20 @@ def _conditions(config, scene) -> int:
     return n
 
 
+def _path_traced(spec, rule) -> bool:
+    """``rule(spec)`` (runner.path_traced), True where the scene cannot be
+    loaded (an estimate errs on the larger side)."""
+    try:
+        return bool(rule(spec))
+    except (CfaMitsubaError, OSError, ValueError, AttributeError):
+        return True
+
+
 def study_size(config, workers: int | None, scheduler: str | None = None) -> StudySize:
     """Count and estimate a study (module docstring) from its config."""
     from ..io import limits
     from .budget import _bands
+    from .render_seeds import path_traced
 
     n_workers = int(workers) if workers else min(2, _cores())
     bands = _bands(config.render)
@@ -144,20 +158,23 @@ def study_size(config, workers: int | None, scheduler: str | None = None) -> Stu
     conditions = tasks = captures = outputs = 0
     worker_s = render_s = 0.0
     render_peak = task_peak = 0
+    n_render = int(getattr(config, "render_seeds", 1))
     for spec in config.scenes:
         w, h, spp, k = _scene_size(spec)
+        renders = n_render if n_render > 1 and _path_traced(spec, path_traced) else 1
         exr_mpx = w * h / 1e6
         sensor_mpx = exr_mpx / (k * k)
         n_cond = _conditions(config, spec)
-        n_tasks = n_cond * len(config.cfas)
-        n_capt = n_tasks * config.seeds
+        n_tasks = n_cond * len(config.cfas) * renders  # a path-traced scene: one task per render seed
+        n_capt = n_cond * len(config.cfas) * config.seeds * n_render
         n_out = n_capt * len(config.demosaics)
         conditions, tasks, captures, outputs = (conditions + n_cond, tasks + n_tasks, captures + n_capt,
                                                 outputs + n_out)
-        worker_s += (n_cond * min(n_workers, max(1, n_tasks)) * cost["optics_per_megapixel_band"] * exr_mpx * bands
+        worker_s += (renders * n_cond * min(n_workers, max(1, n_tasks)) * cost["optics_per_megapixel_band"] * exr_mpx
+                     * bands
                      + n_capt * cost["capture_per_megapixel"] * exr_mpx
                      + n_out * cost["output_per_megapixel"] * sensor_mpx)
-        render_s += cost["render_per_megasample_band"] * exr_mpx * spp * bands
+        render_s += renders * cost["render_per_megasample_band"] * exr_mpx * spp * bands
         render_peak = max(render_peak, limits.estimate_render_bytes(w, h, bands))
         task_peak = max(task_peak, limits.estimate_task_bytes(h, w, bands))
     seconds = render_s + cost["worker_start"] + worker_s / n_workers

@@ -1,8 +1,12 @@
 """A study's tables, from the rows its tasks returned.
 
-    metrics_realisations.csv   one row per noise realisation (``realisation`` 0, 1, ...)
+    metrics_realisations.csv   one row per realisation (``realisation`` 0, 1, ...; its
+                               ``render_seed``)
     metrics.csv                one row per (scene, cfa, demosaic, condition, metric):
-                               the mean over realisations, ``ci_low``, ``ci_high`` (95 %), ``n``
+                               the mean over realisations, ``ci_low``, ``ci_high`` (95 %,
+                               render and sensor noise: study/intervals.py), ``n``,
+                               ``render_seeds`` (the renders it spans) and
+                               ``sensor_half_width`` (the half width from sensor noise alone)
     ideal.csv                  the ideal sensor measured against itself (the anchor of
                                the ``ideal`` range policy)
     scores.csv                 the scored rows under the study's range policy, with
@@ -41,12 +45,16 @@ def metric_columns(*, realisations: bool = False) -> list[str]:
     """metrics.csv's columns: the keys, one per condition axis, ``base``,
     the metric, its mean ``value`` with ``ci_low``, ``ci_high``, ``n``,
     ``unit`` and ``censored`` (the value is a bound: True when any
-    realisation's is); per realisation: ``realisation``, ``value``, ``unit``,
-    ``censored``."""
+    realisation's is), the capture columns, ``render_seeds`` (how many
+    renders its realisations span: 1 for a chart) and ``sensor_half_width``
+    (the 95 % half width from sensor noise alone: how much of the interval
+    is not render noise); per realisation: ``realisation``, ``value``,
+    ``unit``, ``censored``, the capture columns and ``render_seed``."""
     keys = key_columns()
     if realisations:
-        return [*keys[:-1], "realisation", "metric", "value", "unit", "censored", *CAPTURE_COLUMNS]
-    return [*keys, "value", "ci_low", "ci_high", "n", "unit", "censored", *CAPTURE_COLUMNS]
+        return [*keys[:-1], "realisation", "metric", "value", "unit", "censored", *CAPTURE_COLUMNS, "render_seed"]
+    return [*keys, "value", "ci_low", "ci_high", "n", "unit", "censored", *CAPTURE_COLUMNS, "render_seeds",
+            "sensor_half_width"]
 
 
 def order_rows(rows, config_order: dict, columns: list[str] | None = None):
@@ -83,14 +91,22 @@ def mean_table(realisations):
     """metrics.csv from the per-realisation table (the order kept)."""
     import pandas as pd
 
-    from .intervals import aggregate
+    from .intervals import aggregate, sensor_half_width
 
     if realisations.empty:
         return pd.DataFrame(columns=metric_columns())
     keyed = realisations.assign(exposure=realisations["exposure"].astype(str),
                                 f_number=realisations["f_number"].astype(float))
     keys = key_columns()
-    agg = aggregate(keyed, keys, "value").drop(columns=["std"])
+    if "render_seed" not in keyed.columns or keyed["render_seed"].isna().all():  # a table written before render seeds
+        keyed = keyed.assign(render_seed=0)
+    keyed = keyed.assign(render_seed=keyed["render_seed"].fillna(0).astype(int))
+    agg = aggregate(keyed, keys, "value", groups="render_seed").drop(columns=["std"])
+    spread = keyed.groupby(keys, sort=False, dropna=False).apply(
+        lambda g: pd.Series({"render_seeds": int(g["render_seed"].nunique()),
+                             "sensor_half_width": sensor_half_width(g["value"], g["render_seed"])}),
+        include_groups=False).reset_index()
+    agg = agg.merge(spread, on=keys, how="left")
     unit = keyed.drop_duplicates(keys)[keys + ["unit"]]
     out = agg.merge(unit, on=keys, how="left")
     bound = keyed.assign(censored=keyed["censored"].fillna(False).astype(bool)).groupby(
@@ -178,6 +194,7 @@ def write_tables(out_dir: Path, realisations, ideal, *, paper_ranges: dict, over
             if m in constant and worst != best:
                 constant.remove(m)
         cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
+        cols += ["render_seed"] if "render_seed" in scored_real.columns else []
         from .censored import values_for_scoring
 
         scored_real = values_for_scoring(scored_real, ranges)  # a bound scores by the stated rule (censored.py)

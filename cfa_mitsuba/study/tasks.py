@@ -14,9 +14,11 @@ arguments so any executor can run them:
   metric rows, one column per condition axis.
 
 Everything after the render is deterministic: the noise seed of a task is
-derived from the study seed and the task's identity (never from the order
-in which tasks run), so a study gives the same numbers on one process, on
-many, or on a Dask cluster, and after an interruption.
+derived from the study seed, the scene, the luminance and the realisation's
+index (never from the order in which tasks run, nor from the CFA: realisation
+k of every CFA has the same render seed and the same sensor seed, so
+comparisons between CFAs pair), so a study gives the same numbers on one
+process, on many, or on a Dask cluster, and after an interruption.
 """
 
 from __future__ import annotations
@@ -55,7 +57,11 @@ class EvaluationTask:
     details_dir, details_tag : where the first realisation's curves and
         thumbnails go (None: nowhere) and their file stem.
     realisations : noise realisations of the capture (rows carry
-        ``realisation`` 0, 1, ...).
+        ``realisation`` offset, offset + 1, ...).
+    realisation_offset : the index of the task's first realisation (``r S``
+        for render seed r of a path-traced scene with S sensor seeds).
+    render_seed : the render seed index of the task's render (rows carry it
+        as ``render_seed``; 0 for a scene rendered once).
     ideal_rows : also measure the ideal sensor against itself.
     base : the condition is one of the study's own (scored), not a sweep's.
     """
@@ -73,6 +79,8 @@ class EvaluationTask:
     realisations: int = 1
     ideal_rows: bool = False
     base: bool = True
+    realisation_offset: int = 0
+    render_seed: int = 0
 
     @classmethod
     def of(cls, task) -> "EvaluationTask":
@@ -96,12 +104,15 @@ def task_seed(study_seed: int, *parts) -> int:
     return int.from_bytes(hashlib.sha256(text.encode()).digest()[:4], "little")
 
 
-def realisation_seeds(study_seed: int, scene: str, cfa: str, luminance: float, n: int) -> list[int]:
-    """The noise seeds of ``n`` realisations of one capture: the first is the
-    task's own seed (:func:`task_seed`), the others add the realisation's
-    index to its identity, so adding realisations never changes the first."""
-    first = task_seed(study_seed, scene, cfa, luminance)
-    return [first] + [task_seed(study_seed, scene, cfa, luminance, i) for i in range(1, int(n))]
+def realisation_seeds(study_seed: int, scene: str, luminance: float, n: int, offset: int = 0) -> list[int]:
+    """The sensor-noise seeds of realisations ``offset .. offset + n - 1`` of
+    one capture: realisation 0's is the task's own seed (:func:`task_seed`),
+    the others add the realisation's index to its identity, so adding
+    realisations never changes the earlier ones.  The CFA is not part of
+    it: realisation k of every CFA uses the same seed (paired comparisons,
+    study/intervals.py)."""
+    return [task_seed(study_seed, scene, luminance) if k == 0 else task_seed(study_seed, scene, luminance, k)
+            for k in range(int(offset), int(offset) + int(n))]
 
 
 #: One render at a time per process: Mitsuba's variant is process-global, and
@@ -262,11 +273,13 @@ def evaluate_task(task) -> dict:
     applies = _readout_applies(t.cfa, cond)
     if not applies and (t.ideal_rows or details_dir is not None):
         ideal = chain.ideal(chain.optical(image, cond, scene_key), cond, scene_key)
-    seeds = realisation_seeds(cond.seed, t.scene, t.cfa, cond.luminance, t.realisations) if applies else []
+    seeds = (realisation_seeds(cond.seed, t.scene, cond.luminance, t.realisations, t.realisation_offset)
+             if applies else [])
     for i, seed in enumerate(seeds):
         for raw, ideal, method, ev in chain.evaluate(image, t.cfa, t.demosaics, t.metrics, cond, seed, scene_key):
             base = {"scene": t.scene, "cfa": cfa_label, "demosaic": method, **condition_columns(cond, ideal.meta),
-                    "spectra": spectra_used, "base": bool(t.base), "realisation": i}
+                    "spectra": spectra_used, "base": bool(t.base), "realisation": t.realisation_offset + i,
+                    "render_seed": int(t.render_seed)}
             if not hasattr(ev, "results"):
                 # No output to measure (a channel the scene white leaves dark) or
                 # no scale for it (a black ideal interior): every metric of this
@@ -275,7 +288,7 @@ def evaluate_task(task) -> dict:
                 continue
             rows.extend({**base, **r, **_capture_columns(raw)} for r in _result_rows(ev.results))
             failures.extend({**base, **f} for f in ev.failures)
-            if details_dir is not None and i == 0:  # curves and thumbnails of the first realisation
+            if details_dir is not None and i == 0 and t.realisation_offset == 0:  # the first realisation's curves
                 _save_details(details_dir / t.scene / safe_label(cfa_label) / method, tag, ev.results,
                               ev.processed, _details_extra(ev, raw, seed))
     return {"rows": rows, "timing": chain.timing, "failures": failures,
@@ -294,7 +307,7 @@ def _ideal_rows(t: EvaluationTask, chain, ideal, details_dir, tag) -> list[dict]
         got = m.evaluate_many(t.metrics, chain.inputs(ideal, ideal.xyz, cond), [],
                               options=chain.settings.metric_options_for(cond))
         base = {"scene": t.scene, "cfa": "ideal", "demosaic": "none", **condition_columns(cond, ideal.meta),
-                "base": bool(t.base), "realisation": 0}
+                "base": bool(t.base), "realisation": 0, "render_seed": 0}
         rows = [{**base, **r} for r in _result_rows(got)]
     if details_dir is not None:
         ideal_dir = details_dir / t.scene / "ideal"
