@@ -261,10 +261,6 @@ def _half_planes(vertices) -> np.ndarray:
     return ConvexHull(np.asarray(vertices, dtype=np.float64)).equations
 
 
-#: The sRGB primaries' triangle in xy (IEC 61966-2-1): inside the spectral locus.
-_SRGB_TRIANGLE = _half_planes([[0.64, 0.33], [0.30, 0.60], [0.15, 0.06]])
-
-
 def _locus_half_planes() -> np.ndarray:
     """(n, 3) half-planes a x + b y + c <= 0 of the convex hull of the CIE
     1931 2-degree spectral locus and the purple line (360-830 nm, 1 nm)."""
@@ -307,10 +303,11 @@ def realisable(xyz, *, tolerance: float = 1e-6) -> np.ndarray:
     # Two stages, so a camera image costs little, not an (n_pixels, n_planes) product: sRGB's
     # triangle lies inside the locus, so a point inside it is realisable; only the points outside it
     # (saturated colours, errors) meet the locus's half-planes, in blocks that keep memory small.
+    # (Inside the triangle of the 4-digit matrix's primaries <=> linear R, G, B all of one sign: one
+    # matrix product; those primaries lie within 1e-4 of IEC 61966-2-1's, well inside the locus.)
     flat = xy.reshape(-1, 2)
-    inside = np.ones(flat.shape[0], dtype=bool)
-    for a_, b_, c_ in _SRGB_TRIANGLE:
-        inside &= a_ * flat[:, 0] + b_ * flat[:, 1] + c_ <= 0.0
+    rgb = a.reshape(-1, 3) @ XYZ_TO_SRGB.T
+    inside = rgb.min(axis=1) >= 0.0
     # A point that fails the sign test is not realisable whatever its chromaticity: test only the others.
     rest = np.flatnonzero(~inside & (nonneg & (s > 0)).reshape(-1))
     inside[rest] = _inside_locus(flat[rest], tolerance)

@@ -150,8 +150,8 @@ def scielab_reference_lab(reference_xyz, white_xyz, *, samples_per_degree: float
         n = kernels[0].shape[0]
         h_in, w_in = ref.shape[:2]
         ref = ref[:h_in - (h_in - n) % 2, :w_in - (w_in - n) % 2]
-    return xyz_to_lab(_filter_opponent(ref, OPPONENT_MATRICES[matrix], kernels, boundary, samples_per_degree, parameters), as_white(white_xyz),
-                      constants=lab_constants)
+    filtered = _filter_opponent(ref, OPPONENT_MATRICES[matrix], kernels, boundary, samples_per_degree, parameters)
+    return xyz_to_lab(filtered, as_white(white_xyz), constants=lab_constants)
 
 
 def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, matrix: str = "xyz2",
@@ -218,11 +218,13 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
         keep_h, keep_w = h_in - (h_in - n) % 2, w_in - (w_in - n) % 2
         ref, test = ref[:keep_h, :keep_w], test[:keep_h, :keep_w]
     if reference_lab is None:
-        lab_r = xyz_to_lab(_filter_opponent(ref, m, kernels, boundary, samples_per_degree, parameters), white, constants=lab_constants)
+        lab_r = xyz_to_lab(_filter_opponent(ref, m, kernels, boundary, samples_per_degree, parameters), white,
+                           constants=lab_constants)
     else:
         lab_r = np.asarray(reference_lab, dtype=np.float64)
         require(lab_r.shape == ref.shape, f"reference_lab has shape {lab_r.shape}, the reference {ref.shape}")
-    lab_t = xyz_to_lab(_filter_opponent(test, m, kernels, boundary, samples_per_degree, parameters), white, constants=lab_constants)
+    lab_t = xyz_to_lab(_filter_opponent(test, m, kernels, boundary, samples_per_degree, parameters), white,
+                       constants=lab_constants)
     de_map = delta_e_2000(lab_r, lab_t) if version == "2000" else delta_e_1976(lab_r, lab_t)
 
     b = int(np.floor(samples_per_degree + 0.5))
