@@ -207,13 +207,24 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
         x[ref.channel] = refimg
     scale = max(float(np.sqrt(np.mean(raw * raw))), np.finfo(float).tiny)
     done, change = 0, 0.0
+    phases = {c: mosaic.phases(c) for c in others}
+    d, lowpassed, new = np.empty(shape), np.empty(shape), np.empty(shape)  # reused: no allocation per pass
+    k = lowpass_kernel(levels)
     for _ in range(iterations):
         change = 0.0
         for c in others:
-            new = refimg + _project_detail(x[c] - refimg, levels, threshold)
-            for i, j in mosaic.phases(c):
+            # new = ref + P(x_c - ref), then the observations; the arithmetic of _project_detail, in place
+            np.subtract(x[c], refimg, out=d)
+            if threshold == 0.0:
+                ndimage.correlate1d(d, k, axis=0, mode="mirror", output=lowpassed)
+                ndimage.correlate1d(lowpassed, k, axis=1, mode="mirror", output=d)
+                np.add(refimg, d, out=new)
+            else:
+                np.add(refimg, _subbands(d, 0, levels, threshold), out=new)
+            for i, j in phases[c]:
                 new[i::th, j::tw] = raw[i::th, j::tw]
-            change = max(change, float(np.sqrt(np.mean((new - x[c]) ** 2))) / scale)
+            np.subtract(new, x[c], out=d)
+            change = max(change, float(np.sqrt(np.mean(np.multiply(d, d, out=d)))) / scale)
             x[c] = new
         done += 1
         if ref.channel is None:
