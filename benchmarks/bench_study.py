@@ -2,7 +2,8 @@
 
 Per phase, against another commit (issue 25)::
 
-    python benchmarks/bench_study.py --paper [--subset bayer,rgbw1] [--against REV] [--warm-only] [--workers 2]
+    python benchmarks/bench_study.py --paper [--subset bayer,rgbw1] [--against REV] [--warm-only]
+                                     [--keep DIR] [--workers 2]
 
 runs the study (configs/paper.toml with --paper, else --config) through
 ``python -m cfa_mitsuba study`` twice per tree: *cold* (an empty render
@@ -14,8 +15,9 @@ this tree in a temporary git worktree, in the same invocation (this tree
 and REV alternate, so a change of machine load hits both), and the table
 adds the ratio REV / this tree.  ``--subset`` keeps only the listed CFAs
 (a reduced paper study in minutes); ``--warm-only`` skips the cold runs and
-uses the default render cache (renders made there first if missing).
-Each tree runs its own copy of the config (its own configs/ file).
+uses the default render cache (renders made there first if missing);
+``--keep DIR`` keeps each run's metrics CSVs and timing.json.  Each tree
+runs its own copy of the config (its own configs/ file).
 
 The optics memo (the quick study with the optical image shared by every
 CFA and demosaic of a scene, against recomputing it per capture,
@@ -33,6 +35,7 @@ import argparse
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -139,6 +142,12 @@ def phases_main(args) -> int:
                     cache = None if args.warm_only else tmp / f"cache-{i}"  # warm: the cold run's cache again
                     out = tmp / f"out-{i}-{mode}"
                     runs.setdefault(name, {})[mode] = _study(tree, configs[name], out, cache, args.workers)
+                    if args.keep:  # the tables, to compare the trees' values
+                        kept = Path(args.keep) / f"{'this' if tree == REPO else 'against'}-{mode}"
+                        kept.mkdir(parents=True, exist_ok=True)
+                        for f in ("metrics.csv", "metrics_realisations.csv", "timing.json"):
+                            if (out / f).is_file():
+                                shutil.copy2(out / f, kept / f)
                     print(f"  {name} {mode}: evaluate {runs[name][mode]['evaluate_s']:.1f} s", file=sys.stderr)
         finally:
             if args.against:
@@ -171,10 +180,11 @@ def main() -> int:
     ap.add_argument("--subset", metavar="CFAS", help="comma-separated CFAs: the study reduced to them")
     ap.add_argument("--against", metavar="REV", help="also run commit REV (git worktree beside this tree)")
     ap.add_argument("--warm-only", action="store_true", help="no cold runs; the default render cache")
+    ap.add_argument("--keep", metavar="DIR", help="copy each run's metrics CSVs and timing.json into DIR/<tree>-<mode>/")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--repeat", type=int, default=1, help="optics-memo mode: best of this many")
     args = ap.parse_args()
-    if args.paper or args.against or args.subset or args.warm_only:
+    if args.paper or args.against or args.subset or args.warm_only or args.keep:
         return phases_main(args)
     return memo_main(args)
 

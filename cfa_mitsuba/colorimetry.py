@@ -100,7 +100,7 @@ def srgb_to_linear(srgb) -> np.ndarray:
 def linear_to_srgb(linear) -> np.ndarray:
     """IEC 61966-2-1 encoding (inverse EOTF): linear 0..1 -> encoded 0..1 (not clipped)."""
     # colour-science's ``eotf_inverse_sRGB`` formula, term for term (its ``spow``: sign(L) |L|^(1/2.4)),
-    # without its domain-range scaling and validation: the same float64 values (tests/test_colorimetry_fast.py
+    # without its domain-range scaling and validation: the same float64 values (tests/test_fast_paths.py
     # checks them equal), at a fraction of the time on a camera image.
     lin = np.asarray(linear, dtype=np.float64)
     return np.where(lin <= 0.0031308, lin * 12.92, 1.055 * (np.sign(lin) * np.abs(lin) ** (1 / 2.4)) - 0.055)
@@ -149,7 +149,7 @@ def xyz_to_srgb(xyz, white_xyz, *, adaptation: str | None = None) -> np.ndarray:
         colour = _colour()
         d65 = SRGB_WHITE_XYZ / SRGB_WHITE_XYZ[1]
         # colour-science's von Kries matrix, applied as one (N, 3) x (3, 3) product rather than its
-        # per-pixel batched 3 x 3 products (the same values to rounding; tests/test_colorimetry_fast.py)
+        # per-pixel batched 3 x 3 products (the same values to rounding; tests/test_fast_paths.py)
         cat = colour.adaptation.matrix_chromatic_adaptation_VonKries(w / w[1], d65, transform=adaptation)
         xyz = w[1] * ((xyz / w[1]) @ cat.T)
     lin = np.clip(xyz_to_linear(xyz, scale=w[1]), 0.0, 1.0)

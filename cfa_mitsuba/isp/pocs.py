@@ -91,15 +91,6 @@ def _filter(x, k, axis):
     return ndimage.correlate1d(x, k, axis=axis, mode="mirror")
 
 
-def _project_detail(d: np.ndarray, levels: int, threshold: float) -> np.ndarray:
-    """Detail projection of the colour difference d = c - ref: its
-    subbands kept within +-threshold (0: only the low-pass path)."""
-    if threshold == 0.0:
-        k = lowpass_kernel(levels)
-        return _filter(_filter(d, k, 0), k, 1)
-    return _subbands(d, 0, levels, threshold)
-
-
 def _subbands(x, level, levels, t):
     f = 2 ** level
     h0, h1, g0, g1 = (_dilate(k, f) for k in (_H0, _H1, _G0, _G1))
@@ -213,7 +204,8 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
     for _ in range(iterations):
         change = 0.0
         for c in others:
-            # new = ref + P(x_c - ref), then the observations; the arithmetic of _project_detail, in place
+            # the detail projection new = ref + P(x_c - ref) (module doc: for T = 0, P is the low-pass
+            # path; T > 0 clips the subbands), then the observations; in place, into reused buffers
             np.subtract(x[c], refimg, out=d)
             if threshold == 0.0:
                 ndimage.correlate1d(d, k, axis=0, mode="mirror", output=lowpassed)
