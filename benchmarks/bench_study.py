@@ -1,14 +1,32 @@
-"""Where the quick study's worker time goes, with the optical image shared
-by every CFA and demosaic of a (scene, condition) in a worker (the camera
-chain, study/chain.py) and without it (computed again for every capture,
-``CFA_MITSUBA_NO_OPTICS_MEMO=1``: the per-task work the study did before).
+"""Study timing benchmarks.
+
+Per phase, against another commit (issue 25)::
+
+    python benchmarks/bench_study.py --paper [--subset bayer,rgbw1] [--against REV] [--warm-only]
+                                     [--keep DIR] [--workers 2]
+
+runs the study (configs/paper.toml with --paper, else --config) through
+``python -m cfa_mitsuba study`` twice per tree: *cold* (an empty render
+cache in a temporary folder: every scene rendered) and *warm* (the same
+cache again: renders reused), and prints the render, evaluate and report
+phases of each (timing.json) with the worker time per stage.  With
+``--against REV`` the same runs are made on commit REV, checked out beside
+this tree in a temporary git worktree, in the same invocation (this tree
+and REV alternate, so a change of machine load hits both), and the table
+adds the ratio REV / this tree.  ``--subset`` keeps only the listed CFAs
+(a reduced paper study in minutes); ``--warm-only`` skips the cold runs and
+uses the default render cache (renders made there first if missing);
+``--keep DIR`` keeps each run's metrics CSVs and timing.json.  Each tree
+runs its own copy of the config (its own configs/ file).
+
+The optics memo (the quick study with the optical image shared by every
+CFA and demosaic of a scene, against recomputing it per capture,
+``CFA_MITSUBA_NO_OPTICS_MEMO=1``)::
 
     python benchmarks/bench_study.py [--config configs/quick.toml] [--workers 2] [--repeat 1]
 
-Renders are made once into a temporary cache first (not timed), so both
-modes time only the evaluation.  Prints one table: worker time per stage
-(summed over tasks, seconds), the evaluation's wall time, and the ratio
-before / after.  Compare ratios within one run: the machine is shared.
+Compare ratios within one run: the machine is shared; the load average is
+printed with the table.
 """
 
 from __future__ import annotations
@@ -16,6 +34,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
+import shutil
+import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -43,19 +64,14 @@ def run(config: Path, out: Path, workers: int, shared: bool) -> dict:
     return t
 
 
-def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--config", default=str(REPO / "configs" / "quick.toml"))
-    ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--repeat", type=int, default=1)
-    args = ap.parse_args()
+def memo_main(args) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         os.environ["CFA_MITSUBA_CACHE"] = str(Path(tmp) / "cache")
-        run(Path(args.config), Path(tmp) / "warm", args.workers, True)  # renders into the cache
+        run(Path(args.config or REPO / 'configs' / 'quick.toml'), Path(tmp) / "warm", args.workers, True)  # renders into the cache
         rows = {"before": [], "after": []}
         for i in range(args.repeat):
             for mode, shared in (("before", False), ("after", True)):
-                rows[mode].append(run(Path(args.config), Path(tmp) / f"{mode}{i}", args.workers, shared))
+                rows[mode].append(run(Path(args.config or REPO / 'configs' / 'quick.toml'), Path(tmp) / f"{mode}{i}", args.workers, shared))
     best = {mode: {k: min(r[k] for r in runs) for k in runs[0]} for mode, runs in rows.items()}
     print(f"quick study evaluation, {args.workers} worker(s), best of {args.repeat} "
           f"(load average {os.getloadavg()[0]:.1f})")
@@ -68,6 +84,110 @@ def main() -> int:
     print(f"{'worker total':<16}{tb:>12.2f}{ta:>12.2f}{tb / ta:>14.2f}")
     print(json.dumps({"before": best["before"], "after": best["after"]}))
     return 0
+
+
+PHASES = ("render_s", "evaluate_s", "report_s", "total_s")
+STAGES = ("optics_s", "capture_s", "process_s", "metrics_s")
+
+
+def _subset_config(tree: Path, config: str, cfas: list[str] | None, folder: Path) -> Path:
+    """``tree``'s copy of ``config`` (a path relative to the repository), its
+    ``cfas`` list replaced by ``cfas`` when given, written into ``folder``."""
+    text = (tree / config).read_text()
+    if cfas:
+        text, n = re.subn(r"^cfas\s*=\s*\[.*?\]", "cfas = " + json.dumps(cfas), text, count=1,
+                          flags=re.MULTILINE | re.DOTALL)
+        if n != 1:
+            raise SystemExit(f"bench_study: {config} has no top-level 'cfas = [...]' to reduce")
+    folder.mkdir(parents=True, exist_ok=True)
+    out = folder / Path(config).name
+    out.write_text(text)
+    return out
+
+
+def _study(tree: Path, config: Path, out: Path, cache: Path | None, workers: int) -> dict:
+    """One ``cfa_mitsuba study`` run of ``tree``'s package; its timing.json."""
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    env.pop("CFA_MITSUBA_NO_OPTICS_MEMO", None)
+    if cache is not None:
+        env["CFA_MITSUBA_CACHE"] = str(cache)
+    cmd = [sys.executable, "-m", "cfa_mitsuba", "study", str(config), "--out", str(out), "--quiet",
+           "--workers", str(workers)]
+    proc = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise SystemExit(f"bench_study: the study failed in {tree}:\n{proc.stderr[-3000:]}")
+    timing = json.loads((out / "timing.json").read_text())
+    return {**{k: float(timing["phases"].get(k, 0.0)) for k in PHASES},
+            **{k: float(timing["tasks"].get(k, 0.0)) for k in STAGES}}
+
+
+def phases_main(args) -> int:
+    given = Path(args.config or REPO / "configs" / "quick.toml").resolve()
+    config = "configs/paper.toml" if args.paper else os.path.relpath(given, REPO)
+    cfas = args.subset.split(",") if args.subset else None
+    runs: dict[str, dict[str, dict]] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        trees = {"this": REPO}
+        if args.against:
+            where = tmp / "against"
+            subprocess.run(["git", "-C", str(REPO), "worktree", "add", "--detach", str(where), args.against],
+                           check=True, capture_output=True, text=True)
+            trees[args.against] = where
+        try:
+            configs = {name: _subset_config(tree, config, cfas, tmp / f"config-{i}") for i, (name, tree) in
+                       enumerate(trees.items())}
+            for mode in (("warm",) if args.warm_only else ("cold", "warm")):
+                for i, (name, tree) in enumerate(trees.items()):
+                    cache = None if args.warm_only else tmp / f"cache-{i}"  # warm: the cold run's cache again
+                    out = tmp / f"out-{i}-{mode}"
+                    runs.setdefault(name, {})[mode] = _study(tree, configs[name], out, cache, args.workers)
+                    if args.keep:  # the tables, to compare the trees' values
+                        kept = Path(args.keep) / f"{'this' if tree == REPO else 'against'}-{mode}"
+                        kept.mkdir(parents=True, exist_ok=True)
+                        for f in ("metrics.csv", "metrics_realisations.csv", "timing.json"):
+                            if (out / f).is_file():
+                                shutil.copy2(out / f, kept / f)
+                    print(f"  {name} {mode}: evaluate {runs[name][mode]['evaluate_s']:.1f} s", file=sys.stderr)
+        finally:
+            if args.against:
+                subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(trees[args.against])],
+                               capture_output=True)
+    load = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    what = f"{config}" + (f" reduced to {', '.join(cfas)}" if cfas else "")
+    print(f"{what}, {args.workers} worker(s); load average (1, 5, 15 min) after the runs: {load}")
+    names = list(runs)
+    header = f"{'':<22}" + "".join(f"{n[:14] + ' ' + m:>20}" for n in names for m in runs[n])
+    if len(names) == 2:
+        header += "".join(f"{'ratio ' + m:>14}" for m in runs[names[0]])
+    print(header)
+    for key in (*PHASES, *STAGES):
+        label = key.replace("_s", "") + (" (worker s)" if key in STAGES else " (s)")
+        line = f"{label:<22}" + "".join(f"{runs[n][m][key]:>20.1f}" for n in names for m in runs[n])
+        if len(names) == 2:
+            for m in runs[names[0]]:
+                a, b = runs[names[0]][m][key], runs[names[1]][m][key]
+                line += f"{(b / a if a > 0 else float('nan')):>14.2f}"
+        print(line)
+    print(json.dumps({"config": what, "load_average": os.getloadavg(), "runs": runs}))
+    return 0
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--config", help="a study config (default configs/quick.toml)")
+    ap.add_argument("--paper", action="store_true", help="configs/paper.toml, phases per tree")
+    ap.add_argument("--subset", metavar="CFAS", help="comma-separated CFAs: the study reduced to them")
+    ap.add_argument("--against", metavar="REV", help="also run commit REV (git worktree beside this tree)")
+    ap.add_argument("--warm-only", action="store_true", help="no cold runs; the default render cache")
+    ap.add_argument("--keep", metavar="DIR", help="copy each run's metrics CSVs and timing.json into DIR/<tree>-<mode>/")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--repeat", type=int, default=1, help="optics-memo mode: best of this many")
+    args = ap.parse_args()
+    if args.paper or args.against or args.subset or args.warm_only or args.keep:
+        return phases_main(args)
+    return memo_main(args)
+
 
 
 if __name__ == "__main__":

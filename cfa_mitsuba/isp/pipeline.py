@@ -36,6 +36,26 @@ WHITE_BALANCE_MODES = ("illuminant", "gray-world")
 MIN_WHITE_ELECTRONS = 1e-30
 
 
+class _DisplayOnDemand(RenderedImage):
+    """A :class:`~cfa_mitsuba.values.RenderedImage` whose display ``srgb``
+    is encoded from ``xyz`` and ``white_xyz`` on first read (then kept): a
+    study reads it for one thumbnail per camera output, not for each noise
+    realisation, and the metrics encode their own sRGB (no adaptation), so
+    the encoding is mostly never needed.  The same values as encoding at
+    once; ``xyz`` is not changed after processing."""
+
+    @property
+    def srgb(self):
+        value = self.__dict__.get("_srgb")
+        if value is None:
+            value = self.__dict__["_srgb"] = xyz_to_srgb(self.xyz, self.white_xyz)
+        return value
+
+    @srgb.setter
+    def srgb(self, value):
+        self.__dict__["_srgb"] = value
+
+
 @dataclass(frozen=True)
 class _TileCFA:
     """The CFA a raw file describes (its tile, channel order and spectra)."""
@@ -255,7 +275,6 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     if readout.get("mode") == "bin":  # back on the full pixel grid (isp/remosaic.py)
         xyz = upsample_blocks(xyz, int(readout["block"]), readout["full_shape"])
     out_of_gamut = float(np.mean(~realisable(xyz)))
-    srgb = xyz_to_srgb(xyz, fit.white_xyz)
 
     ref_gain = gains.min()  # reported relative to the most sensitive channel, as cameras do
     meta["isp"] = {
@@ -278,4 +297,4 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         "out_of_gamut_fraction": out_of_gamut,
         **fit.as_meta(),
     }
-    return RenderedImage(xyz=xyz, srgb=srgb, white_xyz=fit.white_xyz.copy(), meta=meta)
+    return _DisplayOnDemand(xyz=xyz, srgb=None, white_xyz=fit.white_xyz.copy(), meta=meta)

@@ -91,15 +91,6 @@ def _filter(x, k, axis):
     return ndimage.correlate1d(x, k, axis=axis, mode="mirror")
 
 
-def _project_detail(d: np.ndarray, levels: int, threshold: float) -> np.ndarray:
-    """Detail projection of the colour difference d = c - ref: its
-    subbands kept within +-threshold (0: only the low-pass path)."""
-    if threshold == 0.0:
-        k = lowpass_kernel(levels)
-        return _filter(_filter(d, k, 0), k, 1)
-    return _subbands(d, 0, levels, threshold)
-
-
 def _subbands(x, level, levels, t):
     f = 2 ** level
     h0, h1, g0, g1 = (_dilate(k, f) for k in (_H0, _H1, _G0, _G1))
@@ -207,13 +198,25 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
         x[ref.channel] = refimg
     scale = max(float(np.sqrt(np.mean(raw * raw))), np.finfo(float).tiny)
     done, change = 0, 0.0
+    phases = {c: mosaic.phases(c) for c in others}
+    d, lowpassed, new = np.empty(shape), np.empty(shape), np.empty(shape)  # reused: no allocation per pass
+    k = lowpass_kernel(levels)
     for _ in range(iterations):
         change = 0.0
         for c in others:
-            new = refimg + _project_detail(x[c] - refimg, levels, threshold)
-            for i, j in mosaic.phases(c):
+            # the detail projection new = ref + P(x_c - ref) (module doc: for T = 0, P is the low-pass
+            # path; T > 0 clips the subbands), then the observations; in place, into reused buffers
+            np.subtract(x[c], refimg, out=d)
+            if threshold == 0.0:
+                ndimage.correlate1d(d, k, axis=0, mode="mirror", output=lowpassed)
+                ndimage.correlate1d(lowpassed, k, axis=1, mode="mirror", output=d)
+                np.add(refimg, d, out=new)
+            else:
+                np.add(refimg, _subbands(d, 0, levels, threshold), out=new)
+            for i, j in phases[c]:
                 new[i::th, j::tw] = raw[i::th, j::tw]
-            change = max(change, float(np.sqrt(np.mean((new - x[c]) ** 2))) / scale)
+            np.subtract(new, x[c], out=d)
+            change = max(change, float(np.sqrt(np.mean(np.multiply(d, d, out=d)))) / scale)
             x[c] = new
         done += 1
         if ref.channel is None:

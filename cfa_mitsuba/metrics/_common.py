@@ -21,7 +21,10 @@ def check_values(arr, what: str) -> np.ndarray:
     The one input check of every metric (``as_image``, ``as_white``) and of
     the ``metric`` command's loaded files, before any conversion (which would
     clip an infinity to the sRGB white)."""
-    a = require_finite(arr, what)
+    a = np.asarray(arr, dtype=np.float64)
+    if a.size and -MAX_ABS_INPUT <= float(a.min()) and float(a.max()) <= MAX_ABS_INPUT:
+        return a  # two reductions, no temporary: NaN fails the comparisons and falls through to the messages
+    a = require_finite(a, what)
     big = int(np.count_nonzero(np.abs(a) > MAX_ABS_INPUT))
     require(big == 0, f"{what} has {big} value(s) beyond +-{MAX_ABS_INPUT:g} (largest magnitude "
                       f"{float(np.max(np.abs(a))):g}): not a physical image value")
@@ -90,11 +93,15 @@ def conv2_same(x: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     convolution starting at index ``floor(m/2)``; scipy's ``'same'`` picks the
     other centre, so we slice the full result ourselves.
     """
-    from scipy import signal  # lazy: scipy.signal costs 0.6 s to import
+    from scipy import ndimage, signal  # lazy: scipy.signal costs 0.6 s to import
 
+    if kernel.size < 16:
+        # Small kernels (HaarPSI's 2 x 2 mean, MDSI's 3 x 3 Prewitt): ndimage's direct convolution with
+        # zeros outside, centred at floor(m/2) as MATLAB's 'same' for odd and even sizes alike; ~3x
+        # faster than signal.convolve2d, the same sums in another order (~1e-16 relative apart).
+        return ndimage.convolve(np.asarray(x, dtype=np.float64), kernel, mode="constant", cval=0.0)
     # FFT for the larger kernels (HaarPSI's 4x4 and 8x8): ~3x faster, ~1e-13 apart.
-    conv = signal.fftconvolve if kernel.size >= 16 else signal.convolve2d
-    full = conv(x, kernel, mode="full")
+    full = signal.fftconvolve(x, kernel, mode="full")
     r0, c0 = kernel.shape[0] // 2, kernel.shape[1] // 2
     return full[r0:r0 + x.shape[0], c0:c0 + x.shape[1]]
 

@@ -58,9 +58,10 @@ class MetricRecord:
     ideal_details : whether the study keeps this metric's curves of the
         ideal sensor too (the MTF: the report draws camera against ideal).
     reference_cache : optional ``(keyword, function)``: ``function(reference,
-        white, **options)`` computes what depends on the reference image alone
+        white, **options)`` (``function(reference, **options)`` for metrics of
+        two display images) computes what depends on the reference image alone
         (S-CIELAB's filtered reference, ``('reference_lab',
-        scielab_reference_lab)``); the adapter calls it once per ideal image
+        scielab_reference_lab)``; SSIM's window means); the adapter calls it once per ideal image
         and option set (the options it takes) and passes the result to the
         metric as ``keyword``.
     """

@@ -186,7 +186,7 @@ def _reference_part(r: MetricRecord, inp: MetricInputs, images: tuple, kw: dict)
     ref_kw = {k: v for k, v in kw.items() if k in taken}
     key = (r.name, tuple(sorted((k, float(v) if isinstance(v, (int, float)) else v) for k, v in ref_kw.items())))
     if key not in inp.shared:
-        inp.shared[key] = fn(images[0], images[2], **ref_kw)
+        inp.shared[key] = fn(images[0], *images[2:], **ref_kw)  # the reference (and the white, for XYZ)
     return {keyword: inp.shared[key]}
 
 

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 __all__ = ["RECORDS", "scielab", "scielab_filters", "OPPONENT_MATRICES", "FILTER_PARAMETERS"]
 
+import functools
+
 import numpy as np
 
 from ..errors import require
@@ -96,18 +98,42 @@ def _circular(plane: np.ndarray, k: np.ndarray) -> np.ndarray:
     return np.fft.irfft2(np.fft.rfft2(plane) * np.fft.rfft2(kp), s=(h, w))
 
 
-def _filter_opponent(xyz: np.ndarray, matrix: np.ndarray, kernels, boundary: str) -> np.ndarray:
-    """XYZ -> opponent, filter each channel, -> XYZ."""
-    from scipy import signal  # lazy: keeps `import cfa_mitsuba` fast
+@functools.lru_cache(maxsize=8)
+def _kernel_spectra(samples_per_degree: float, parameters: str, fshape: tuple) -> np.ndarray:
+    """(3, fh, fw // 2 + 1) the kernels' real FFTs at the padded size ``fshape``
+    (one per image size and viewing geometry, reused for every image)."""
+    from scipy import fft
 
+    spectra = fft.rfft2(np.stack(scielab_filters(samples_per_degree, parameters=parameters)), s=fshape)
+    spectra.flags.writeable = False
+    return spectra
+
+
+def _symmetric_filter(opp: np.ndarray, samples_per_degree: float, parameters: str, n: int) -> np.ndarray:
+    """Each opponent plane of ``opp`` (H, W, 3) convolved with its kernel after
+    symmetric extension by n // 2, the map of the input's size: what
+    ``scipy.signal.fftconvolve(padded, kernel, mode='valid')`` computes per
+    plane (the same FFT sizes and products), with the three planes in one
+    transform and the kernels' transforms kept (:func:`_kernel_spectra`)."""
+    from scipy import fft
+
+    half = n // 2
+    planes = np.pad(np.moveaxis(opp, -1, 0), ((0, 0), (half, half), (half, half)), mode="symmetric")
+    fshape = tuple(fft.next_fast_len(d + n - 1, True) for d in planes.shape[1:])
+    full = fft.irfft2(fft.rfft2(planes, s=fshape) * _kernel_spectra(samples_per_degree, parameters, fshape), s=fshape)
+    h, w = opp.shape[:2]
+    return np.moveaxis(full[:, n - 1:n - 1 + h, n - 1:n - 1 + w], 0, -1)
+
+
+def _filter_opponent(xyz: np.ndarray, matrix: np.ndarray, kernels, boundary: str, samples_per_degree: float,
+                     parameters: str) -> np.ndarray:
+    """XYZ -> opponent, filter each channel, -> XYZ."""
     opp = xyz @ matrix.T
-    half = kernels[0].shape[0] // 2
-    out = np.empty_like(opp)
-    for c, k in enumerate(kernels):
-        if boundary == "symmetric":
-            padded = np.pad(opp[..., c], half, mode="symmetric")
-            out[..., c] = signal.fftconvolve(padded, k, mode="valid")
-        else:  # ISETCam: wrap-around, and the map shifted by one pixel
+    if boundary == "symmetric":
+        out = _symmetric_filter(opp, samples_per_degree, parameters, kernels[0].shape[0])
+    else:  # ISETCam: wrap-around, and the map shifted by one pixel
+        out = np.empty_like(opp)
+        for c, k in enumerate(kernels):
             out[..., c] = np.roll(_circular(opp[..., c], k), (-1, -1), axis=(0, 1))
     return out @ np.linalg.inv(matrix).T
 
@@ -124,8 +150,8 @@ def scielab_reference_lab(reference_xyz, white_xyz, *, samples_per_degree: float
         n = kernels[0].shape[0]
         h_in, w_in = ref.shape[:2]
         ref = ref[:h_in - (h_in - n) % 2, :w_in - (w_in - n) % 2]
-    return xyz_to_lab(_filter_opponent(ref, OPPONENT_MATRICES[matrix], kernels, boundary), as_white(white_xyz),
-                      constants=lab_constants)
+    filtered = _filter_opponent(ref, OPPONENT_MATRICES[matrix], kernels, boundary, samples_per_degree, parameters)
+    return xyz_to_lab(filtered, as_white(white_xyz), constants=lab_constants)
 
 
 def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, matrix: str = "xyz2",
@@ -192,11 +218,13 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
         keep_h, keep_w = h_in - (h_in - n) % 2, w_in - (w_in - n) % 2
         ref, test = ref[:keep_h, :keep_w], test[:keep_h, :keep_w]
     if reference_lab is None:
-        lab_r = xyz_to_lab(_filter_opponent(ref, m, kernels, boundary), white, constants=lab_constants)
+        lab_r = xyz_to_lab(_filter_opponent(ref, m, kernels, boundary, samples_per_degree, parameters), white,
+                           constants=lab_constants)
     else:
         lab_r = np.asarray(reference_lab, dtype=np.float64)
         require(lab_r.shape == ref.shape, f"reference_lab has shape {lab_r.shape}, the reference {ref.shape}")
-    lab_t = xyz_to_lab(_filter_opponent(test, m, kernels, boundary), white, constants=lab_constants)
+    lab_t = xyz_to_lab(_filter_opponent(test, m, kernels, boundary, samples_per_degree, parameters), white,
+                       constants=lab_constants)
     de_map = delta_e_2000(lab_r, lab_t) if version == "2000" else delta_e_1976(lab_r, lab_t)
 
     b = int(np.floor(samples_per_degree + 0.5))

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-__all__ = ["RECORDS", "ssim"]
+__all__ = ["RECORDS", "ssim", "ssim_reference_moments"]
 
 import numpy as np
 
 from ..errors import require
-from ._common import as_pair, code_range, round_half_away
+from ._common import as_image, as_pair, code_range, round_half_away
 from .colourspace import rgb_to_gray
 from .record import NATURAL, MetricRecord
 
@@ -29,8 +29,61 @@ def _wang2009_downsample(x: np.ndarray) -> np.ndarray:
     return (box / (f * f))[::f, ::f]
 
 
+def _planes(image, channel: str, downsample: bool) -> list[np.ndarray]:
+    """The planes SSIM compares: the luma, or each channel; downsampled if asked."""
+    if image.ndim == 2:
+        planes = [image]
+    elif channel == "gray":
+        planes = [rgb_to_gray(image)]
+    else:
+        planes = [image[..., c] for c in range(3)]
+    if downsample:
+        planes = [_wang2009_downsample(p) for p in planes]
+        require(min(planes[0].shape) >= WINDOW_PX, f"after downsampling the images are {planes[0].shape[0]} x "
+                                                    f"{planes[0].shape[1]} px, smaller than the 11 x 11 window")
+    return planes
+
+
+def _gaussian(x: np.ndarray) -> np.ndarray:
+    """scikit-image's SSIM window: its ``gaussian`` with the arguments
+    ``structural_similarity`` passes (sigma 1.5, truncate 3.5: 11 taps, 'reflect')."""
+    from skimage.filters import gaussian
+
+    return gaussian(x, sigma=SIGMA_PX, truncate=3.5, mode="reflect")
+
+
+def ssim_reference_moments(reference, *, data_range: float = 255.0, channel: str = "gray",
+                           downsample: bool = False) -> tuple:
+    """What :func:`ssim` computes from the reference alone: per plane, the
+    plane and its windowed mean and mean square (scikit-image's ``ux`` and
+    ``uxx``).  Pass it as ``reference_moments`` when one reference is
+    compared with many test images (same options): the result is identical."""
+    require(channel in ("gray", "rgb_mean"), f"unknown SSIM channel mode {channel!r} (expected 'gray' or 'rgb_mean')")
+    ref = as_image(reference, "reference image", allow_gray=True, min_size=WINDOW_PX)
+    ref, _ = code_range(ref, ref, data_range, "ssim")
+    return _moments(ref, channel, downsample)
+
+
+def _moments(ref: np.ndarray, channel: str, downsample: bool) -> tuple:
+    return tuple((p, _gaussian(p), _gaussian(p * p)) for p in _planes(ref, channel, downsample))
+
+
+def _ssim_plane(x, ux, uxx, y) -> float:
+    """scikit-image 0.26's ``structural_similarity`` (gaussian_weights=True,
+    sigma 1.5, population covariance, data_range 255) term for term, with the
+    reference's window moments given: the same float64 operations in the same
+    order (tests/test_ssim_moments.py checks the values equal)."""
+    uy, uyy, uxy = _gaussian(y), _gaussian(y * y), _gaussian(x * y)
+    vx, vy, vxy = uxx - ux * ux, uyy - uy * uy, uxy - ux * uy  # cov_norm = 1.0
+    c1, c2 = (0.01 * 255.0) ** 2, (0.03 * 255.0) ** 2
+    a1, a2, b1, b2 = 2 * ux * uy + c1, 2 * vxy + c2, ux**2 + uy**2 + c1, vx + vy + c2
+    s = (a1 * a2) / (b1 * b2)
+    pad = (WINDOW_PX - 1) // 2
+    return s[pad:s.shape[0] - pad, pad:s.shape[1] - pad].mean(dtype=np.float64)
+
+
 def ssim(reference, test, *, data_range: float = 255.0, channel: str = "gray",
-         downsample: bool = False) -> float:
+         downsample: bool = False, reference_moments=None) -> float:
     """Mean SSIM index of ``test`` against ``reference``.
 
     Parameters
@@ -44,6 +97,9 @@ def ssim(reference, test, *, data_range: float = 255.0, channel: str = "gray",
     downsample : apply Wang's 2009 automatic downsampling (``f =
         max(1, round(min(H, W) / 256))``); off by default, as the 2004 paper
         and ``ssim_index.m``.
+    reference_moments : optional, :func:`ssim_reference_moments` of this
+        reference with the same options (a speed-up only: the result is
+        identical).
 
     Returns
     -------
@@ -66,26 +122,15 @@ def ssim(reference, test, *, data_range: float = 255.0, channel: str = "gray",
     >>> ssim(a, a)
     1.0
     """
-    from skimage.metrics import structural_similarity
-
     require(channel in ("gray", "rgb_mean"), f"unknown SSIM channel mode {channel!r} (expected 'gray' or 'rgb_mean')")
     ref, test = as_pair(reference, test, allow_gray=True, min_size=WINDOW_PX)
     ref, test = code_range(ref, test, data_range, "ssim")
-    if ref.ndim == 2:
-        planes = [(ref, test)]
-    elif channel == "gray":
-        planes = [(rgb_to_gray(ref), rgb_to_gray(test))]
-    else:
-        planes = [(ref[..., c], test[..., c]) for c in range(3)]
-    values = []
-    for a, b in planes:
-        if downsample:
-            a, b = _wang2009_downsample(a), _wang2009_downsample(b)
-            require(min(a.shape) >= WINDOW_PX,
-                    f"after downsampling the images are {a.shape[0]} x {a.shape[1]} px, smaller than the 11 x 11 window")
-        values.append(structural_similarity(a, b, data_range=255.0, gaussian_weights=True, sigma=SIGMA_PX,
-                                            use_sample_covariance=False))
-    return float(np.mean(values))
+    if reference_moments is None:
+        reference_moments = _moments(ref, channel, downsample)
+    planes = _planes(test, channel, downsample)
+    require(len(planes) == len(reference_moments) and planes[0].shape == reference_moments[0][0].shape,
+            "reference_moments do not belong to images of this shape and channel mode")
+    return float(np.mean([_ssim_plane(*m, p) for m, p in zip(reference_moments, planes)]))
 
 
 #: This module's metric records (collected by :mod:`.registry`).
@@ -93,5 +138,6 @@ RECORDS = (
     MetricRecord(name="ssim", function=ssim, scenes=(NATURAL,), inputs="srgb8", unit="", higher_is_better=True,
                  scored=True, label="SSIM", order=3, decimals=3,
                  description="structural similarity (Wang 2004) of the 8-bit sRGB luma",
-                 paper="SSIM (s. 2.2.3, Fig 10)", score_range=(0.0, 1.0)),
+                 paper="SSIM (s. 2.2.3, Fig 10)", score_range=(0.0, 1.0),
+                 reference_cache=("reference_moments", ssim_reference_moments)),
 )

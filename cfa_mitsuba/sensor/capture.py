@@ -201,7 +201,9 @@ def metered_exposure(oi: OpticalImage, pix: np.ndarray, spectra_cb: np.ndarray, 
     wl = np.asarray(oi.wavelengths, dtype=np.float64)
     t_rule = auto_exposure(oi, spectra_cb, sensor, None, luminance_scale)
     w = (np.asarray(spectra_cb) * _electrons_per_irradiance(wl, sensor)[None, :]).T * luminance_scale  # (B, C)
-    peak = float((pix.reshape(-1, pix.shape[-1]) @ w).max())
+    # (C, B) x (B, N) rather than (N, B) x (B, C): the same dot products (to the last bit), 6x faster in
+    # OpenBLAS's skinny kernels (measured at 636 x 720 x 31)
+    peak = float((w.T @ pix.reshape(-1, pix.shape[-1]).T).max())
     if not (math.isfinite(peak) and peak > 0):
         return t_rule
     return min(t_rule, AUTO_EXPOSURE_LEVEL * sensor.well_capacity_e / peak)

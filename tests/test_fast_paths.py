@@ -1,0 +1,101 @@
+"""The evaluation's fast paths (issue 25) against the library code they
+replace: colour-science's sRGB encoding and von Kries adaptation, the full
+half-plane test of the spectral locus, scipy's FFT convolution per plane
+for S-CIELAB, scipy's convolve2d for MATLAB's conv2 'same', and the (N, B)
+x (B, C) product of the metered exposure."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cfa_mitsuba import colorimetry
+from cfa_mitsuba.colorimetry import _colour, _locus_half_planes, linear_to_srgb, realisable, xyz_to_srgb
+
+
+@pytest.fixture(scope="module")
+def colour():
+    return _colour()
+
+
+def test_srgb_encoding_is_colour_sciences_to_the_bit(colour):
+    x = np.random.default_rng(1).normal(0.3, 0.5, (400, 3))
+    x[:5, 0] = [0.0, 0.0031308, -0.0031308, 1.0, -1e-9]
+    assert np.array_equal(linear_to_srgb(x), colour.models.eotf_inverse_sRGB(x))
+    assert float(linear_to_srgb(0.18)) == float(colour.models.eotf_inverse_sRGB(0.18))
+
+
+def test_bradford_adaptation_matches_colour_science(colour):
+    rng = np.random.default_rng(2)
+    xyz = rng.random((50, 40, 3)) * 120.0
+    white = np.array([98.0, 100.0, 80.0])  # not D65: the adaptation does something
+    d65 = colorimetry.SRGB_WHITE_XYZ / colorimetry.SRGB_WHITE_XYZ[1]
+    adapted = white[1] * colour.adaptation.chromatic_adaptation_VonKries(xyz / white[1], white / white[1], d65,
+                                                                        transform="Bradford")
+    expected = linear_to_srgb(np.clip(colorimetry.xyz_to_linear(adapted, scale=white[1]), 0.0, 1.0))
+    np.testing.assert_allclose(xyz_to_srgb(xyz, white, adaptation="Bradford"), expected, rtol=0, atol=1e-13)
+
+
+def test_realisable_equals_the_full_half_plane_test():
+    rng = np.random.default_rng(3)
+    xyz = rng.normal(0.3, 0.4, (100000, 3))
+    cmfs = _colour().MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].values
+    locus = cmfs / cmfs.sum(axis=1, keepdims=True)
+    centre = locus.mean(axis=0)
+    near = np.concatenate([centre + (locus - centre) * (1 + e) for e in (-1e-5, -1e-7, 0.0, 1e-7, 1e-5)])
+    xyz = np.concatenate([xyz, 10.0 * near, np.zeros((3, 3))])
+    s = xyz.sum(axis=1)
+    planes = _locus_half_planes()
+    xy = xyz[:, :2] / np.where(s > 0, s, 1.0)[:, None]
+    inside = np.all(xy @ planes[:, :2].T + planes[:, 2] <= 1e-6, axis=1)
+    nonneg = np.all(xyz >= -1e-6 * np.maximum(np.abs(s), np.finfo(float).tiny)[:, None], axis=1)
+    expected = nonneg & ((s <= 0) | inside)
+    got = realisable(xyz)
+    assert np.array_equal(got, expected)
+    assert 0.1 < got.mean() < 0.9  # both answers well represented
+
+
+def test_scielab_filtering_equals_fftconvolve_per_plane():
+    from scipy import signal
+
+    from cfa_mitsuba.metrics.scielab import _symmetric_filter, scielab_filters
+
+    opp = np.random.default_rng(4).random((57, 64, 3)) * 50.0
+    kernels = scielab_filters(23.0)
+    n = kernels[0].shape[0]
+    expected = np.stack([signal.fftconvolve(np.pad(opp[..., c], n // 2, mode="symmetric"), kernels[c], mode="valid")
+                         for c in range(3)], axis=-1)
+    np.testing.assert_allclose(_symmetric_filter(opp, 23.0, "distribution", n), expected, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("shape", [(2, 2), (3, 3), (2, 3), (3, 2)])
+def test_small_conv2_same_equals_convolve2d(shape):
+    from scipy import signal
+
+    from cfa_mitsuba.metrics._common import conv2_same
+
+    rng = np.random.default_rng(5)
+    x, k = rng.random((31, 37)) * 255.0, rng.normal(size=shape)
+    full = signal.convolve2d(x, k, mode="full")
+    expected = full[shape[0] // 2:shape[0] // 2 + 31, shape[1] // 2:shape[1] // 2 + 37]
+    np.testing.assert_allclose(conv2_same(x, k), expected, rtol=0, atol=1e-11)
+
+
+def test_processed_srgb_is_encoded_on_first_read():
+    import cfa_mitsuba as cm
+    from cfa_mitsuba.isp.colour_matrix import xyz_to_srgb as display
+    from test_isp_process import WHITE, synthetic_raw
+
+    radiance = np.broadcast_to(WHITE * 0.4, (12, 14, WHITE.size)) * np.linspace(0.5, 1.5, 14)[None, :, None]
+    out = cm.isp.process(synthetic_raw(radiance, "rgbw1"), "bilinear")
+    assert out.__dict__["_srgb"] is None  # not encoded yet
+    assert np.array_equal(out.srgb, display(out.xyz, out.white_xyz))
+    assert out.srgb is out.srgb  # encoded once, then kept
+    assert isinstance(out, cm.values.RenderedImage)
+
+
+def test_metered_peak_product_is_the_same_numbers():
+    rng = np.random.default_rng(6)
+    pix, w = rng.random((40, 50, 31)), rng.random((31, 4))
+    # the same dot products; OpenBLAS's kernels may round the last bit differently
+    np.testing.assert_allclose((w.T @ pix.reshape(-1, 31).T).T, pix.reshape(-1, 31) @ w, rtol=1e-14, atol=0)
