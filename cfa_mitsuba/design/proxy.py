@@ -26,16 +26,24 @@
   alias at a vertical frequency that the edge's projection averages out),
   so a tile with a luminance-heavy channel in full columns scores worse
   than its transpose.
-* ``noise`` (lower is better): relative rms noise of the luminance Y on an
-  18 % grey after the colour matrix, at the objectives' lowest luminance
-  (``noise_xyz``, the rms over X, Y and Z, is reported beside it).  Each
-  channel's electrons follow from its response to the scene white and the
-  auto exposure (the most sensitive channel present fills 95 % of the well
-  at the reference luminance: a W pixel shortens every colour pixel's
-  exposure), shot plus read noise; a channel's noise is carried into the
-  image by interpolation: a 5 x 5 binomial normalised convolution of its
-  samples, whose variance factor g_c (1 at a sample, sum w^2 / (sum w)^2
-  between samples) is averaged over the tile.
+* ``noise`` (lower is better): relative rms noise of the luminance Y on a
+  mid-grey after demosaicking and the colour matrix, at the objectives'
+  lowest luminance (``noise_xyz``, the rms over X, Y and Z, beside it).
+  Each channel's electrons on the grey follow from the exposure policy
+  (:func:`grey_electrons`): under ``reference`` the most sensitive channel
+  present fills 95 % of the well at the reference luminance (a W pixel
+  shortens every colour pixel's exposure); under the exposure ``program``
+  (the default) the time is the metered one capped at ``max_exposure_s``,
+  so in dim light every CFA integrates the same time and a sensitive
+  channel simply collects more.  Shot plus read noise give each balanced
+  channel's relative variance v_c.  For the linear demosaics (``bilinear``,
+  ``laplacian``) the propagation is exact (:func:`demosaic_noise_gains`):
+  Y at output pixel p is sum_q w_pq raw_q with w = sum_k M_kY dout_k(p) /
+  draw(q), the demosaic's weights at p's CFA phase combined through the
+  colour matrix's Y column M_kY, so var Y(p) = sum_q w_pq^2 v_ch(q); the
+  weights are read off the demosaic itself (an impulse at each tile
+  position) and var Y averaged over the tile's phases.  A nonlinear
+  demosaic gets the Laplacian's gains (its linear core).
 * ``colour`` (lower is better): mean CIEDE2000 of the 190 training
   reflectances after the white-preserving colour fit (what the ISP does,
   :func:`cfa_mitsuba.isp.colour_matrix.fit_colour_matrix`); the Vora-Trussell
@@ -49,7 +57,7 @@ letters present (:class:`ColourModel`).
 from __future__ import annotations
 
 __all__ = ["ProxySettings", "ColourModel", "colour_model", "evaluate_layouts", "PROXY_NAMES",
-           "frequency_weights"]
+           "frequency_weights", "demosaic_noise_gains", "grey_electrons", "LINEAR_DEMOSAICS"]
 
 import functools
 from dataclasses import dataclass
@@ -65,6 +73,14 @@ PROXY_NAMES = ("aliasing", "aliasing_h", "noise", "colour")
 _F0 = 0.05
 _GREY = 0.18
 _AE_LEVEL = 0.95
+#: The gray bar (YSNR's chart, render/charts.py): its mean reflectance is
+#: 0.289, its mid-grey step 0.145 and its white 0.876, so at a mean scene
+#: luminance L the measured grey sits at about 0.5 L and the brightest
+#: pixel (the program's meter) at about 3.0 L.
+_GREY_OF_MEAN = 0.145 / 0.289
+_BRIGHT_OF_MEAN = 0.876 / 0.289
+#: The demosaics whose noise propagation is exact (linear in the mosaic).
+LINEAR_DEMOSAICS = ("bilinear", "laplacian")
 
 
 @dataclass(frozen=True)
@@ -78,6 +94,11 @@ class ProxySettings:
     well_e: float = 6200.0
     read_noise_e: float = 6.2
     luminance_ratio: float = 1.0
+    policy: str = "reference"        # the exposure policy: 'program' (and 'bayer'), 'reference', 'each'
+    luminance_cd_m2: float = 100.0    # the (lowest) objective luminance the noise is predicted at
+    max_exposure_s: float = 1.0 / 30.0
+    fill_factor: float = 1.0
+    demosaics: tuple = ("bilinear",)  # the noise proxy is the best (lowest) over these
 
 
 @dataclass(frozen=True)
@@ -90,14 +111,25 @@ class ColourModel:
     colour_de00: float
     vora_trussell: float
     luminance_share: np.ndarray  # (C,) |M_cY| / sum |M_cY|
+    white_rate: np.ndarray = None  # (C,) electrons per s per m^2 of pixel per (cd/m^2 of D65) at f/0.5 (module doc)
+    lum_weights: np.ndarray = None  # (C,) the Laplacian demosaic's luminance reference weights
 
 
-def colour_model(qe_bands: np.ndarray, wavelengths=spectra.DEFAULT_WAVELENGTHS) -> ColourModel:
-    """The :class:`ColourModel` of (C, B) band QEs under D65."""
+def colour_model(qe_bands: np.ndarray, wavelengths=spectra.DEFAULT_WAVELENGTHS, *, well_e: float | None = None,
+                 read_noise_e: float = 0.0) -> ColourModel:
+    """The :class:`ColourModel` of (C, B) band QEs under D65; with ``well_e``
+    the colour matrix is the image processor's noise-regularised fit (the
+    white filling the most sensitive channel's well, isp/pipeline.py)."""
+    from ..isp.colour_matrix import channel_noise, luminance_weights
+
     wl = spectra.validate_wavelengths(wavelengths)
     white = spectra.illuminant("D65", wl)
     epr = electrons_per_radiance_of(qe_bands, wl)
-    fit = fit_colour_matrix(epr, white, wl)
+    white_e = epr @ white
+    noise = None
+    if well_e and np.all(white_e > 0):
+        noise = channel_noise(float(well_e) * white_e / white_e.max(), read_noise_e=float(read_noise_e))
+    fit = fit_colour_matrix(epr, white, wl, channel_noise=noise)
     rel = fit.matrix / fit.white_xyz[None, :]
     resp = epr @ white
     refl = spectra.training_reflectances(wl)
@@ -106,7 +138,9 @@ def colour_model(qe_bands: np.ndarray, wavelengths=spectra.DEFAULT_WAVELENGTHS) 
     de = delta_e00(cam @ fit.matrix / fit.white_xyz[1] * fit.white_xyz[1], spectra.xyz_from_radiance(radiance, wl),
                    fit.white_xyz)
     share = np.abs(rel[:, 1]) / np.sum(np.abs(rel[:, 1]))
-    return ColourModel(rel, resp / resp.max(), float(np.mean(de)), vora_trussell(epr, white, wl), share)
+    rate = resp / float(spectra.luminance_cd_m2(white, wl))
+    return ColourModel(rel, resp / resp.max(), float(np.mean(de)), vora_trussell(epr, white, wl), share, rate,
+                       luminance_weights(epr, white, wl))
 
 
 def vora_trussell(epr: np.ndarray, white: np.ndarray, wavelengths) -> float:
@@ -139,28 +173,82 @@ def frequency_weights(h: int, w: int, f_number: float, pixel_pitch_um: float) ->
     return s
 
 
-@functools.lru_cache(maxsize=8)
-def _kernel() -> np.ndarray:
-    b = np.array([1.0, 4.0, 6.0, 4.0, 1.0])
-    return np.outer(b, b) / 256.0
+class _Tile:
+    """What the demosaics read of a CFA: its tile of filter names and its channels."""
+
+    def __init__(self, pattern: np.ndarray, channels: tuple):
+        self.pattern, self.channels = pattern, channels
 
 
-def interpolation_gain(masks: np.ndarray) -> np.ndarray:
-    """(N, K) mean variance factor of each channel after a 5 x 5 binomial
-    normalised convolution of its samples (masks (N, K, h, w) float, periodic)."""
-    kern = _kernel()
-    s1 = np.zeros_like(masks)
-    s2 = np.zeros_like(masks)
-    for dy in range(-2, 3):
-        for dx in range(-2, 3):
-            rolled = np.roll(masks, (dy, dx), axis=(2, 3))
-            wgt = kern[dy + 2, dx + 2]
-            s1 += wgt * rolled
-            s2 += wgt * wgt * rolled
-    with np.errstate(divide="ignore", invalid="ignore"):
-        between = np.where(s1 > 0, s2 / np.maximum(s1, 1e-300) ** 2, 1.0)
-    g = np.where(masks > 0, 1.0, between)
-    return g.mean(axis=(2, 3))
+def _block(n: int, period: int, support: int = 12) -> int:
+    """A multiple of ``period`` at least 2 ``support``: room for one impulse response."""
+    return period * max(2, -(-2 * support // period))
+
+
+def demosaic_noise_gains(layout: np.ndarray, channels: tuple, matrix_rel: np.ndarray, method: str,
+                         lum_weights=None) -> np.ndarray:
+    """(C, 3) noise gains of a tile through a linear demosaic and the colour
+    matrix (module doc): G[c, j] = the mean over the tile's phases of
+    sum_q (sum_k M_kj dout_k(p) / draw(q))^2 over the raw pixels q of channel
+    c, so that var(XYZ_j / white_j) = sum_c G[c, j] v_c for independent
+    balanced-channel noise of relative variance v_c.
+
+    ``layout`` (h, w) holds indices into ``channels`` (every one present);
+    ``matrix_rel`` (C, 3) the colour matrix over the white's XYZ.  One
+    demosaic call: an impulse at each tile position, each in its own block
+    of zeros wide enough that the responses do not meet (the methods here
+    reach at most a few tiles).
+    """
+    from ..isp import demosaic
+
+    h, w = layout.shape
+    names = np.asarray(channels, dtype=object)
+    tile = _Tile(names[layout], tuple(channels))
+    bh, bw = _block(h, h), _block(w, w)
+    n = h * w
+    raw = np.zeros((bh, bw * n))
+    r0, c0 = (bh // h // 2) * h, (bw // w // 2) * w
+    for k in range(n):
+        raw[r0 + k // w, k * bw + c0 + k % w] = 1.0
+    opts = {"luminance_weights": list(map(float, lum_weights))} if method != "bilinear" and lum_weights is not None \
+        else {}
+    out = demosaic(raw, tile, "laplacian" if method not in LINEAR_DEMOSAICS else method, **opts)
+    resp = out @ np.asarray(matrix_rel, dtype=np.float64)              # (bh, bw n, 3)
+    energy = (resp ** 2).reshape(bh, n, bw, 3).sum(axis=(0, 2))       # (n, 3): each impulse's
+    gains = np.zeros((len(channels), 3))
+    np.add.at(gains, layout.ravel(), energy)
+    return gains / n
+
+
+def grey_electrons(model: ColourModel, settings: ProxySettings) -> np.ndarray:
+    """(C,) electrons each channel collects on the measured mid-grey (module doc).
+
+    ``reference`` / ``each``: 18 % of 95 % of the well in the most sensitive
+    channel at the reference luminance, times the luminance ratio.
+    ``program``: the grey's electron rate (the channels' absolute response to
+    D65 at the grey's luminance, through the f-number, the pixel area and
+    fill factor) times the program's time: the metered time (the brightest
+    pixel's most sensitive channel at 95 % of the well) capped at
+    ``max_exposure_s``; gains add no electrons."""
+    if settings.policy in ("reference", "each") or model.white_rate is None:
+        return (_GREY * _AE_LEVEL * settings.well_e * settings.luminance_ratio
+                * model.white_response / model.white_response.max())
+    optics = np.pi / (1.0 + 4.0 * settings.f_number ** 2) * (settings.pixel_pitch_um * 1e-6) ** 2 * settings.fill_factor
+    rate = model.white_rate * optics * settings.luminance_cd_m2   # e-/s of a D65 field at the mean luminance
+    metered = _AE_LEVEL * settings.well_e / (rate.max() * _BRIGHT_OF_MEAN)
+    return rate * _GREY_OF_MEAN * min(metered, settings.max_exposure_s)
+
+
+def _noise_gains(layout_row, h, w, idx, m: ColourModel, method: str, cache: dict) -> np.ndarray:
+    key = (layout_row.tobytes(), idx, method, m.matrix_rel.tobytes())
+    if key not in cache:
+        lut = {j: i for i, j in enumerate(idx)}
+        local = np.vectorize(lut.__getitem__)(layout_row.reshape(h, w))
+        cache[key] = demosaic_noise_gains(local, tuple(str(i) for i in idx), m.matrix_rel, method, m.lum_weights)
+    return cache[key]
+
+
+_GAIN_CACHE: dict = {}
 
 
 def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings: ProxySettings) -> dict:
@@ -183,7 +271,6 @@ def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings
     per_channel = np.einsum("nkij,ij->nk", power, s)
     crosstalk = per_channel.sum(axis=1)
     horizontal = np.einsum("nkj,j->nk", power[:, :, 0, :], s[0, :])  # carriers with f_y = 0
-    gain = interpolation_gain(masks)
     present = dens > 0
     out = {name: np.zeros(n) for name in ("sampling", "aliasing_h", "noise", "noise_xyz",
                                                   "colour", "vora_trussell")}
@@ -195,12 +282,16 @@ def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings
         d = dens[rows][:, idx]
         out["sampling"][rows] = np.sum(m.luminance_share[None, :] * per_channel[rows][:, idx] / d ** 2, axis=1)
         out["aliasing_h"][rows] = np.sum((1 + m.luminance_share[None, :] / d ** 2) * horizontal[rows][:, idx], axis=1)
-        electrons = (_GREY * _AE_LEVEL * settings.well_e * settings.luminance_ratio
-                     * m.white_response / m.white_response.max())
+        electrons = grey_electrons(m, settings)
         var = (electrons + settings.read_noise_e ** 2) / electrons ** 2
-        xyz_var = (gain[rows][:, idx] * var[None, :]) @ (m.matrix_rel ** 2)
-        out["noise"][rows] = np.sqrt(xyz_var[:, 1])
-        out["noise_xyz"][rows] = np.sqrt(xyz_var.mean(axis=1))
+        for r in rows:
+            best = None
+            for method in settings.demosaics:
+                xyz_var = var @ _noise_gains(layouts[r], h, w, idx, m, method, _GAIN_CACHE)
+                if best is None or xyz_var[1] < best[1]:
+                    best = xyz_var
+            out["noise"][r] = np.sqrt(best[1])
+            out["noise_xyz"][r] = np.sqrt(best.mean())
         out["colour"][rows] = m.colour_de00
         out["vora_trussell"][rows] = m.vora_trussell
     out["crosstalk"] = crosstalk
