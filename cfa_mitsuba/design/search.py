@@ -66,14 +66,16 @@ def proxy_settings(config) -> P.ProxySettings:
     policy = chain.exposure_policy
     ref = float(st.capture.get("reference_luminance_cd_m2", 100.0))
     ratio = 1.0 if policy == "each" else min(lums) / ref
+    edge = min([o.luminance for o in config.objectives if o.scene == "slanted-edge"] or [100.0])
     f_number = float(st.optics.get("f_number", 4.0))
-    wanted = [d for o in config.objectives if "noise" in o.proxies
+    wanted = [d for o in config.objectives if {"noise", "snr10", "blur", "neg_capacity"} & set(o.proxies)
               for d in (st.demosaics if o.demosaic == "best" else (o.demosaic,))]
     demosaics = tuple(dict.fromkeys(d if d in P.LINEAR_DEMOSAICS else "laplacian" for d in wanted)) or ("bilinear",)
     return P.ProxySettings(f_number, float(sensor.pixel_pitch_um), float(sensor.well_capacity_e),
                            float(sensor.read_noise_e), ratio, policy=policy, luminance_cd_m2=float(min(lums)),
                            max_exposure_s=float(chain.max_exposure_s),
-                           fill_factor=float(sensor.fill_factor), demosaics=demosaics)
+                           fill_factor=float(sensor.fill_factor), demosaics=demosaics,
+                           reference_luminance_cd_m2=ref, edge_luminance_cd_m2=edge)
 
 
 def _bands(curves: dict, letters) -> np.ndarray:
@@ -124,6 +126,14 @@ def _rows(layouts, h, w, alphabet, proxies, params=""):
     return df
 
 
+def _state_key(settings) -> str:
+    """A short hash of the proxy's settings and names: saved state is reused
+    only by a run that would compute the same proxies."""
+    import hashlib
+
+    return hashlib.sha1(repr((settings, P.PROXY_NAMES)).encode()).hexdigest()[:8]
+
+
 def _save_npz(path: Path, **arrays) -> None:
     with atomic_output(path) as tmp:
         with open(tmp, "wb") as fh:
@@ -134,9 +144,10 @@ def _exhaustive(config, h, w, state: Path, settings, models, log) -> tuple[list[
     k = len(config.alphabet)
     lo, hi = L.density_limits(config.density, config.alphabet, h * w)
     rows, evaluated, reused = [], 0, 0
-    names = ("aliasing", "aliasing_h", "crosstalk", "sampling", "noise", "noise_xyz", "colour", "vora_trussell")
+    names = ("aliasing", "aliasing_h", "crosstalk", "sampling", "blur", "neg_capacity", "noise", "noise_xyz",
+             "snr10", "colour", "vora_trussell")
     for i in range(L.n_chunks(h, w, k)):
-        f = state / f"exhaustive-{h}x{w}-{i:05d}.npz"
+        f = state / f"exhaustive-{h}x{w}-{_state_key(settings)}-{i:05d}.npz"
         if f.exists():
             with np.load(f) as z:
                 lay, got = z["layouts"], {n: z[n] for n in names}
@@ -177,7 +188,7 @@ def _nsga2(config, h, w, state: Path, settings, models, objectives, log) -> tupl
     spec = config.spectra
     n_spec = n_params(spec) * (len(spec.letters) if spec else 0)
     lo, hi = L.density_limits(config.density, config.alphabet, n)
-    archive = _Archive(state / f"nsga-{h}x{w}.json")
+    archive = _Archive(state / f"nsga-{h}x{w}-{_state_key(settings)}.json")
 
     def decode(x):
         lay = np.minimum((x[:, :n] * k).astype(np.int64), k - 1).astype(np.uint8)
