@@ -78,11 +78,18 @@ def _one(metrics, lab, o, demosaic):
 
         sel = metrics[(metrics["cfa"] == lab) & (metrics["scene"] == o.scene) & (metrics["demosaic"] == demosaic)]
         t = snr10_table(snr_table(sel))
-        if t.empty or not np.isfinite(float(t["snr10_cd_m2"].iloc[0])):
+
+        def num(v):  # an interval curve that never reaches YSNR 10 in the sweep: unbounded on that side
+            return float(v) if v is not None and np.isfinite(float(v)) else float("nan")
+
+        if t.empty or not np.isfinite(num(t["snr10_cd_m2"].iloc[0])):
             return (float("nan"),) * 3 + (0,)
         r = t.iloc[0]
         n = int(sel[sel["metric"] == "ysnr"]["n"].min()) if "n" in sel else 0
-        return float(r["snr10_cd_m2"]), float(r["ci_low"]), float(r["ci_high"]), n
+
+        low, high = num(r["ci_low"]), num(r["ci_high"])
+        return (float(r["snr10_cd_m2"]), low if np.isfinite(low) else 0.0,
+                high if np.isfinite(high) else float("inf"), n)
     sel = metrics[(metrics["cfa"] == lab) & (metrics["scene"] == o.scene) & (metrics["demosaic"] == demosaic)
                   & (metrics["metric"] == o.metric)
                   & ((metrics["luminance"].astype(float) - o.luminance).abs() < 1e-9)]
