@@ -89,30 +89,44 @@ def _better(a, b, o) -> bool:
         bool(a[f"{o.label} low"] > b[f"{o.label} high"])
 
 
+def _versus(row, ref_row, ref_name, objectives) -> str:
+    """Where ``row`` is better and worse than ``ref_row`` with separated intervals."""
+    if ref_row is None:
+        return ""
+    wins = [getattr(o, "title", o.label) for o in objectives if _better(row, ref_row, o)]
+    losses = [getattr(o, "title", o.label) for o in objectives if _better(ref_row, row, o)]
+    return (f" Against {ref_name}, intervals separated: better on {_e(', '.join(wins) or 'none')}; worse on "
+            f"{_e(', '.join(losses) or 'none')}.")
+
+
 def headline(table, objectives) -> str:
     """The answer first: whether any candidate beat the named CFAs, with numbers."""
     named = table[table["kind"] == "named"]
     cand = table[table["kind"] == "candidate"]
     pareto = table[table["pareto"]].sort_values("score", ascending=False)
     ref = named[named["cfa"] == "bayer"]
-    ref_name = "Bayer" if len(ref) else "the named CFAs"
+    ref_name = "Bayer" if len(ref) else "the best named CFA"
     ref_row = ref.iloc[0] if len(ref) else (named.sort_values("score", ascending=False).iloc[0] if len(named) else None)
     ref_txt = "" if ref_row is None else f" {_e(ref_row['cfa'])}: {_vals(ref_row, objectives)}."
     if pareto.empty:
         by = sorted({str(d) for d in cand["dominated_by"] if str(d) and str(d) != "nan"})
+        named_by = [d for d in by if d in set(named["cfa"])]
+        who = "Bayer" if named_by == ["bayer"] and len(ref) else "the named CFAs"
         best = cand.sort_values("score", ascending=False).iloc[0] if len(cand) else None
-        best_txt = "" if best is None else (f" The best candidate by full-chain score, {_e(best['cfa'])} "
-                                            f"({_e(best['tile_text'])}): {_vals(best, objectives)}.")
-        return (f"<p class=answer><b>Nothing beat {ref_name}</b>: every one of the {len(cand)} candidates run "
-                f"through the full chain is dominated within 95 % intervals (by {_e(', '.join(by))}).{ref_txt}"
+        best_txt = ""
+        if best is not None:
+            best_txt = (f" The best candidate by full-chain score, {_e(best['cfa'])} ({_e(best['tile_text'])}): "
+                        f"{_vals(best, objectives)}.{_versus(best, ref_row, ref_name, objectives)}")
+            dom = table[table["cfa"] == best["dominated_by"]]
+            if len(dom) and dom.iloc[0]["cfa"] != (None if ref_row is None else ref_row["cfa"]):
+                best_txt += f" It is dominated by {_e(dom.iloc[0]['cfa'])}: {_vals(dom.iloc[0], objectives)}."
+        return (f"<p class=answer><b>Nothing beat {who}</b>: every one of the {len(cand)} candidates run through "
+                f"the full chain is dominated within 95 % intervals (by {_e(', '.join(by))}).{ref_txt}"
                 f"{best_txt}</p>")
     top = pareto.iloc[0]
-    wins = [getattr(o, "title", o.label) for o in objectives if ref_row is not None and _better(top, ref_row, o)]
-    losses = [getattr(o, "title", o.label) for o in objectives if ref_row is not None and _better(ref_row, top, o)]
     return (f"<p class=answer><b>{len(pareto)} candidate(s) on the front</b> (no evaluated CFA dominates them "
             f"within 95 % intervals). Best by full-chain score: {_e(top['cfa'])} ({_e(top['tile_text'])}): "
-            f"{_vals(top, objectives)}.{ref_txt} Against {ref_name}, intervals separated: better on "
-            f"{_e(', '.join(wins) or 'none')}; worse on {_e(', '.join(losses) or 'none')}.</p>")
+            f"{_vals(top, objectives)}.{ref_txt}{_versus(top, ref_row, ref_name, objectives)}</p>")
 
 
 def _agreement_html(agree) -> str:
