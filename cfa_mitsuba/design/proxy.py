@@ -317,19 +317,34 @@ def _gains_and_lsf(layout, channels, matrix_rel, method, lum_weights):
     return gains / n, (offsets, lsf / n, zipper), per_channel
 
 
+@functools.lru_cache(maxsize=8)
+def _dtft(n: int, start: int) -> tuple[np.ndarray, np.ndarray]:
+    """(f, the DTFT matrix at f = 0..1 cy/px, 401 points, of offsets start..start+n-1)."""
+    f = np.linspace(0.0, 1.0, 401)
+    return f, np.exp(-2j * np.pi * np.outer(f, np.arange(start, start + n)))
+
+
+@functools.lru_cache(maxsize=8)
+def _optics_mtf(f_number: float, pixel_pitch_um: float) -> np.ndarray:
+    """Diffraction at 550 nm times the pixel aperture on :func:`_dtft`'s frequencies."""
+    from ..optics.diffraction import diffraction_mtf
+
+    f = np.linspace(0.0, 1.0, 401)
+    return np.abs(np.sinc(f)) * diffraction_mtf(f / (pixel_pitch_um * 1e-3), 550.0, f_number)
+
+
 def edge_mtf50(lsf, f_number: float, pixel_pitch_um: float) -> float:
     """MTF50 (cy/px) of a grey slanted edge through the optics (diffraction
     at 550 nm, the pixel's box aperture) and the demosaic's phase-averaged
     line spread function ``lsf`` = (offsets px, weights): what the slanted
     edge's super-sampled ESF measures of a periodic, linear system (its
     phases averaged); the first crossing of 0.5 up to 1 cy/px."""
-    from ..optics.diffraction import diffraction_mtf
 
     offsets, weights = lsf[:2]
-    f = np.linspace(0.0, 1.0, 401)
-    h = np.abs(np.exp(-2j * np.pi * np.outer(f, offsets)) @ weights)
+    f, kernel = _dtft(len(offsets), int(offsets[0]))
+    h = np.abs(kernel @ weights)
     h = h / h[0] if h[0] > 0 else h
-    m = h * np.abs(np.sinc(f)) * diffraction_mtf(f / (pixel_pitch_um * 1e-3), 550.0, f_number)
+    m = h * _optics_mtf(f_number, pixel_pitch_um)
     below = np.flatnonzero(m < 0.5)
     if below.size == 0:
         return float(f[-1])
