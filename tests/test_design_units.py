@@ -91,16 +91,6 @@ def test_frequency_weights_follow_the_system_mtf():
     assert s[0, 0] == 0.0 and s[1, 1] < s[1, 0]
 
 
-def test_interpolation_gain_is_one_for_a_full_channel_and_known_for_a_checkerboard():
-    full = np.ones((1, 1, 2, 2))
-    assert P.interpolation_gain(full)[0, 0] == pytest.approx(1.0)
-    cb = np.array([[[[1.0, 0.0], [0.0, 1.0]]]])
-    k = P._kernel()
-    on = sum(k[i, j] for i in range(5) for j in range(5) if (i + j) % 2 == 1)
-    on2 = sum(k[i, j] ** 2 for i in range(5) for j in range(5) if (i + j) % 2 == 1)
-    assert P.interpolation_gain(cb)[0, 0] == pytest.approx(0.5 + 0.5 * on2 / on ** 2)
-
-
 def test_bayer_has_the_least_aliasing_of_the_2x2_rgb_layouts():
     qe = _bands("isetcam-rgb", "RGB")
     got = L.enumerate_layouts(2, 2, 3, np.ones(3, int), np.full(3, 4))

@@ -113,7 +113,8 @@ def test_list_metrics(cli):
     proc = cli("list", "metrics")
     assert proc.returncode == 0
     assert [l.split()[0] for l in proc.stdout.splitlines()] == [
-        "delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi", "ysnr"]  # ysnr: issue 22
+        "delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi", "ysnr",
+        "info-capacity"]  # ysnr: issue 22; info-capacity: issue 26
 
 
 def test_processed_npz_white_is_used_unless_white_given(cli, tmp_path):

@@ -236,7 +236,8 @@ def test_bad_keywords_are_refused():
 
 def test_registry_lists_the_eight_metrics():
     names = [n for n, _ in cm.list_metrics()]
-    assert names == ["delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi", "ysnr"]
+    assert names == ["delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi", "ysnr",
+                     "info-capacity"]
     assert [n for n in names if cm.get_metric(n).scored] == names[:8]  # the paper's eight are scored
 
 

@@ -22,7 +22,7 @@ A config has five parts (docs/design.md lists every key):
 from __future__ import annotations
 
 __all__ = ["DesignConfig", "Objective", "SpectraSpec", "load_design", "parse_design", "PROXIES_OF",
-           "MAX_EXHAUSTIVE", "ENGINES", "FAMILIES"]
+           "MAX_EXHAUSTIVE", "ENGINES", "FAMILIES", "SNR10", "SNR10_SWEEP", "BEST"]
 
 import dataclasses
 from dataclasses import dataclass
@@ -36,8 +36,16 @@ PROXIES_OF = {
     "delta-e": ("colour", "noise"), "delta-e76": ("colour", "noise"), "delta-l": ("noise",),
     "scielab": ("colour", "noise", "aliasing"), "scielab-interior": ("colour", "noise", "aliasing"),
     "ssim": ("noise", "aliasing"), "mdsi": ("noise", "aliasing"), "haarpsi": ("noise", "aliasing"),
-    "mtf": ("aliasing", "aliasing_h"), "moire": ("aliasing",), "achromatic": ("noise",),
+    "mtf": ("blur",), "moire": ("aliasing",), "achromatic": ("noise",),
+    "ysnr": ("noise",), "chroma_snr": ("noise",), "info-capacity": ("neg_capacity",), "snr10": ("snr10",),
 }
+#: The design objective read from a study's snr10.csv (study/snr.py), not
+#: metrics.csv: the luminance (cd/m^2) at which YSNR reaches 10 on a
+#: luminance sweep of the gray bar (``luminances``, default below).
+SNR10 = "snr10"
+SNR10_SWEEP = (0.3, 1.0, 3.0, 10.0, 30.0, 100.0)
+#: ``demosaic = "best"``: per CFA, the best of the study's demosaics on that objective.
+BEST = "best"
 #: Raw layouts (alphabet ** pixels) per tile size that exhaustive search takes on.
 MAX_EXHAUSTIVE = 50_000_000
 ENGINES = ("auto", "exhaustive", "nsga2")
@@ -57,10 +65,33 @@ class Objective:
     demosaic: str
     goal: str
     bound: object = None
+    sweep: tuple = ()        # snr10: the gray bar's luminances (cd/m^2)
 
     @property
     def label(self) -> str:
+        if self.metric == SNR10:
+            return f"{self.metric}@{self.scene}/{self.demosaic}"
         return f"{self.metric}@{self.scene}/L{self.luminance:g}/{self.demosaic}"
+
+    @property
+    def unit(self) -> str:
+        from ..metrics import get_metric
+
+        return "cd/m^2" if self.metric == SNR10 else get_metric(self.metric).unit
+
+    @property
+    def title(self) -> str:
+        """The axis name: metric, condition and unit (the report's)."""
+        from ..metrics import get_metric
+
+        dem = "best demosaic" if self.demosaic == BEST else self.demosaic
+        unit = self.unit
+        if self.metric == SNR10:
+            return f"SNR10: luminance at YSNR 10 ({self.scene}, {dem}) [cd/m²]"
+        rec = get_metric(self.metric)
+        names = {"delta-e": "ΔE00", "mtf": "MTF50", "ysnr": "YSNR", "info-capacity": "information capacity"}
+        return (f"{names.get(self.metric, rec.label)} ({self.scene}, {self.luminance:g} cd/m², {dem})"
+                + (f" [{unit}]" if unit else ""))
 
     @property
     def proxies(self) -> tuple[str, ...]:
@@ -209,23 +240,33 @@ def _spectra(ck: _Checker, data, alphabet, sset) -> SpectraSpec | None:
 def _objective(ck: _Checker, o, key: str, study, constraint: bool) -> Objective:
     from ..metrics import METRICS, get_metric
 
-    allowed = {"metric": None, "scene": None, "luminance": None, "demosaic": None, "goal": None}
+    allowed = {"metric": None, "scene": None, "luminance": None, "demosaic": None, "goal": None, "luminances": None}
     if constraint:
         allowed.update(max=None, min=None)
     ck.table(o, key, allowed)
-    known = [m for m in METRICS]
+    known = [m for m in METRICS] + [SNR10]
     metric = ck.string(o.get("metric", ""), f"{key}.metric")
     if metric not in known:
         ck.fail(f"{key}.metric", f"unknown objective metric {metric!r} (known: {', '.join(known)})")
-    feeding = [s.name for s in study.scenes if metric in s.metrics or get_metric(metric).parent in s.metrics]
+    if "luminances" in o and metric != SNR10:
+        ck.fail(f"{key}.luminances", "applies to metric = \"snr10\" only (its gray-bar sweep)")
+    fed_by = "ysnr" if metric == SNR10 else metric
+    feeding = [s.name for s in study.scenes if fed_by in s.metrics or get_metric(fed_by).parent in s.metrics]
     if not feeding:
         ck.fail(f"{key}.metric", f"no scene of [study] feeds {metric!r}")
     scene = ck.string(o.get("scene", feeding[0]), f"{key}.scene", tuple(feeding))
-    lum = ck.number(o.get("luminance", study.luminances[0]), f"{key}.luminance", positive=True)
-    if lum != study.luminances[0] and "scene" not in o:
+    sweep = ()
+    if metric == SNR10:
+        if "luminance" in o:
+            ck.fail(f"{key}.luminance", "snr10 is read off a sweep: give luminances = [...] (cd/m^2), not luminance")
+        sweep = _snr10_sweep(ck, o, key)
+        lum = float(min(sweep))
+    else:
+        lum = ck.number(o.get("luminance", study.luminances[0]), f"{key}.luminance", positive=True)
+    if lum != study.luminances[0] and "scene" not in o and metric != SNR10:
         ck.fail(f"{key}.scene", "an objective at another luminance than the first objective's must name its scene")
-    demosaic = ck.string(o.get("demosaic", study.demosaics[0]), f"{key}.demosaic", tuple(study.demosaics))
-    default_goal = "max" if get_metric(metric).higher_is_better else "min"
+    demosaic = ck.string(o.get("demosaic", study.demosaics[0]), f"{key}.demosaic", (*study.demosaics, BEST))
+    default_goal = "min" if metric == SNR10 else ("max" if get_metric(metric).higher_is_better else "min")
     bound = None
     if constraint:
         if ("max" in o) == ("min" in o):
@@ -238,9 +279,16 @@ def _objective(ck: _Checker, o, key: str, study, constraint: bool) -> Objective:
             bound = v
         else:
             bound = ck.number(v, f"{key}.{side}")
-        return Objective(metric, scene, lum, demosaic, side, bound)
+        return Objective(metric, scene, lum, demosaic, side, bound, sweep)
     goal = ck.string(o.get("goal", default_goal), f"{key}.goal", ("min", "max"))
-    return Objective(metric, scene, lum, demosaic, goal)
+    return Objective(metric, scene, lum, demosaic, goal, sweep=sweep)
+
+
+def _snr10_sweep(ck: _Checker, o: dict, key: str) -> tuple:
+    v = o.get("luminances", list(SNR10_SWEEP))
+    if not isinstance(v, list) or len(v) < 2:
+        ck.fail(f"{key}.luminances", "must be a list of at least 2 luminances (cd/m^2) to find YSNR 10 between")
+    return tuple(sorted({ck.number(x, f"{key}.luminances[{i}]", positive=True) for i, x in enumerate(v)}))
 
 
 def parse_design(data: dict, *, where: str = "design", base: Path | None = None) -> DesignConfig:
@@ -297,10 +345,15 @@ def parse_design(data: dict, *, where: str = "design", base: Path | None = None)
                 ck.number(o["luminance"], f"{key}[{i}].luminance", positive=True)
     # the first objective's luminance is the study's; any other (scene,
     # luminance) an objective names is a sweep of that scene's metrics there
-    lums = [float(o.get("luminance", 100.0)) for o in [*objs_in, *cons_in]]
+    lums = [float(o.get("luminance", 100.0)) for o in [*objs_in, *cons_in] if o.get("metric") != SNR10] or [100.0]
     sweeps = list(study_in.get("sweep", [])) if isinstance(study_in.get("sweep", []), list) else study_in["sweep"]
     extra: dict = {}
-    for o in [*objs_in, *cons_in]:
+    for i, o in enumerate([*objs_in, *cons_in]):
+        if o.get("metric") == SNR10:  # the gray bar's YSNR at every luminance of its sweep
+            scene = o.get("scene", "gray-bar")
+            for lum in _snr10_sweep(ck, o, f"objective[{i}]"):
+                extra.setdefault((scene, lum), []).append("ysnr")
+            continue
         lum = float(o.get("luminance", lums[0]))
         if lum != lums[0] and isinstance(o.get("scene"), str) and isinstance(o.get("metric"), str):
             extra.setdefault((o["scene"], lum), []).append(o["metric"])
@@ -308,6 +361,8 @@ def parse_design(data: dict, *, where: str = "design", base: Path | None = None)
 
     for (scene, lum), ms in extra.items():
         fed = list(dict.fromkeys((METRICS[m].parent or m) if m in METRICS else m for m in ms))
+        if lum == lums[0]:  # the study's own luminance: every metric of the scene is computed there already
+            continue
         sweeps.append({"scene": scene, "luminance": [lum], "metrics": fed})
     study_data = {"name": name, "seed": seed, "cfas": ["bayer"], **study_in, "luminances": [lums[0]]}
     if sweeps:

@@ -12,7 +12,7 @@ report stage's settings :data:`cfa_mitsuba.report.figure.RC`).
 
 from __future__ import annotations
 
-__all__ = ["letter_colours", "front_figure", "proxy_figure", "agreement_figure", "card_figure"]
+__all__ = ["letter_colours", "front_figure", "proxy_figure", "agreement_figure", "card_figure", "agreement_text"]
 
 import numpy as np
 
@@ -49,10 +49,10 @@ def front_figure(table, objectives):
     and 95 % interval; Pareto candidates filled, dominated ones hollow,
     named CFAs as labelled squares."""
     pairs = _pairs(objectives)
-    fig = new_figure(4.4 * len(pairs) + 0.4, 4.0)
+    fig = new_figure(4.6 * len(pairs) + 0.4, 4.6)
     named = table[table["kind"] == "named"]
     for k, (i, j) in enumerate(pairs):
-        ax = fig.add_axes((0.07 + k / len(pairs) * 0.95, 0.14, 0.95 / len(pairs) - 0.09, 0.76))
+        ax = fig.add_axes((0.08 + k / len(pairs) * 0.95, 0.17, 0.95 / len(pairs) - 0.11, 0.63))
         ox = objectives[i]
         oy = objectives[j] if j is not None else None
 
@@ -71,44 +71,63 @@ def front_figure(table, objectives):
             if len(sel):
                 x, y, xe, ye = xy(sel)
                 ax.errorbar(x, y, xerr=xe, yerr=ye, linestyle="none", capsize=2, **style)
-        for n, (_, r) in enumerate(named.iterrows()):
+        for n, (_, r) in enumerate(named.iterrows()):  # named in the legend: labels never overlap
             x, y, xe, ye = xy(named.loc[[_]])
-            ax.errorbar(x, y, xerr=xe, yerr=ye, fmt="s", color=_NAMED[n % len(_NAMED)], capsize=2, ms=7)
-            ax.annotate(r["cfa"], (x[0], y[0]), textcoords="offset points", xytext=(5, 5), fontsize=8,
-                        color=_NAMED[n % len(_NAMED)])
-        ax.set_xlabel(f"{ox.label} ({'lower' if ox.goal == 'min' else 'higher'} is better)", fontsize=8)
+            ax.errorbar(x, y, xerr=xe, yerr=ye, fmt="s", color=_NAMED[n % len(_NAMED)], capsize=2, ms=7,
+                        label=r["cfa"])
+        ax.set_xlabel(_axis_title(ox), fontsize=8)
         if oy is not None:
-            ax.set_ylabel(f"{oy.label} ({'lower' if oy.goal == 'min' else 'higher'} is better)", fontsize=8)
+            ax.set_ylabel(_axis_title(oy), fontsize=8)
         else:
             ax.set_yticks([])
-        if k == 0:
-            ax.legend(loc="best", fontsize=7)
+    handles, labels = fig.axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="upper center", ncol=min(len(labels), 4), fontsize=7, frameon=False)
     return fig
 
 
-def proxy_figure(cands, named_proxies):
-    """aliasing against noise for every candidate (colour: the colour proxy
+def _axis_title(o) -> str:
+    """An axis named by metric, condition and unit, with its direction (line-wrapped)."""
+    title = getattr(o, "title", o.label)
+    return f"{title}\n({'lower' if o.goal == 'min' else 'higher'} is better)"
+
+
+#: Axis names of the proxies (design/proxy.py), each lower-is-better.
+PROXY_TITLES = {
+    "aliasing": "aliasing proxy (carrier crosstalk + sampling)",
+    "aliasing_h": "horizontal aliasing proxy",
+    "blur": "blur proxy: 1 / edge MTF50 [px/cy]",
+    "neg_capacity": "minus edge information capacity [bit/px]",
+    "noise": "noise proxy: rms Y noise / Y on the grey",
+    "snr10": "SNR10 proxy [cd/m²]",
+    "colour": "colour proxy: training-fit ΔE00",
+}
+
+
+def proxy_figure(cands, named_proxies, proxies=("aliasing", "noise")):
+    """The first two proxies the objectives use (x, y; ``noise`` and
+    ``aliasing`` by default) for every candidate (colour: the colour proxy
     when it varies), the chosen ones ringed, the named CFAs as squares."""
-    fig = new_figure(6.4, 4.4)
-    ax = fig.add_axes((0.12, 0.12, 0.72, 0.8))
+    xn, yn = (list(proxies) + ["aliasing", "noise"])[:2] if len(proxies) < 2 else list(proxies)[:2]
+    if xn == yn:
+        yn = "noise" if xn != "noise" else "aliasing"
+    fig = new_figure(6.4, 4.6)
+    ax = fig.add_axes((0.13, 0.12, 0.7, 0.8))
     c = cands["colour"].to_numpy(float)
     varies = np.ptp(c) > 1e-9
     kw = dict(c=c, cmap="viridis") if varies else dict(color="#88CCEE")
-    sc = ax.scatter(cands["aliasing"], cands["noise"], s=4, alpha=0.6, rasterized=True,
-                    label=f"{len(cands):,} candidates", **kw)
+    sc = ax.scatter(cands[xn], cands[yn], s=4, alpha=0.6, rasterized=True, label=f"{len(cands):,} candidates", **kw)
     if varies:
         cb = fig.colorbar(sc, cax=fig.add_axes((0.86, 0.12, 0.025, 0.8)))
         cb.set_label("colour proxy (training-fit ΔE00)")
-    for kind, mk, col in (("best", "o", "#CC3311"), ("sample", "o", "#222222")):
+    for kind, col in (("best", "#CC3311"), ("sample", "#222222")):
         sel = cands[cands["chosen"] == kind]
-        ax.scatter(sel["aliasing"], sel["noise"], s=40, facecolors="none", edgecolors=col, linewidths=1.2,
+        ax.scatter(sel[xn], sel[yn], s=40, facecolors="none", edgecolors=col, linewidths=1.2,
                    label=f"full chain: {'best by proxy' if kind == 'best' else 'agreement sample'}")
-    for n, (name, p) in enumerate(named_proxies.items()):
-        ax.scatter([p["aliasing"]], [p["noise"]], marker="s", s=40, color=_NAMED[n % len(_NAMED)])
-        ax.annotate(name, (p["aliasing"], p["noise"]), textcoords="offset points", xytext=(4, 4), fontsize=8)
-    ax.set_xlabel("aliasing proxy (carrier crosstalk + channel sampling; lower is better)")
-    ax.set_ylabel("noise proxy (relative luminance noise; lower is better)")
-    ax.legend(loc="best", fontsize=7)
+    for n, (name, p) in enumerate(named_proxies.items()):  # named in the legend: labels never overlap
+        ax.scatter([p[xn]], [p[yn]], marker="s", s=40, color=_NAMED[n % len(_NAMED)], label=name)
+    ax.set_xlabel(f"{PROXY_TITLES.get(xn, xn)} (lower is better)", fontsize=8)
+    ax.set_ylabel(f"{PROXY_TITLES.get(yn, yn)} (lower is better)", fontsize=8)
+    ax.legend(loc="best", fontsize=7, ncol=2)
     return fig
 
 
@@ -121,11 +140,20 @@ def agreement_figure(table, agree):
         ax.scatter(sel["proxy_score"], sel["score"], color=col, s=25, label=kind)
     ax.set_xlabel("proxy score (lower is better)")
     ax.set_ylabel("full-chain score (higher is better)")
-    rho = agree.get("combined")
-    ax.set_title("Spearman " + ("n/a" if rho is None else f"{-rho:+.2f} (proxy vs full chain, sign: lower-better)"),
-                 fontsize=8)
+    ax.set_title("proxy against full chain: " + agreement_text(agree), fontsize=8)
     ax.legend(fontsize=7)
     return fig
+
+
+def agreement_text(agree) -> str:
+    """The one agreement number the page and the plot both show: Spearman
+    of minus the proxy score against the full-chain score (+1: the proxy
+    orders the candidates as the full chain does), with its interval."""
+    rho = agree.get("combined")
+    if rho is None:
+        return "Spearman n/a (fewer than 3 candidates)"
+    ci = agree.get("combined_interval")
+    return f"Spearman {rho:+.2f}" + (f" [{ci[0]:+.2f}, {ci[1]:+.2f}]" if ci else "") + f", n = {agree['n']}"
 
 
 def card_figure(cfa, title: str):

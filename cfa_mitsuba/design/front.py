@@ -21,7 +21,8 @@ Two CFAs whose intervals overlap everywhere are ties: both stay.
 
 from __future__ import annotations
 
-__all__ = ["proxy_scores", "select", "dominates", "pareto", "separating", "fullchain_scores", "agreement"]
+__all__ = ["proxy_scores", "select", "dominates", "pareto", "separating", "fullchain_scores", "agreement",
+           "spearman_interval", "objective_prediction", "AGREEMENT_TARGET"]
 
 import numpy as np
 
@@ -33,9 +34,7 @@ def _normalise(v: np.ndarray) -> np.ndarray:
 
 def proxy_scores(df, objectives) -> np.ndarray:
     """(N,) the combined proxy score of each candidate (module doc)."""
-    norm = {p: _normalise(df[p].to_numpy(dtype=float)) for o in objectives for p in o.proxies}
-    per = [np.mean([norm[p] for p in o.proxies], axis=0) for o in objectives]
-    return np.mean(per, axis=0)
+    return np.mean([objective_prediction(df, o) for o in objectives], axis=0)
 
 
 def select(df, proxies, n_best: int, n_sample: int, seed: int) -> tuple[list[int], list[int]]:
@@ -116,16 +115,44 @@ def fullchain_scores(table, objectives) -> np.ndarray:
     return np.mean(per, axis=0)
 
 
+#: The agreement a design aims for on every objective (issue 26).
+AGREEMENT_TARGET = 0.8
+
+
+def spearman_interval(rho: float | None, n: int, level: float = 0.95) -> list | None:
+    """[low, high]: the interval of a Spearman correlation by Fisher's z with
+    the Fieller-Hartley-Pearson variance 1.06 / (n - 3) (Fieller, Hartley &
+    Pearson, Biometrika 44 (1957) 470-481); None when n <= 3 or rho is None."""
+    from scipy.stats import norm
+
+    if rho is None or n <= 3:
+        return None
+    z = np.arctanh(np.clip(rho, -0.999999, 0.999999))
+    half = norm.ppf(0.5 + level / 2) * np.sqrt(1.06 / (n - 3))
+    return [float(np.tanh(z - half)), float(np.tanh(z + half))]
+
+
+def objective_prediction(df, o) -> np.ndarray:
+    """(N,) the proxy's prediction of objective ``o`` (lower is better): the
+    mean of its proxies, each min-max normalised over ``df``'s rows."""
+    return np.mean([_normalise(df[p].to_numpy(dtype=float)) for p in o.proxies], axis=0)
+
+
 def agreement(table, objectives) -> dict:
     """Spearman rank correlations between proxy and full chain over the
     evaluated candidates: the combined scores (proxy score against minus the
     full-chain score, so +1 is perfect agreement) and per objective (its
-    proxy prediction against the value, oriented the same way)."""
+    proxy prediction against the value, oriented the same way), each with
+    its 95 % interval (:func:`spearman_interval`), the target
+    (:data:`AGREEMENT_TARGET`), whether each objective separates the
+    candidates (:func:`separating`) and whether every separating objective
+    meets the target."""
     from scipy.stats import spearmanr
 
     cand = table[table["kind"] == "candidate"]
-    out = {"n": int(len(cand))}
-    if len(cand) < 3:
+    n = int(len(cand))
+    out = {"n": n, "target": AGREEMENT_TARGET}
+    if n < 3:
         out["combined"] = None
         return out
 
@@ -134,10 +161,20 @@ def agreement(table, objectives) -> dict:
         return None if not np.isfinite(r) else float(r)
 
     out["combined"] = rho(-cand["proxy_score"].to_numpy(), cand["score"].to_numpy())
-    per = {}
+    out["combined_interval"] = spearman_interval(out["combined"], n)
+    per, ci, sep = {}, {}, {}
     for o in objectives:
-        pred = np.mean([_normalise(cand[p].to_numpy(dtype=float)) for p in o.proxies], axis=0)
+        sep[o.label] = separating(cand, o)
         val = cand[o.label].to_numpy(dtype=float)
-        per[o.label] = rho(-pred, -val if o.goal == "min" else val)
+        ok = np.isfinite(val)
+        pred = objective_prediction(cand, o)
+        per[o.label] = rho(-pred[ok], (-val if o.goal == "min" else val)[ok]) if ok.sum() >= 3 else None
+        ci[o.label] = spearman_interval(per[o.label], int(ok.sum()))
     out["per_objective"] = per
+    out["per_objective_interval"] = ci
+    # an objective whose candidates differ by less than their own intervals
+    # has no order for a proxy to predict: its rank correlation is noise
+    out["separating"] = sep
+    judged = [k for k in per if sep[k]]
+    out["meets_target"] = bool(judged) and all(per[k] is not None and per[k] >= AGREEMENT_TARGET for k in judged)
     return out

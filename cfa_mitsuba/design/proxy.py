@@ -26,16 +26,46 @@
   alias at a vertical frequency that the edge's projection averages out),
   so a tile with a luminance-heavy channel in full columns scores worse
   than its transpose.
-* ``noise`` (lower is better): relative rms noise of the luminance Y on an
-  18 % grey after the colour matrix, at the objectives' lowest luminance
-  (``noise_xyz``, the rms over X, Y and Z, is reported beside it).  Each
-  channel's electrons follow from its response to the scene white and the
-  auto exposure (the most sensitive channel present fills 95 % of the well
-  at the reference luminance: a W pixel shortens every colour pixel's
-  exposure), shot plus read noise; a channel's noise is carried into the
-  image by interpolation: a 5 x 5 binomial normalised convolution of its
-  samples, whose variance factor g_c (1 at a sample, sum w^2 / (sum w)^2
-  between samples) is averaged over the tile.
+* ``noise`` (lower is better): relative rms noise of the luminance Y on a
+  mid-grey after demosaicking and the colour matrix, at the objectives'
+  lowest luminance (``noise_xyz``, the rms over X, Y and Z, beside it).
+  Each channel's electrons on the grey follow from the exposure policy
+  (:func:`grey_electrons`): under ``reference`` the most sensitive channel
+  present fills 95 % of the well at the reference luminance (a W pixel
+  shortens every colour pixel's exposure); under the exposure ``program``
+  (the default) the time is the metered one capped at ``max_exposure_s``,
+  so in dim light every CFA integrates the same time and a sensitive
+  channel simply collects more.  Shot plus read noise give each balanced
+  channel's relative variance v_c.  For the linear demosaics (``bilinear``,
+  ``laplacian``) the propagation is exact (:func:`demosaic_noise_gains`):
+  Y at output pixel p is sum_q w_pq raw_q with w = sum_k M_kY dout_k(p) /
+  draw(q), the demosaic's weights at p's CFA phase combined through the
+  colour matrix's Y column M_kY, so var Y(p) = sum_q w_pq^2 v_ch(q); the
+  weights are read off the demosaic itself (an impulse at each tile
+  position) and var Y averaged over the tile's phases.  A nonlinear
+  demosaic gets the Laplacian's gains (its linear core).
+* ``blur`` (lower is better, px per cycle): 1 / MTF50 of a grey slanted
+  edge through the optics (diffraction at 550 nm, the pixel aperture) and
+  the demosaic, from the same impulse responses: a vertical edge sees each
+  response summed down its columns, and the slanted edge's super-sampled
+  ESF averages the tile's phases, so the measured MTF is that of the
+  phase-averaged line spread function (:func:`edge_mtf50`); a grey edge,
+  white balanced, carries no chrominance, so the colour carriers do not
+  enter; the best over the objectives' demosaics.
+* ``neg_capacity`` (lower is better, bit/px): minus the slanted edge's
+  information capacity predicted from the same impulse responses
+  (:func:`edge_capacity`): the grey edge's MTF as for ``blur``, the noise
+  power spectrum each channel's noise makes through the demosaic and the
+  colour matrix, the channels' noise on the edge's mean level; the best
+  over the objectives' demosaics.
+* ``snr10`` (lower is better, cd/m^2): the mean scene luminance at which
+  the predicted YSNR (1 / ``noise``) reaches 10, ISO 12232's noise-based
+  speed point.  In dim light the exposure is the same at every luminance
+  (the program's capped time; the reference policy's kept one), so each
+  channel's electrons are a_c L and the Y variance is
+  sum_c G_c (a_c L + r^2) / (a_c L)^2 = 1 / 100, a quadratic in L:
+  L = (B + sqrt(B^2 + 4 C / 100)) / (2 / 100), B = sum_c G_c / a_c,
+  C = r^2 sum_c G_c / a_c^2 (G_c the demosaic's noise gains, r the read noise).
 * ``colour`` (lower is better): mean CIEDE2000 of the 190 training
   reflectances after the white-preserving colour fit (what the ISP does,
   :func:`cfa_mitsuba.isp.colour_matrix.fit_colour_matrix`); the Vora-Trussell
@@ -49,8 +79,10 @@ letters present (:class:`ColourModel`).
 from __future__ import annotations
 
 __all__ = ["ProxySettings", "ColourModel", "colour_model", "evaluate_layouts", "PROXY_NAMES",
-           "frequency_weights"]
+           "frequency_weights", "demosaic_noise_gains", "grey_electrons", "edge_mtf50", "edge_capacity",
+           "LINEAR_DEMOSAICS"]
 
+import dataclasses
 import functools
 from dataclasses import dataclass
 
@@ -61,10 +93,18 @@ from ..colorimetry import delta_e00
 from ..isp.colour_matrix import electrons_per_radiance_of, fit_colour_matrix
 
 #: The proxies, each lower-is-better.
-PROXY_NAMES = ("aliasing", "aliasing_h", "noise", "colour")
+PROXY_NAMES = ("aliasing", "aliasing_h", "blur", "neg_capacity", "noise", "snr10", "colour")
 _F0 = 0.05
 _GREY = 0.18
 _AE_LEVEL = 0.95
+#: The gray bar (YSNR's chart, render/charts.py): its mean reflectance is
+#: 0.289, its mid-grey step 0.145 and its white 0.876, so at a mean scene
+#: luminance L the measured grey sits at about 0.5 L and the brightest
+#: pixel (the program's meter) at about 3.0 L.
+_GREY_OF_MEAN = 0.145 / 0.289
+_BRIGHT_OF_MEAN = 0.876 / 0.289
+#: The demosaics whose noise propagation is exact (linear in the mosaic).
+LINEAR_DEMOSAICS = ("bilinear", "laplacian")
 
 
 @dataclass(frozen=True)
@@ -78,6 +118,13 @@ class ProxySettings:
     well_e: float = 6200.0
     read_noise_e: float = 6.2
     luminance_ratio: float = 1.0
+    policy: str = "reference"        # the exposure policy: 'program' (and 'bayer'), 'reference', 'each'
+    luminance_cd_m2: float = 100.0    # the (lowest) objective luminance the noise is predicted at
+    max_exposure_s: float = 1.0 / 30.0
+    fill_factor: float = 1.0
+    demosaics: tuple = ("bilinear",)  # the noise proxy is the best (lowest) over these
+    reference_luminance_cd_m2: float = 100.0  # where the 'reference' policy meters
+    edge_luminance_cd_m2: float = 100.0       # the slanted edge's luminance (the capacity proxy's)
 
 
 @dataclass(frozen=True)
@@ -90,14 +137,25 @@ class ColourModel:
     colour_de00: float
     vora_trussell: float
     luminance_share: np.ndarray  # (C,) |M_cY| / sum |M_cY|
+    white_rate: np.ndarray = None  # (C,) electrons per s per m^2 of pixel per (cd/m^2 of D65) at f/0.5 (module doc)
+    lum_weights: np.ndarray = None  # (C,) the Laplacian demosaic's luminance reference weights
 
 
-def colour_model(qe_bands: np.ndarray, wavelengths=spectra.DEFAULT_WAVELENGTHS) -> ColourModel:
-    """The :class:`ColourModel` of (C, B) band QEs under D65."""
+def colour_model(qe_bands: np.ndarray, wavelengths=spectra.DEFAULT_WAVELENGTHS, *, well_e: float | None = None,
+                 read_noise_e: float = 0.0) -> ColourModel:
+    """The :class:`ColourModel` of (C, B) band QEs under D65; with ``well_e``
+    the colour matrix is the image processor's noise-regularised fit (the
+    white filling the most sensitive channel's well, isp/pipeline.py)."""
+    from ..isp.colour_matrix import channel_noise, luminance_weights
+
     wl = spectra.validate_wavelengths(wavelengths)
     white = spectra.illuminant("D65", wl)
     epr = electrons_per_radiance_of(qe_bands, wl)
-    fit = fit_colour_matrix(epr, white, wl)
+    white_e = epr @ white
+    noise = None
+    if well_e and np.all(white_e > 0):
+        noise = channel_noise(float(well_e) * white_e / white_e.max(), read_noise_e=float(read_noise_e))
+    fit = fit_colour_matrix(epr, white, wl, channel_noise=noise)
     rel = fit.matrix / fit.white_xyz[None, :]
     resp = epr @ white
     refl = spectra.training_reflectances(wl)
@@ -106,7 +164,9 @@ def colour_model(qe_bands: np.ndarray, wavelengths=spectra.DEFAULT_WAVELENGTHS) 
     de = delta_e00(cam @ fit.matrix / fit.white_xyz[1] * fit.white_xyz[1], spectra.xyz_from_radiance(radiance, wl),
                    fit.white_xyz)
     share = np.abs(rel[:, 1]) / np.sum(np.abs(rel[:, 1]))
-    return ColourModel(rel, resp / resp.max(), float(np.mean(de)), vora_trussell(epr, white, wl), share)
+    rate = resp / float(spectra.luminance_cd_m2(white, wl))
+    return ColourModel(rel, resp / resp.max(), float(np.mean(de)), vora_trussell(epr, white, wl), share, rate,
+                       luminance_weights(epr, white, wl))
 
 
 def vora_trussell(epr: np.ndarray, white: np.ndarray, wavelengths) -> float:
@@ -139,28 +199,201 @@ def frequency_weights(h: int, w: int, f_number: float, pixel_pitch_um: float) ->
     return s
 
 
+class _Tile:
+    """What the demosaics read of a CFA: its tile of filter names and its channels."""
+
+    def __init__(self, pattern: np.ndarray, channels: tuple):
+        self.pattern, self.channels = pattern, channels
+
+
+def _block(n: int, period: int, support: int = 12) -> int:
+    """A multiple of ``period`` at least 2 ``support``: room for one impulse response."""
+    return period * max(2, -(-2 * support // period))
+
+
+def _impulse_responses(layout: np.ndarray, channels: tuple, matrix_rel: np.ndarray, method: str,
+                       lum_weights=None) -> tuple[np.ndarray, int]:
+    """((bh, n, bw, 3) XYZ / white response to an impulse at each of the
+    tile's n positions, each in its own block; the impulse's column in its
+    block).  One demosaic call: each impulse in a block of zeros wide enough
+    that the responses do not meet (the methods here reach a few tiles)."""
+    from ..isp import demosaic
+
+    h, w = layout.shape
+    names = np.asarray(channels, dtype=object)
+    tile = _Tile(names[layout], tuple(channels))
+    bh, bw = _block(h, h), _block(w, w)
+    n = h * w
+    raw = np.zeros((bh, bw * n))
+    r0, c0 = (bh // h // 2) * h, (bw // w // 2) * w
+    for k in range(n):
+        raw[r0 + k // w, k * bw + c0 + k % w] = 1.0
+    opts = {"luminance_weights": list(map(float, lum_weights))} if method != "bilinear" and lum_weights is not None \
+        else {}
+    out = demosaic(raw, tile, "laplacian" if method not in LINEAR_DEMOSAICS else method, **opts)
+    resp = out @ np.asarray(matrix_rel, dtype=np.float64)
+    return resp.reshape(bh, n, bw, 3), c0
+
+
+def demosaic_noise_gains(layout: np.ndarray, channels: tuple, matrix_rel: np.ndarray, method: str,
+                         lum_weights=None) -> np.ndarray:
+    """(C, 3) noise gains of a tile through a linear demosaic and the colour
+    matrix (module doc): G[c, j] = the mean over the tile's phases of
+    sum_q (sum_k M_kj dout_k(p) / draw(q))^2 over the raw pixels q of channel
+    c, so that var(XYZ_j / white_j) = sum_c G[c, j] v_c for independent
+    balanced-channel noise of relative variance v_c.
+
+    ``layout`` (h, w) holds indices into ``channels`` (every one present);
+    ``matrix_rel`` (C, 3) the colour matrix over the white's XYZ.
+    """
+    return _gains_and_lsf(layout, channels, matrix_rel, method, lum_weights)[0]
+
+
+#: Radial rings of the proxy's noise power spectrum over 0..0.5 cy/px.
+_NPS_RINGS = 12
+#: The slanted edge (render/charts.py EDGE_REFLECTANCES): dark 0.15, bright
+#: 0.60, half of the region each, so its mean is 0.375 of the scene's white.
+_EDGE = (0.15, 0.60)
+
+
+def edge_capacity(lsf, nps_per_channel, level_var, step: float, f_number: float, pixel_pitch_um: float,
+                  roi_width_px: float = 20.0) -> float:
+    """Information capacity (bit/px) of the slanted edge predicted for a
+    linear demosaic: the metric's formula (:mod:`cfa_mitsuba.metrics.info_capacity`)
+    with S(f) = (step / 2)^2 MTF(f)^2 (MTF of the optics and the demosaic's
+    grey line spread function, :func:`edge_mtf50`'s) and N(f) = sum_c var_c
+    NPS_c(f), NPS_c the radially averaged power spectrum of the Y responses
+    to channel c's impulses (phases averaged), var_c its noise variance
+    (white = 1 units) on the edge's mean level."""
+    from ..metrics.info_capacity import capacity_bits_per_px
+    from ..optics.diffraction import diffraction_mtf
+
+    offsets, weights, zipper = lsf
+    centres = (np.arange(_NPS_RINGS) + 0.5) * 0.5 / _NPS_RINGS
+    f = np.concatenate([[0.0], centres, [0.5]])
+    h = np.abs(np.exp(-2j * np.pi * np.outer(f, offsets)) @ weights)
+    h = h / h[0] if h[0] > 0 else h
+    m = h * np.abs(np.sinc(f)) * diffraction_mtf(f / (pixel_pitch_um * 1e-3), 550.0, f_number)
+    nps = np.asarray(level_var, dtype=np.float64) @ nps_per_channel
+    nps = np.interp(f, centres, nps) + step ** 2 * zipper / roi_width_px
+    return capacity_bits_per_px(f, (0.5 * step) ** 2 * m ** 2, np.maximum(nps, 1e-300))
+
+
+def _gains_and_lsf(layout, channels, matrix_rel, method, lum_weights):
+    """(noise gains (C, 3), the grey line spread function of Y across columns
+    averaged over the tile's phases: (offsets px, weights))."""
+    resp, c0 = _impulse_responses(layout, channels, matrix_rel, method, lum_weights)
+    bh, n, bw, _ = resp.shape
+    energy = (resp ** 2).sum(axis=(0, 2))                       # (n, 3): each impulse's
+    gains = np.zeros((len(channels), 3))
+    np.add.at(gains, layout.ravel(), energy)
+    w = layout.shape[1]
+    lsf = np.zeros(2 * bw)
+    for k in range(n):  # a vertical edge sees each response summed down its columns, about its impulse
+        col = resp[:, k, :, 1].sum(axis=0)
+        start = bw - (c0 + k % w)
+        lsf[start:start + bw] += col
+    offsets = np.arange(2 * bw) - bw
+    # each output phase's own line spread function against their average: a
+    # grey edge rendered differently at each phase is what the edge's noise
+    # image keeps as zipper (px^2 of ESF difference summed across the edge)
+    h = layout.shape[0]
+    rr, cc = np.meshgrid(np.arange(bh), np.arange(bw), indexing="ij")
+    phase = ((rr % h) * w + cc % w).ravel()
+    per_phase = np.zeros((n, 2 * bw))
+    for k in range(n):
+        np.add.at(per_phase, (phase, (c0 + k % w - cc).ravel() + bw), resp[:, k, :, 1].ravel())
+    per_phase = per_phase[:, ::-1]  # index by output minus input, as lsf
+    esf = np.cumsum(per_phase, axis=1)
+    zipper = float(np.mean(np.sum((esf - esf.mean(axis=0)[None, :]) ** 2, axis=1)))
+    power = np.abs(np.fft.fft2(resp[..., 1].transpose(1, 0, 2), axes=(1, 2))) ** 2   # (n, bh, bw): each impulse's
+    f = np.hypot(np.fft.fftfreq(bh)[:, None], np.fft.fftfreq(bw)[None, :]).ravel()
+    rings = np.minimum((f / 0.5 * _NPS_RINGS).astype(int), _NPS_RINGS)
+    counts = np.bincount(rings, minlength=_NPS_RINGS + 1)[:_NPS_RINGS]
+    per_channel = np.zeros((len(channels), _NPS_RINGS))
+    for k in range(n):  # each channel's noise spectrum, radially averaged, phases averaged
+        ring = np.bincount(rings, weights=power[k].ravel(), minlength=_NPS_RINGS + 1)[:_NPS_RINGS]
+        per_channel[layout.ravel()[k]] += ring / np.maximum(counts, 1) / n
+    return gains / n, (offsets, lsf / n, zipper), per_channel
+
+
 @functools.lru_cache(maxsize=8)
-def _kernel() -> np.ndarray:
-    b = np.array([1.0, 4.0, 6.0, 4.0, 1.0])
-    return np.outer(b, b) / 256.0
+def _dtft(n: int, start: int) -> tuple[np.ndarray, np.ndarray]:
+    """(f, the DTFT matrix at f = 0..1 cy/px, 401 points, of offsets start..start+n-1)."""
+    f = np.linspace(0.0, 1.0, 401)
+    return f, np.exp(-2j * np.pi * np.outer(f, np.arange(start, start + n)))
 
 
-def interpolation_gain(masks: np.ndarray) -> np.ndarray:
-    """(N, K) mean variance factor of each channel after a 5 x 5 binomial
-    normalised convolution of its samples (masks (N, K, h, w) float, periodic)."""
-    kern = _kernel()
-    s1 = np.zeros_like(masks)
-    s2 = np.zeros_like(masks)
-    for dy in range(-2, 3):
-        for dx in range(-2, 3):
-            rolled = np.roll(masks, (dy, dx), axis=(2, 3))
-            wgt = kern[dy + 2, dx + 2]
-            s1 += wgt * rolled
-            s2 += wgt * wgt * rolled
-    with np.errstate(divide="ignore", invalid="ignore"):
-        between = np.where(s1 > 0, s2 / np.maximum(s1, 1e-300) ** 2, 1.0)
-    g = np.where(masks > 0, 1.0, between)
-    return g.mean(axis=(2, 3))
+@functools.lru_cache(maxsize=8)
+def _optics_mtf(f_number: float, pixel_pitch_um: float) -> np.ndarray:
+    """Diffraction at 550 nm times the pixel aperture on :func:`_dtft`'s frequencies."""
+    from ..optics.diffraction import diffraction_mtf
+
+    f = np.linspace(0.0, 1.0, 401)
+    return np.abs(np.sinc(f)) * diffraction_mtf(f / (pixel_pitch_um * 1e-3), 550.0, f_number)
+
+
+def edge_mtf50(lsf, f_number: float, pixel_pitch_um: float) -> float:
+    """MTF50 (cy/px) of a grey slanted edge through the optics (diffraction
+    at 550 nm, the pixel's box aperture) and the demosaic's phase-averaged
+    line spread function ``lsf`` = (offsets px, weights): what the slanted
+    edge's super-sampled ESF measures of a periodic, linear system (its
+    phases averaged); the first crossing of 0.5 up to 1 cy/px."""
+
+    offsets, weights = lsf[:2]
+    f, kernel = _dtft(len(offsets), int(offsets[0]))
+    h = np.abs(kernel @ weights)
+    h = h / h[0] if h[0] > 0 else h
+    m = h * _optics_mtf(f_number, pixel_pitch_um)
+    below = np.flatnonzero(m < 0.5)
+    if below.size == 0:
+        return float(f[-1])
+    i = int(below[0])
+    return float(f[i - 1] + (m[i - 1] - 0.5) * (f[i] - f[i - 1]) / (m[i - 1] - m[i]))
+
+
+def grey_electrons(model: ColourModel, settings: ProxySettings, *, level_of_mean: float = _GREY_OF_MEAN,
+                   bright_of_mean: float = _BRIGHT_OF_MEAN, reference_level: float = _GREY) -> np.ndarray:
+    """(C,) electrons each channel collects on the measured mid-grey (module doc).
+
+    ``reference`` / ``each``: 18 % of 95 % of the well in the most sensitive
+    channel at the reference luminance, times the luminance ratio.
+    ``program``: the grey's electron rate (the channels' absolute response to
+    D65 at the grey's luminance, through the f-number, the pixel area and
+    fill factor) times the program's time: the metered time (the brightest
+    pixel's most sensitive channel at 95 % of the well) capped at
+    ``max_exposure_s``; gains add no electrons.  The defaults measure the
+    gray bar's mid-grey; ``level_of_mean`` and ``bright_of_mean`` (the
+    measured level and the brightest pixel over the scene's mean
+    luminance) and ``reference_level`` (the measured reflectance) another
+    chart's."""
+    if settings.policy in ("reference", "each") or model.white_rate is None:
+        return (reference_level * _AE_LEVEL * settings.well_e * settings.luminance_ratio
+                * model.white_response / model.white_response.max())
+    optics = np.pi / (1.0 + 4.0 * settings.f_number ** 2) * (settings.pixel_pitch_um * 1e-6) ** 2 * settings.fill_factor
+    rate = model.white_rate * optics * settings.luminance_cd_m2   # e-/s of a D65 field at the mean luminance
+    metered = _AE_LEVEL * settings.well_e / (rate.max() * bright_of_mean)
+    return rate * level_of_mean * min(metered, settings.max_exposure_s)
+
+
+def _noise_gains(layout_row, h, w, idx, m: ColourModel, method: str, cache: dict) -> tuple:
+    key = (h, w, layout_row.tobytes(), idx, method, m.matrix_rel.tobytes())
+    if key not in cache:
+        lut = {j: i for i, j in enumerate(idx)}
+        local = np.vectorize(lut.__getitem__)(layout_row.reshape(h, w))
+        cache[key] = _gains_and_lsf(local, tuple(str(i) for i in idx), m.matrix_rel, method, m.lum_weights)
+    return cache[key]
+
+
+_GAIN_CACHE: dict = {}
+
+
+def _snr10(gain_y: np.ndarray, per_lux: np.ndarray, read_noise_e: float, target: float = 10.0) -> float:
+    """The luminance (cd/m^2) where 1 / noise reaches ``target`` (module doc)."""
+    b = float(np.sum(gain_y / per_lux))
+    c = float(read_noise_e) ** 2 * float(np.sum(gain_y / per_lux ** 2))
+    q = 1.0 / target ** 2
+    return (b + np.sqrt(b * b + 4.0 * q * c)) / (2.0 * q)
 
 
 def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings: ProxySettings) -> dict:
@@ -183,10 +416,14 @@ def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings
     per_channel = np.einsum("nkij,ij->nk", power, s)
     crosstalk = per_channel.sum(axis=1)
     horizontal = np.einsum("nkj,j->nk", power[:, :, 0, :], s[0, :])  # carriers with f_y = 0
-    gain = interpolation_gain(masks)
     present = dens > 0
-    out = {name: np.zeros(n) for name in ("sampling", "aliasing_h", "noise", "noise_xyz",
-                                                  "colour", "vora_trussell")}
+    out = {name: np.zeros(n) for name in ("sampling", "aliasing_h", "noise", "noise_xyz", "snr10", "blur", "neg_capacity",
+                                          "colour", "vora_trussell")}
+    dim = dataclasses.replace(settings, luminance_cd_m2=1.0,
+                              luminance_ratio=1.0 / settings.reference_luminance_cd_m2)
+    edge_settings = dataclasses.replace(settings, luminance_cd_m2=settings.edge_luminance_cd_m2,
+                                        luminance_ratio=settings.edge_luminance_cd_m2
+                                        / settings.reference_luminance_cd_m2)
     keys = present @ (1 << np.arange(k))
     for key in np.unique(keys):
         rows = np.flatnonzero(keys == key)
@@ -195,12 +432,29 @@ def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings
         d = dens[rows][:, idx]
         out["sampling"][rows] = np.sum(m.luminance_share[None, :] * per_channel[rows][:, idx] / d ** 2, axis=1)
         out["aliasing_h"][rows] = np.sum((1 + m.luminance_share[None, :] / d ** 2) * horizontal[rows][:, idx], axis=1)
-        electrons = (_GREY * _AE_LEVEL * settings.well_e * settings.luminance_ratio
-                     * m.white_response / m.white_response.max())
+        electrons = grey_electrons(m, settings)
         var = (electrons + settings.read_noise_e ** 2) / electrons ** 2
-        xyz_var = (gain[rows][:, idx] * var[None, :]) @ (m.matrix_rel ** 2)
-        out["noise"][rows] = np.sqrt(xyz_var[:, 1])
-        out["noise_xyz"][rows] = np.sqrt(xyz_var.mean(axis=1))
+        per_lux = grey_electrons(m, dim)  # a_c: electrons per cd/m^2 in dim light
+        mean_refl = 0.5 * (_EDGE[0] + _EDGE[1])
+        edge_e = grey_electrons(m, edge_settings, level_of_mean=1.0, bright_of_mean=_EDGE[1] / mean_refl,
+                                reference_level=mean_refl)
+        edge_var = mean_refl ** 2 * (edge_e + settings.read_noise_e ** 2) / edge_e ** 2  # white = 1 units
+        for r in rows:
+            best, snr10, blur, cap = None, np.inf, np.inf, -np.inf
+            for method in settings.demosaics:
+                gains, lsf, nps = _noise_gains(layouts[r], h, w, idx, m, method, _GAIN_CACHE)
+                blur = min(blur, 1.0 / edge_mtf50(lsf, settings.f_number, settings.pixel_pitch_um))
+                cap = max(cap, edge_capacity(lsf, nps, edge_var, _EDGE[1] - _EDGE[0], settings.f_number,
+                                             settings.pixel_pitch_um))
+                xyz_var = var @ gains
+                if best is None or xyz_var[1] < best[1]:
+                    best = xyz_var
+                snr10 = min(snr10, _snr10(gains[:, 1], per_lux, settings.read_noise_e))
+            out["noise"][r] = np.sqrt(best[1])
+            out["noise_xyz"][r] = np.sqrt(best.mean())
+            out["snr10"][r] = snr10
+            out["blur"][r] = blur
+            out["neg_capacity"][r] = -cap
         out["colour"][rows] = m.colour_de00
         out["vora_trussell"][rows] = m.vora_trussell
     out["crosstalk"] = crosstalk

@@ -70,6 +70,8 @@ def _fullchain_table(config, search, values, names, named_proxies):
         table[f"{o.label} low"] = [g[1] for g in got]
         table[f"{o.label} high"] = [g[2] for g in got]
         table[f"{o.label} n"] = [g[3] for g in got]
+        if o.demosaic == "best":
+            table[f"{o.label} demosaic"] = [g[4] for g in got]
     feasible = np.ones(len(table), bool)
     for c in config.constraints:
         bound = _bound(c, None, values)

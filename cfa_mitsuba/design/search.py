@@ -55,17 +55,27 @@ def used_proxies(config) -> tuple[str, ...]:
 
 
 def proxy_settings(config) -> P.ProxySettings:
-    """The study's optics and sensor, at the lowest luminance of an
-    objective that the noise proxy predicts."""
+    """The study's optics, sensor and exposure policy (the study's own
+    default, the exposure program, when the config names none), at the
+    lowest luminance of an objective that the noise proxy predicts; the
+    noise proxy takes the best of the objectives' linear demosaics."""
     st = config.study
-    sensor = st.chain_settings().sensor
+    chain = st.chain_settings()
+    sensor = chain.sensor
     lums = [o.luminance for o in config.objectives if "noise" in o.proxies] or list(st.luminances)
-    policy = st.capture.get("exposure_policy", "reference")
+    policy = chain.exposure_policy
     ref = float(st.capture.get("reference_luminance_cd_m2", 100.0))
     ratio = 1.0 if policy == "each" else min(lums) / ref
+    edge = min([o.luminance for o in config.objectives if o.scene == "slanted-edge"] or [100.0])
     f_number = float(st.optics.get("f_number", 4.0))
+    wanted = [d for o in config.objectives if {"noise", "snr10", "blur", "neg_capacity"} & set(o.proxies)
+              for d in (st.demosaics if o.demosaic == "best" else (o.demosaic,))]
+    demosaics = tuple(dict.fromkeys(d if d in P.LINEAR_DEMOSAICS else "laplacian" for d in wanted)) or ("bilinear",)
     return P.ProxySettings(f_number, float(sensor.pixel_pitch_um), float(sensor.well_capacity_e),
-                           float(sensor.read_noise_e), ratio)
+                           float(sensor.read_noise_e), ratio, policy=policy, luminance_cd_m2=float(min(lums)),
+                           max_exposure_s=float(chain.max_exposure_s),
+                           fill_factor=float(sensor.fill_factor), demosaics=demosaics,
+                           reference_luminance_cd_m2=ref, edge_luminance_cd_m2=edge)
 
 
 def _bands(curves: dict, letters) -> np.ndarray:
@@ -73,13 +83,15 @@ def _bands(curves: dict, letters) -> np.ndarray:
     return np.stack([_spectra.band_average(*curves[a], wl) for a in letters])
 
 
-def fixed_models(curves: dict, alphabet):
-    """A cached function: tuple of letter indices -> ColourModel."""
+def fixed_models(curves: dict, alphabet, settings: P.ProxySettings | None = None):
+    """A cached function: tuple of letter indices -> ColourModel (with
+    ``settings``, the image processor's noise-regularised colour matrix)."""
     qe = _bands(curves, alphabet)
+    kw = {} if settings is None else {"well_e": settings.well_e, "read_noise_e": settings.read_noise_e}
 
     @functools.lru_cache(maxsize=None)
     def model(idx):
-        return P.colour_model(qe[list(idx)])
+        return P.colour_model(qe[list(idx)], **kw)
 
     return model
 
@@ -90,7 +102,8 @@ def cfa_proxies(cfa, settings: P.ProxySettings) -> dict:
     lut = {c: i for i, c in enumerate(cfa.channels)}
     h, w = cfa.tile_shape
     layout = np.array([[lut[c] for c in cfa.pattern.ravel()]], dtype=np.uint8)
-    got = P.evaluate_layouts(layout, h, w, lambda idx: P.colour_model(qe[list(idx)]), settings)
+    kw = {"well_e": settings.well_e, "read_noise_e": settings.read_noise_e}
+    got = P.evaluate_layouts(layout, h, w, lambda idx: P.colour_model(qe[list(idx)], **kw), settings)
     return {k: float(v[0]) for k, v in got.items()}
 
 
@@ -113,6 +126,14 @@ def _rows(layouts, h, w, alphabet, proxies, params=""):
     return df
 
 
+def _state_key(settings) -> str:
+    """A short hash of the proxy's settings and names: saved state is reused
+    only by a run that would compute the same proxies."""
+    import hashlib
+
+    return hashlib.sha1(repr((settings, P.PROXY_NAMES)).encode()).hexdigest()[:8]
+
+
 def _save_npz(path: Path, **arrays) -> None:
     with atomic_output(path) as tmp:
         with open(tmp, "wb") as fh:
@@ -123,9 +144,10 @@ def _exhaustive(config, h, w, state: Path, settings, models, log) -> tuple[list[
     k = len(config.alphabet)
     lo, hi = L.density_limits(config.density, config.alphabet, h * w)
     rows, evaluated, reused = [], 0, 0
-    names = ("aliasing", "aliasing_h", "crosstalk", "sampling", "noise", "noise_xyz", "colour", "vora_trussell")
+    names = ("aliasing", "aliasing_h", "crosstalk", "sampling", "blur", "neg_capacity", "noise", "noise_xyz",
+             "snr10", "colour", "vora_trussell")
     for i in range(L.n_chunks(h, w, k)):
-        f = state / f"exhaustive-{h}x{w}-{i:05d}.npz"
+        f = state / f"exhaustive-{h}x{w}-{_state_key(settings)}-{i:05d}.npz"
         if f.exists():
             with np.load(f) as z:
                 lay, got = z["layouts"], {n: z[n] for n in names}
@@ -166,7 +188,7 @@ def _nsga2(config, h, w, state: Path, settings, models, objectives, log) -> tupl
     spec = config.spectra
     n_spec = n_params(spec) * (len(spec.letters) if spec else 0)
     lo, hi = L.density_limits(config.density, config.alphabet, n)
-    archive = _Archive(state / f"nsga-{h}x{w}.json")
+    archive = _Archive(state / f"nsga-{h}x{w}-{_state_key(settings)}.json")
 
     def decode(x):
         lay = np.minimum((x[:, :n] * k).astype(np.int64), k - 1).astype(np.uint8)
@@ -180,7 +202,7 @@ def _nsga2(config, h, w, state: Path, settings, models, objectives, log) -> tupl
             params = json.dumps([{a: round(v, 4) if isinstance(v, float) else [round(u, 4) for u in v]
                                   for a, v in p.items()} for p in decoded])
             curves = letter_curves(config.alphabet, config.spectra_set, spec, json.loads(params))
-            model = fixed_models(curves, config.alphabet)
+            model = fixed_models(curves, config.alphabet, settings)
         key = _rows(lay[None, :], h, w, config.alphabet, {}, params)["key"].iloc[0]
         if key in archive.rows:
             archive.reused += 1
@@ -228,7 +250,7 @@ def run_search(config, out_dir, *, log=print) -> SearchResult:
     settings = proxy_settings(config)
     objectives = used_proxies(config)
     curves = letter_curves(config.alphabet, config.spectra_set) if config.spectra is None else None
-    models = fixed_models(curves, config.alphabet) if curves else None
+    models = fixed_models(curves, config.alphabet, settings) if curves else None
     rows, evaluated, reused = [], 0, 0
     for h, w in config.tiles:
         if config.engine[(h, w)] == "exhaustive":

@@ -3,8 +3,10 @@
 Candidates per tile size: every raw layout (alphabet ** pixels) for the
 exhaustive engine, population x generations evaluations for NSGA-II.  Time
 from the measured throughputs (docs/design.md, ``benchmarks/bench_design.py``
-on 2 cores: 43,046,721 raw 4x4 layouts enumerated, folded and scored in
-97.8 s; 7,238 candidates/s end to end); peak memory of NSGA-II from pymoo's
+on 2 cores: 43,046,721 raw 4x4 layouts enumerated and folded in 54.2 s;
+7,238 candidates/s end to end before issue 26), plus the demosaic impulse
+responses of every distinct candidate for each demosaic the proxy takes
+(:data:`IMPULSE_S_PER_CANDIDATE`); peak memory of NSGA-II from pymoo's
 population objects (measured: 1.7 kB per individual in one ``Population``;
 parents, offspring and their merge are alive at once).
 
@@ -21,10 +23,15 @@ from pathlib import Path
 
 from ..errors import CfaMitsubaError
 
-#: Seconds per raw layout of the exhaustive engine (97.8 s / 43,046,721).
-EXHAUSTIVE_S_PER_RAW = 97.8 / 43_046_721
-#: Seconds per NSGA-II evaluation (1 / 7,238 candidates per second end to end).
+#: Seconds per raw layout of the exhaustive engine's enumeration and folding
+#: (54.2 s / 43,046,721 for 4x4 tiles of three letters).
+EXHAUSTIVE_S_PER_RAW = 54.2 / 43_046_721
+#: Seconds per NSGA-II evaluation without the demosaic impulse responses (1 / 7,238 per second end to end).
 NSGA2_S_PER_EVALUATION = 1 / 7238
+#: Seconds per distinct candidate and demosaic for the proxy's impulse
+#: responses (issue 26: 28 ms measured for 4x4 tiles, 19 ms for 3x3, at a
+#: load average of 11 on 2 cores; an upper bound on an idle machine).
+IMPULSE_S_PER_CANDIDATE = 0.028
 #: Bytes per NSGA-II population member (1.7 kB per individual x 3 populations).
 NSGA2_BYTES_PER_INDIVIDUAL = 3 * 1700
 _FIXED_BYTES = 400 * 2**20
@@ -32,15 +39,19 @@ _FIXED_BYTES = 400 * 2**20
 
 def design_size(config) -> tuple[int, float, int, str]:
     """(candidates, estimated search seconds, peak bytes, per-tile text)."""
+    from .search import proxy_settings
+
+    per_candidate = IMPULSE_S_PER_CANDIDATE * len(proxy_settings(config).demosaics)
     candidates, seconds, peak, parts = 0, 0.0, _FIXED_BYTES, []
     for h, w in config.tiles:
         if config.engine[(h, w)] == "exhaustive":
             n = len(config.alphabet) ** (h * w)
-            seconds += n * EXHAUSTIVE_S_PER_RAW
+            # translations and mirrors fold about 2 h w raw tiles into one distinct candidate
+            seconds += n * EXHAUSTIVE_S_PER_RAW + n / (2 * h * w) * per_candidate
             parts.append(f"{h}x{w} exhaustive {n:.3g} raw layouts")
         else:
             n = config.population * config.generations
-            seconds += n * NSGA2_S_PER_EVALUATION
+            seconds += n * (NSGA2_S_PER_EVALUATION + per_candidate)
             peak = max(peak, _FIXED_BYTES + config.population * NSGA2_BYTES_PER_INDIVIDUAL)
             parts.append(f"{h}x{w} NSGA-II {config.population:,} x {config.generations:,} generations")
         candidates += n

@@ -144,8 +144,9 @@ def design_table(repo: Path, results: str) -> str:
     if not path.is_file():
         raise CfaMitsubaError(f"{results}/fullchain.csv not found")
     f = pd.read_csv(path, keep_default_na=False)
-    objectives = [c for c in f.columns if "@" in c and not c.endswith((" low", " high", " n"))]
-    head = ["CFA", "tile", *[o.replace("/bilinear", "") for o in objectives], "dominated by"]
+    objectives = [c for c in f.columns if "@" in c and not c.endswith((" low", " high", " n", " demosaic"))]
+    head = ["CFA", "tile", *[o.replace("/bilinear", "").replace("/best", " (best demosaic)") for o in objectives],
+            "dominated by"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in f.to_dict("records"):
         name = f"**{r['cfa']}**" if str(r["pareto"]) == "True" else r["cfa"]
