@@ -196,12 +196,10 @@ def test_include_of_only_defaults_loads(tmp_path):
 
 
 @pytest.mark.parametrize("body,sensor,needles", [
-    (LIGHT + '<medium type="homogeneous" id="m"/>', None, ('<medium type="homogeneous">', "participating media")),
     (LIGHT + '<shape type="sphere"><bsdf type="principled"><float name="sheen" value="1"/>'
              '<float name="sheen_tint" value="0.5"/></bsdf></shape>', None, ('principled', "sheen_tint")),
     (LIGHT, _sensor("", camera="orthographic"), ('<sensor type="orthographic">', "no angular field of view")),
-    (LIGHT + '<shape type="sphere"><bsdf type="hair"/></shape>', None, ('<bsdf type="hair">',)),
-], ids=["medium", "tinted-principled", "orthographic", "hair"])
+], ids=["tinted-principled", "orthographic"])
 def test_unsupported_plugins_are_refused_naming_them(tmp_path, body, sensor, needles):
     p = _scene(tmp_path, body, sensor=sensor)
     assert_one_line_error(run_cli("render", p, "--out", tmp_path / "o"), str(p), *needles)

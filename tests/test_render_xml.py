@@ -61,7 +61,6 @@ def test_cache_key_follows_the_file(tmp_path):
     (SCENE.format(sensor=SENSOR, body=LIGHT + '<shape type="sphere"><bsdf type="principled">'
                   '<float name="spec_tint" value="0.5"/></bsdf></shape>'), "spec_tint"),
     (SCENE.format(sensor=SENSOR.replace("perspective", "orthographic"), body=LIGHT), "orthographic"),
-    (SCENE.format(sensor=SENSOR, body=LIGHT + '<medium type="homogeneous" id="m"/>'), "media"),
     ("<scene version='3.0.0'><shape type='sphere'>", "well-formed"),
     ("<notascene/>", "not a Mitsuba scene"),
     (SCENE.format(sensor=SENSOR, body=LIGHT + '<shape type="ply"><string name="filename" value="missing.ply"/></shape>'),

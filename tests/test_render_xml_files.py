@@ -40,10 +40,12 @@ def test_included_sensor_and_lights_render():
 
 
 @pytest.mark.parametrize("what,text,needles", [
-    ("bsdf", '<scene version="3.0.0"><shape type="sphere"><bsdf type="hair"/></shape></scene>',
-     ['<bsdf type="hair">', "parts/extra.xml (line 1"]),
-    ("medium", '<scene version="3.0.0">\n<medium type="homogeneous" id="fog"/></scene>',
-     ['<medium type="homogeneous">', "parts/extra.xml (line 2", "participating media"]),
+    ("tint", '<scene version="3.0.0"><shape type="sphere"><bsdf type="principled">'
+             '<float name="spec_tint" value="0.5"/></bsdf></shape></scene>',
+     ['<bsdf type="principled">', "parts/extra.xml (line 1", "spec_tint"]),
+    ("spectral-eta", '<scene version="3.0.0">\n<shape type="sphere"><bsdf type="principledthin">'
+                     '<spectrum name="eta" value="400:1.5, 700:1.4"/></bsdf></shape></scene>',
+     ['<bsdf type="principledthin">', "parts/extra.xml (line 2", "eta"]),
 ])
 def test_refusals_hold_inside_included_files(tabletop, what, text, needles):
     (tabletop / "parts" / "extra.xml").write_text(text)
@@ -139,7 +141,7 @@ def test_files_outside_the_folder_are_refused_unless_allowed(tabletop, tmp_path)
 
 
 @pytest.mark.parametrize("edit,needles", [
-    (('value="45"', 'value="175"'), ['<float name="fov" value="175.0">', "camera.xml"]),
+    (('value="45"', 'value="180"'), ['<float name="fov" value="180.0">', "camera.xml", "less than 180"]),
     (('name="max_depth" value="4"', 'name="max_depth" value="100"'), ['<integer name="max_depth" value="100">']),
     (('name="height" value="48"', 'name="height" value="0"'), ['<integer name="height" value="0">']),
 ])

@@ -5,12 +5,13 @@ Two routes, one result (band-mean spectral radiance, W/(m^2 sr nm)):
 - JIT variants (``llvm_ad_spectral``, ``cuda_ad_spectral``): one render with
   the spectral-quadrature integrator (:mod:`.integrator`), every band an AOV
   of an ``hdrfilm`` with a ``box`` reconstruction filter.
-- ``scalar_spectral``, where a Python integrator is impractically slow:
+- ``scalar_spectral``, where a Python integrator is impractically slow,
+  and users' scenes with participating media in any variant (:mod:`.media`):
   stock plugins only, one render per band with a single-band ``specfilm``
   (a box sensitivity of height 1/width, so the value is the band mean) and
-  Mitsuba's ``path`` integrator, the scene reloaded per band
-  (research/mitsuba-spectral.md s. 2: retargeting the band in place renders
-  black).
+  Mitsuba's ``path`` integrator (``volpath`` or ``volpathmis`` for media),
+  the scene reloaded per band (research/mitsuba-spectral.md s. 2:
+  retargeting the band in place renders black).
 
 Achromatic charts render a single "band" spanning the whole range with flat
 emitter spectra (the pattern), multiplied afterwards by the white radiance.
@@ -55,7 +56,7 @@ from .loading import load_scene
 from .measured import is_measured_image, measured_cached, measured_image
 from .scaling import DEFAULT_LUMINANCE_CD_M2, scale_to_luminance  # noqa: F401  (part of this module's interface)
 from .registry import get_scene
-from .types import Built, RenderConfig, Scene
+from .types import MAX_FOV_DEG, Built, RenderConfig, Scene
 
 #: ISETCam's default mean scene luminance (cd/m^2).
 #: Bump when a change alters rendered numbers in a way the source digest
@@ -164,11 +165,12 @@ def resolve_settings(scene, *, width=None, height=None, spp=None, luminance=None
     f = _positive_float(sc.fov_deg if fov is None else fov, "fov")
     if fov is None and sc.fov_at is not None and (w, h) != (sc.width, sc.height):
         f = sc.fov_at(w, h)
-        if not 0 < f < 170:
+        if not 0 < f < MAX_FOV_DEG:
             raise CfaMitsubaError(f"scene {sc.name!r}: its camera at {w} x {h} pixels has a horizontal field of view "
-                                  f"of {f:.4g} degrees; cfa-mitsuba needs less than 170 (change --width / --height)")
-    if f >= 170:
-        raise CfaMitsubaError(f"fov (--fov) must be below 170 degrees, got {f:g}")
+                                  f"of {f:.4g} degrees; cfa-mitsuba needs less than {MAX_FOV_DEG:g} "
+                                  "(change --width / --height)")
+    if f >= MAX_FOV_DEG:
+        raise CfaMitsubaError(f"fov (--fov) must be below {MAX_FOV_DEG:g} degrees, got {f:g}")
     depth = _positive_int(sc.max_depth if max_depth is None else max_depth, "max_depth", maximum=64)
     if depth > 1 and not sc.is_3d:
         raise CfaMitsubaError(f"max_depth (--max-depth) applies to 3D scenes; {sc.name!r} is a chart seen directly")
@@ -276,7 +278,8 @@ def _render_boxes(mi, built: Built, cfg: RenderConfig, sc: Scene, boxes, *, widt
     len(boxes)) float32, and the (last) loaded Mitsuba scene.  ``sensor``
     and ``extra`` replace the camera and add shapes (the white panels)."""
     sampler = {"type": sc.sampler, "sample_count": int(spp), "seed": int(cfg.seed), "jitter": bool(sc.jitter)}
-    if cfg.variant.startswith("scalar"):
+    if _per_band(cfg, built):
+        stock = {"type": built.stock_integrator or "path", "max_depth": cfg.max_depth}
         planes = []
         for lo, hi in boxes:
             # The same sampled range as the JIT route (light.BAND_INSET).
@@ -285,8 +288,7 @@ def _render_boxes(mi, built: Built, cfg: RenderConfig, sc: Scene, boxes, *, widt
                     "component_format": "float32",
                     "band": {"type": "regular", "wavelength_min": lo, "wavelength_max": hi,
                              "values": f"{1 / (hi - lo)!r}, {1 / (hi - lo)!r}"}}
-            scene = load_scene(mi, built, film, sampler, {"type": "path", "max_depth": cfg.max_depth},
-                               sensor=sensor, extra=extra)
+            scene = load_scene(mi, built, film, sampler, stock, sensor=sensor, extra=extra)
             img = np.array(mi.render(scene, seed=cfg.seed), dtype=np.float32)
             planes.append(img.reshape(height, width, -1)[..., 0])
         return np.stack(planes, axis=-1), scene
@@ -306,18 +308,25 @@ def _render_boxes(mi, built: Built, cfg: RenderConfig, sc: Scene, boxes, *, widt
     return img[..., -n:], scene  # the AOVs follow the film's own channels
 
 
+def _per_band(cfg: RenderConfig, built: Built) -> bool:
+    """Whether the render goes band by band through stock plugins (module
+    docstring): in ``scalar_spectral``, and for a scene that needs a stock
+    integrator (participating media)."""
+    return cfg.variant.startswith("scalar") or built.stock_integrator is not None
+
+
 def _white_of_3d_scene(mi, built: Built, cfg: RenderConfig, sc: Scene, scene, data: np.ndarray):
     """The canonical ``panel`` white of a 3D scene (:mod:`.white`) and its
     record; the ``illuminant`` rule on the image if no panel gets light."""
     boxes = _band_boxes(cfg, achromatic=False)
 
     def render_panels(sensor, extra, width):
-        if not cfg.variant.startswith("scalar"):
+        if not _per_band(cfg, built):
             return _render_boxes(mi, built, cfg, sc, boxes, width=width, height=1, spp=_white.PANEL_SPP,
                                  sensor=sensor, extra=extra)[0]
-        # scalar_spectral: a batch sensor does not draw wavelengths from a
-        # specfilm's band (measured: band means 10x too high), so one meter
-        # at a time.
+        # Band by band: a batch sensor does not draw wavelengths from a
+        # specfilm's band (measured in scalar_spectral: band means 10x too
+        # high), so one meter at a time.
         meters = [v for k, v in sensor.items() if k.startswith("meter_")]
         return np.concatenate([_render_boxes(mi, built, cfg, sc, boxes, width=1, height=1, spp=_white.PANEL_SPP,
                                              sensor={k: v for k, v in m.items() if k != "film"}, extra=extra)[0]

@@ -26,7 +26,7 @@ from .. import spectra
 from ..errors import CfaMitsubaError
 from ..io.hyperspectral import is_measured_path
 from ..values import SpectralImage
-from .types import NATURAL
+from .types import MAX_FOV_DEG, NATURAL
 
 #: Options of a measured image (the render command's flags, a study's keys).
 MEASURED_OPTIONS = ("bands", "illuminant", "fov", "distance", "oversample", "wavelengths", "quantity", "mat_cube",
@@ -105,8 +105,8 @@ def _resolve(path, options: dict) -> tuple[Path, dict]:
         v = opts[k]
         if v is not None and not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
             raise CfaMitsubaError(f"--{k} must be a positive number, got {v!r}")
-    if opts["fov"] is not None and opts["fov"] >= 170:
-        raise CfaMitsubaError(f"--fov must be below 170 degrees, got {opts['fov']:g}")
+    if opts["fov"] is not None and opts["fov"] >= MAX_FOV_DEG:
+        raise CfaMitsubaError(f"--fov must be below {MAX_FOV_DEG:g} degrees, got {opts['fov']:g}")
     k = opts["oversample"]
     if k is not None and (isinstance(k, bool) or not isinstance(k, int) or not 1 <= k <= 64):
         raise CfaMitsubaError(f"--oversample must be an integer in 1..64, got {k!r}")

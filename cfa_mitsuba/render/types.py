@@ -8,7 +8,7 @@ puppy -> types; builtins -> charts, puppy, registry).
 
 from __future__ import annotations
 
-__all__ = ["Scene", "Built", "RenderConfig", "NATURAL", "LENS_PIXEL_PITCH_M", "focal_length_m"]
+__all__ = ["Scene", "Built", "RenderConfig", "NATURAL", "LENS_PIXEL_PITCH_M", "MAX_FOV_DEG", "focal_length_m"]
 
 import math
 from dataclasses import dataclass, field
@@ -21,6 +21,13 @@ import numpy as np
 #: that images the scene's field of view onto its film width in pixels of
 #: this pitch (the optics stage's default pitch, 2.2 um).
 LENS_PIXEL_PITCH_M = 2.2e-6
+#: Horizontal fields of view from this (degrees) up are refused: Mitsuba's
+#: perspective and thin-lens cameras take (0, 180) (``parse_fov``,
+#: src/render/sensor.cpp), and so do the optics stage and the sidecar schema.
+#: Up to it every quantity derived from the field of view stays finite: the
+#: focal length (w p / 2) / tan(fov / 2) > 0 and relative illumination,
+#: whose tan^2 of the field angle is finite (:func:`focal_length_m`).
+MAX_FOV_DEG = 180.0
 
 
 def focal_length_m(width_px: int, fov_deg: float) -> float:
@@ -89,6 +96,12 @@ class Built:
     ``band_constant``: every spectrum is constant inside each band (built-in
     scenes, :mod:`.light`), so bands are evaluated at their box centres;
     False for users' scenes, whose bands are jittered across their boxes.
+
+    ``stock_integrator``: the name of a Mitsuba integrator (``volpath``,
+    ``volpathmis``) that the scene needs instead of the all-band integrator
+    (a user's scene with participating media, :mod:`.media`); the engine
+    then renders it band by band with a single-band ``specfilm``, in any
+    variant.  None: the engine's usual route.
     """
 
     meta: dict[str, Any]
@@ -98,6 +111,7 @@ class Built:
     band_constant: bool = True
     pattern_spectrum: np.ndarray | None = None
     white_radiance: np.ndarray | None = None
+    stock_integrator: str | None = None
 
 
 @dataclass(frozen=True)

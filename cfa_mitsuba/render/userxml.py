@@ -12,16 +12,18 @@ that absolute path, so the files hashed into the cache key are the files
 rendered.
 
 We keep the scene's geometry, materials, emitters and camera (pose, field
-of view, lens) and replace its film, sampler and integrator with ours.
+of view, lens) and replace its film, sampler and integrator with ours; a
+scene with participating media or a BSDF outside :data:`SUPPORTED_BSDFS`
+is rendered band by band by Mitsuba's own ``volpath``/``path``
+(:mod:`.stockroute`).
 Refused with one line naming the file and line of the element:
 
-- participating media (``<medium>``, ``<phase>``, ``<volume>``): our
-  integrator traces surfaces only;
-- a BSDF outside :data:`SUPPORTED_BSDFS`: the integrator draws one
-  direction per path for all bands, exact only when a BSDF's sampling does
-  not depend on wavelength; the ``principled`` and ``principledthin``
-  BSDFs (which Blender's exporter writes) sample by scalar weights and are
-  rendered, unless a ``spec_tint`` or ``sheen_tint`` is set (Mitsuba
+- a tinted BSDF: the all-band integrator draws one direction per path
+  for all bands, exact only when a BSDF's sampling does not depend on
+  wavelength (:data:`SUPPORTED_BSDFS`; others go band by band through
+  Mitsuba's ``path``); the ``principled`` and ``principledthin`` BSDFs
+  (which Blender's exporter writes) sample by scalar weights and are
+  rendered by it, unless a ``spec_tint`` or ``sheen_tint`` is set (Mitsuba
   normalises the tint by a luminance estimated from a path's own 4
   wavelengths, which no all-band evaluation can reproduce) or a
   ``principledthin``'s ``eta`` is a spectrum (its refraction would depend
@@ -72,9 +74,10 @@ from pathlib import Path
 
 from ..errors import CfaMitsubaError
 from . import variant as _variant
+from . import stockroute as _stockroute
 from . import xmlscan
 from .loading import first_line, inspect_settings
-from .types import NATURAL, Built, RenderConfig, Scene, focal_length_m
+from .types import MAX_FOV_DEG, NATURAL, Built, RenderConfig, Scene, focal_length_m
 
 #: BSDF plugins whose sampling is wavelength-independent (Mitsuba 3.9): a
 #: ``blendbsdf`` picks a child by a scalar weight (``eval_1``), ``plastic``
@@ -98,8 +101,6 @@ UNLIMITED_DEPTH = 8
 MAX_PATH_DEPTH = 64
 #: Default samples per pixel for scene files.
 DEFAULT_SPP = 100
-#: Horizontal fields of view from this (degrees) up are refused.
-MAX_FOV_DEG = 170.0
 #: Smallest physically possible f-number (N >= 1 / (2 sin 90 deg)).
 MIN_F_NUMBER = 0.5
 #: Largest film side (pixels).
@@ -127,6 +128,7 @@ class _Read:
     focus_m: float | None
     files: list[tuple[str, Path]]
     fov_props: tuple[tuple[str, object], ...] = ()
+    stock: tuple[str, str] | None = None  # (Mitsuba integrator, reason): :mod:`.stockroute`
 
 
 def _tag(mi, node) -> str:
@@ -209,14 +211,6 @@ def _read(path: Path, allow_outside_paths: bool, defines=(), asset_root=None) ->
     def at(i: int) -> str:
         return f"{_tag(mi, nodes[i])} at {mi.parser.file_location(state, nodes[i])}"
 
-    for i, n in enumerate(nodes):
-        if n.type in (mi.ObjectType.Medium, mi.ObjectType.PhaseFunction, mi.ObjectType.Volume):
-            _fail(main, f"{at(i)}: participating media are not supported (cfa-mitsuba's spectral integrator "
-                        "traces surfaces only)")
-    for i, n in enumerate(nodes):
-        if n.type == mi.ObjectType.BSDF and n.props.plugin_name() not in SUPPORTED_BSDFS:
-            _fail(main, f"{at(i)}: this BSDF's sampling depends on wavelength or is not supported "
-                        f"(supported: {', '.join(sorted(SUPPORTED_BSDFS))})")
     try:
         _check_tints(mi, nodes, at)
     except CfaMitsubaError as exc:
@@ -258,6 +252,7 @@ def _read(path: Path, allow_outside_paths: bool, defines=(), asset_root=None) ->
                     size[k] = v
             break
     depth = DEFAULT_MAX_DEPTH
+    cands = []
     for _, j in root:
         if nodes[j].type == mi.ObjectType.Integrator:
             cands = [j] + [c for _, c in _children(mi, nodes[j]) if nodes[c].type == mi.ObjectType.Integrator]
@@ -270,14 +265,15 @@ def _read(path: Path, allow_outside_paths: bool, defines=(), asset_root=None) ->
                     depth = UNLIMITED_DEPTH if v < 0 else max(1, v)
                     break
             break
+    key = next((k for k in ("fov", "focal_length") if k in sp.keys()), "fov")
+    shown = f'<float name="fov" value="{_number(sp, "fov")}">' if key == "fov" and "fov" in sp.keys() else (
+        f'<string name="focal_length" value="{sp["focal_length"]}">' if key == "focal_length" else "default fov")
     try:
         fov = float(mi.parse_fov(sp, size[0] / size[1]))
-    except Exception as exc:
-        _fail(main, f"{at(s)}: cannot read its field of view ({first_line(exc)})")
+    except Exception as exc:  # Mitsuba refuses a field of view outside (0, 180)
+        _fail(main, f"{at(s)}, {shown}: cannot read its field of view ({first_line(exc)}); cfa-mitsuba needs more "
+                    f"than 0 and less than {MAX_FOV_DEG:g} degrees")
     if not 0 < fov < MAX_FOV_DEG:
-        key = next((k for k in ("fov", "focal_length") if k in sp.keys()), "fov")
-        shown = f'<float name="fov" value="{_number(sp, "fov")}">' if key == "fov" and "fov" in sp.keys() else (
-            f'<string name="focal_length" value="{sp["focal_length"]}">' if key == "focal_length" else "default fov")
         _fail(main, f"{at(s)}, {shown}: a horizontal field of view of {fov:.4g} degrees; cfa-mitsuba needs more than "
                     f"0 and less than {MAX_FOV_DEG:g}")
     aperture = focus = None
@@ -287,7 +283,8 @@ def _read(path: Path, allow_outside_paths: bool, defines=(), asset_root=None) ->
             _fail(main, f'{at(s)}, <float name="aperture_radius">: must be given, finite and not negative '
                         f"(got {aperture})")
         focus = _number(sp, "focus_distance")
-    return _Read(scan, state, s, camera, (size[0], size[1]), depth, fov, aperture, focus, files, _fov_props(mi, sp))
+    return _Read(scan, state, s, camera, (size[0], size[1]), depth, fov, aperture, focus, files, _fov_props(mi, sp),
+                 _stockroute.stock_route(mi, nodes, cands, SUPPORTED_BSDFS))
 
 
 def _identity(read: _Read, defines) -> dict:
@@ -368,11 +365,14 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
                      "defines": dict(scene.defines), "asset_root": scene.asset_root,
                      "max_depth": config.max_depth, **lens},
     }
+    if read.stock is not None:
+        meta["integrator"] = f"Mitsuba {read.stock[0]} ({read.stock[1]}), one render per band with a single-band specfilm"
     if lens.get("f_number"):
         meta["f_number"] = lens["f_number"]
     if read.focus_m:
         meta["scene_distance_m"] = read.focus_m
-    return Built(meta=meta, loader=_loader(read, radius, scene), band_constant=False)
+    return Built(meta=meta, loader=_loader(read, radius, scene), band_constant=False,
+                 stock_integrator=None if read.stock is None else read.stock[0])
 
 
 def _instantiate(mi, read: _Read, radius: float | None, film, sampler, integrator, *, sensor=None, extra=None):
