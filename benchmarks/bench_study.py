@@ -9,7 +9,9 @@ runs the study (configs/paper.toml with --paper, else --config) through
 ``python -m cfa_mitsuba study`` twice per tree: *cold* (an empty render
 cache in a temporary folder: every scene rendered) and *warm* (the same
 cache again: renders reused), and prints the render, evaluate and report
-phases of each (timing.json) with the worker time per stage.  With
+phases of each (timing.json, wall clock) with the worker time per stage,
+and the CPU seconds of the whole run (the study process and its workers:
+what other jobs on a shared machine move least).  With
 ``--against REV`` the same runs are made on commit REV, checked out beside
 this tree in a temporary git worktree, in the same invocation (this tree
 and REV alternate, so a change of machine load hits both), and the table
@@ -35,6 +37,7 @@ import argparse
 import json
 import os
 import re
+import resource
 import shutil
 import subprocess
 import sys
@@ -113,12 +116,17 @@ def _study(tree: Path, config: Path, out: Path, cache: Path | None, workers: int
         env["CFA_MITSUBA_CACHE"] = str(cache)
     cmd = [sys.executable, "-m", "cfa_mitsuba", "study", str(config), "--out", str(out), "--quiet",
            "--workers", str(workers)]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     proc = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if proc.returncode != 0:
         raise SystemExit(f"bench_study: the study failed in {tree}:\n{proc.stderr[-3000:]}")
     timing = json.loads((out / "timing.json").read_text())
+    # CPU seconds of the study and its worker processes (reaped children count into ours): the measure
+    # that machine load moves least, where the wall-clock phases above move with every other job
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return {**{k: float(timing["phases"].get(k, 0.0)) for k in PHASES},
-            **{k: float(timing["tasks"].get(k, 0.0)) for k in STAGES}}
+            **{k: float(timing["tasks"].get(k, 0.0)) for k in STAGES}, "cpu_s": cpu}
 
 
 def phases_main(args) -> int:
@@ -157,13 +165,14 @@ def phases_main(args) -> int:
     what = f"{config}" + (f" reduced to {', '.join(cfas)}" if cfas else "")
     print(f"{what}, {args.workers} worker(s); load average (1, 5, 15 min) after the runs: {load}")
     names = list(runs)
-    header = f"{'':<22}" + "".join(f"{n[:14] + ' ' + m:>20}" for n in names for m in runs[n])
+    header = f"{'':<24}" + "".join(f"{n[:14] + ' ' + m:>20}" for n in names for m in runs[n])
     if len(names) == 2:
         header += "".join(f"{'ratio ' + m:>14}" for m in runs[names[0]])
     print(header)
-    for key in (*PHASES, *STAGES):
-        label = key.replace("_s", "") + (" (worker s)" if key in STAGES else " (s)")
-        line = f"{label:<22}" + "".join(f"{runs[n][m][key]:>20.1f}" for n in names for m in runs[n])
+    for key in (*PHASES, *STAGES, "cpu_s"):
+        label = {"cpu_s": "CPU, all processes (s)"}.get(key) or key.replace("_s", "") + (
+            " (worker s)" if key in STAGES else " (s)")
+        line = f"{label:<24}" + "".join(f"{runs[n][m][key]:>20.1f}" for n in names for m in runs[n])
         if len(names) == 2:
             for m in runs[names[0]]:
                 a, b = runs[names[0]][m][key], runs[names[1]][m][key]
