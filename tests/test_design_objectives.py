@@ -105,3 +105,14 @@ def test_headline_says_nothing_beat_bayer_with_its_numbers():
     text = headline(t, [o])
     assert text.startswith("<p class=answer><b>Nothing beat Bayer</b>") and "a 1 <span class=note>[0.9, 1.1]" in text
     assert "worse on a" in text  # the best candidate against Bayer, by separated intervals
+
+
+def test_the_dye_search_compares_isetcam_rgb_with_the_17_camera_sets():
+    cfg = load_design(REPO / "configs" / "design-dyes.toml")
+    assert cfg.spectra.family == "bandpass" and set(cfg.spectra.letters) == {"R", "G", "B"}
+    assert [o.metric for o in cfg.objectives] == ["delta-e", "snr10"]
+    import cfa_mitsuba as cm
+
+    cfas = [cm.sensor.get_cfa(c) for c in cfg.study.cfas]
+    assert [c.name for c in cfas][0] == "bayer" and len({c.name for c in cfas}) == 18
+    assert all(c.tile_text() == "G R / B G" for c in cfas)   # one layout: only the dyes differ
