@@ -2,6 +2,16 @@
 speed against colour-demosaicing on a 636 x 720 Bayer mosaic.
 
     python benchmarks/bench_demosaic.py [--quick] [--repeat N] [--new-layouts-only] [--scielab-only]
+        [--bayer-only] [--cfas A,B,...] [--json PATH]
+
+``--json PATH`` also writes the measured numbers (PSNR per CFA, method and
+photograph, the speed table, load average, code commit) to PATH: README.md
+takes its demosaicing numbers from the committed docs/data/bench_demosaic.json
+(``python benchmarks/bench_demosaic.py --bayer-only --json
+docs/data/bench_demosaic.json``, about a minute); ``--cfas A,B,...`` (PSNR
+tables of those CFAs only) and ``--scielab-only`` add their numbers to an
+existing PATH, so the full tables of docs/isp.md are filled in runs of a
+few minutes each.
 
 Images: scikit-image's bundled photographs (astronaut, coffee, chelsea,
 rocket), 8-bit sRGB values / 255 taken as the scene, as the demosaicing
@@ -72,6 +82,10 @@ def photos(quick):
     return imgs
 
 
+#: what --json writes: filled by the tables as they print
+RESULTS: dict = {"psnr_db": {}, "time_per_image_s": {}, "speed_s": {}}
+
+
 def quality_table(cfas, imgs, repeat, rgb: bool):
     print(f"| CFA | method | {' | '.join(imgs)} | mean PSNR (dB) | time per image (s) |")
     print("|---|---|" + "---|" * len(imgs) + "---|---|")
@@ -87,12 +101,15 @@ def quality_table(cfas, imgs, repeat, rgb: bool):
                 times.append(best_time(lambda: cm.isp.demosaic(raws[n], cfa, method), repeat))
             print(f"| {name} | {method} | " + " | ".join(f"{v:.2f}" for v in vals)
                   + f" | {np.mean(vals):.2f} | {np.mean(times):.3f} |")
+            RESULTS["psnr_db"].setdefault(name, {})[method] = {**dict(zip(imgs, vals)), "mean": float(np.mean(vals))}
+            RESULTS["time_per_image_s"].setdefault(name, {})[method] = float(np.mean(times))
         if name == "bayer" and rgb:
             import colour_demosaicing as cdm
 
             for label, fn in (("colour-demosaicing Malvar2004", cdm.demosaicing_CFA_Bayer_Malvar2004),
                               ("colour-demosaicing Menon2007", cdm.demosaicing_CFA_Bayer_Menon2007)):
                 vals = [psnr(im, fn(raws[n], "GRBG")) for n, im in imgs.items()]
+                RESULTS.setdefault("library_psnr_db", {})[label] = {**dict(zip(imgs, vals)), "mean": float(np.mean(vals))}
                 print(f"| {name} | *{label}* | " + " | ".join(f"{v:.2f}" for v in vals) + f" | {np.mean(vals):.2f} | |")
 
 
@@ -115,6 +132,8 @@ def scielab_table(imgs):
     for spd in (23, 72):
         table = {m: [float(scielab(r, o, white, samples_per_degree=spd).value) for r, o in zip(refs, outs[m])]
                  for m in METHODS}
+        RESULTS.setdefault("scielab_de00", {})[str(spd)] = {m: {**dict(zip(imgs, v)), "mean": float(np.mean(v))}
+                                                            for m, v in table.items()}
         ranks = [1 + sum(table[m][k] < table["bilinear"][k] for m in METHODS) for k in range(len(refs))]
         for method in METHODS:
             vals = table[method]
@@ -142,6 +161,10 @@ def speed_table(repeat):
     t = {k: best_time(f, repeat) for k, f in rows.items()}
     info = {}
     cm.isp.demosaic(raw, "bayer", "pocs", info=info)
+    RESULTS["speed_s"] = t
+    RESULTS["speedup"] = {k: t[v] / t[k] for k, v in (("bilinear", "colour-demosaicing bilinear"),
+                                                       ("laplacian", "colour-demosaicing Malvar2004"))}
+    RESULTS["pocs_iterations"] = info["iterations"]
     print("| 636 x 720 Bayer mosaic | time (s) | ratio |")
     print("|---|---|---|")
     pairs = {"bilinear": "colour-demosaicing bilinear", "laplacian": "colour-demosaicing Malvar2004"}
@@ -159,16 +182,31 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--new-layouts-only", action="store_true", help="only the layouts of today's sensors")
     ap.add_argument("--scielab-only", action="store_true", help="only S-CIELAB of the four methods on Bayer")
+    ap.add_argument("--bayer-only", action="store_true", help="only the speed table and Bayer's PSNR (no S-CIELAB)")
+    ap.add_argument("--cfas", metavar="A,B,...", help="only the PSNR tables of these CFAs (added to --json's file)")
+    ap.add_argument("--json", metavar="PATH", help="also write the measured numbers to PATH (JSON)")
     args = ap.parse_args()
     repeat = 1 if args.quick else args.repeat
     load = os.getloadavg() if hasattr(os, "getloadavg") else ("?",)
     print(f"# bench_demosaic: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load average {load[0]:.2f} at start; numpy {np.__version__}\n")
     imgs = photos(args.quick)
+    if args.bayer_only:
+        print("## Speed (Bayer)\n")
+        speed_table(repeat)
+        print("\n## Bayer: PSNR on R, G, B\n")
+        quality_table(("bayer",), imgs, repeat, rgb=True)
+        return write_json(args, repeat)
+    if args.cfas:
+        for name in args.cfas.split(","):
+            rgb = name in RGB_CFAS + NEW_RGB_CFAS
+            print(f"\n## {name}: PSNR on {'R, G, B' if rgb else 'its own white-balanced channels'}\n")
+            quality_table((name,), imgs, repeat, rgb=rgb)
+        return write_json(args, repeat, merge=True)
     print("## S-CIELAB on the photographs (Bayer; rank 4/4 = worst)\n")
     scielab_table(imgs)
     if args.scielab_only:
-        return
+        return write_json(args, repeat, merge=True)
     if not args.new_layouts_only:
         print("## Speed (Bayer)\n")
         speed_table(repeat)
@@ -180,8 +218,39 @@ def main():
     quality_table(NEW_RGB_CFAS, imgs, repeat, rgb=True)
     print("\n## Layouts of today's sensors, others: PSNR on the CFA's own white-balanced channels\n")
     quality_table(NEW_OTHER_CFAS, imgs, repeat, rgb=False)
+    write_json(args, repeat)
+
+
+def write_json(args, repeat, merge=False):
+    """Print the load average; with --json, write RESULTS and how they were measured (``merge``: added
+    to the tables already in the file, whose speed table and header stay; each run listed in ``runs``)."""
+    import json
+    import subprocess
+    from datetime import datetime, timezone
+    from pathlib import Path
+
     load = os.getloadavg() if hasattr(os, "getloadavg") else ("?",)
     print(f"\nload average {load[0]:.2f} at the end")
+    if not args.json:
+        return
+    try:
+        commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                                cwd=Path(__file__).parent).stdout.strip()
+    except OSError:
+        commit = ""
+    run = {"load_average_end": load[0], "date": datetime.now(timezone.utc).strftime("%Y-%m-%d"), "commit": commit,
+           "cfas": args.cfas or ("scielab" if args.scielab_only else "bayer, speed" if args.bayer_only else "all")}
+    out = {**RESULTS, "photos": list(PHOTOS), "quick": args.quick, "repeat": repeat, "cpus": os.cpu_count(), **run,
+           "runs": [run]}
+    if merge and Path(args.json).is_file():
+        out = json.loads(Path(args.json).read_text())
+        for key in ("psnr_db", "time_per_image_s", "library_psnr_db", "scielab_de00"):
+            out.setdefault(key, {}).update(RESULTS.get(key, {}))
+        out["runs"] = [*out.get("runs", []), run]
+    tmp = Path(args.json).with_suffix(".tmp")
+    tmp.write_text(json.dumps(out, indent=1) + "\n")
+    tmp.replace(args.json)
+    print(f"wrote {args.json}")
 
 
 if __name__ == "__main__":

@@ -1,7 +1,11 @@
 """Speed of the eight metrics at the paper's size (636 x 720; chirp and gray
 bar 500 x 500), and of the whole set for one (CFA, demosaic).
 
-    python benchmarks/bench_metrics.py [--repeat N]
+    python benchmarks/bench_metrics.py [--repeat N] [--json PATH]
+
+``--json PATH`` also writes the times, budgets, load average and date to
+PATH; docs/metrics.md's "Speed" table is generated from the committed
+docs/data/bench_metrics.json.
 
 Prints a table: median wall time per metric over N runs, and the budget it
 must meet (issue 5: S-CIELAB < 1 s, MDSI and HaarPSI < 0.3 s each, the whole
@@ -77,6 +81,7 @@ def timeit(fn, repeat):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--json", metavar="PATH", help="also write the measured times to PATH (JSON)")
     args = ap.parse_args(argv)
     ideal, camera = scene()
     e = edge()
@@ -119,12 +124,24 @@ def main(argv=None):
     whole_set()  # warm-up: imports (colour-science, scikit-image)
     print(f"metrics at {H} x {W} (chirp, gray bar 500 x 500); median of {args.repeat}; {os.cpu_count()} CPU(s)")
     print(f"{'metric':<32} {'time (s)':>9} {'budget (s)':>11}  ok")
-    failed = False
+    failed, rows = False, []
     for name, fn, budget in cases:
         t = timeit(fn, args.repeat)
         ok = "" if budget is None else ("yes" if t < budget else "NO")
         failed |= ok == "NO"
+        rows.append({"metric": name, "time_s": t, "budget_s": budget})
         print(f"{name:<32} {t:9.3f} {'' if budget is None else f'{budget:.1f}':>11}  {ok}")
+    if args.json:
+        import json
+        from datetime import datetime, timezone
+        from pathlib import Path
+
+        load = os.getloadavg()[0] if hasattr(os, "getloadavg") else None
+        out = {"rows": rows, "repeat": args.repeat, "size": [H, W], "cpus": os.cpu_count(), "load_average_end": load,
+               "date": datetime.now(timezone.utc).strftime("%Y-%m-%d")}
+        tmp = Path(args.json).with_suffix(".tmp")
+        tmp.write_text(json.dumps(out, indent=1) + "\n")
+        tmp.replace(args.json)
     return 1 if failed else 0
 
 

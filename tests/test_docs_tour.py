@@ -1,9 +1,10 @@
-"""The README's command-line tour is what running it prints now (cfa_mitsuba/report/docs_tour.py).
+"""The command-line tours of README.md and docs/*.md are what running them prints now
+(cfa_mitsuba/report/docs_tour.py).
 
-Runs the tour's commands in a fresh folder with an empty render cache (about
-a minute on 2 cores: a 720 x 636 Macbeth render, two captures, two
-processes, one metric) and compares the output with the README's block,
-seconds and cache keys masked.
+Runs each tour block's commands in a fresh folder with an empty render cache
+(about a minute on 2 cores: the README's 720 x 636 Macbeth render, captures,
+processes and a metric; docs/sensor.md's captures of a small render) and
+compares the output with the block, seconds and cache keys masked.
 """
 
 from __future__ import annotations
@@ -27,10 +28,15 @@ def test_the_tour_block_layout_is_read_back():
         "rendered in T s, cached as KEY"
 
 
-def test_the_readme_tour_is_what_the_tour_prints_now():
-    src = (REPO / "README.md").read_text()
-    m = docs_tour.TOUR.search(src)
-    assert m, "README.md has no tour block"
-    fresh = docs_tour.run_tour_block(REPO, m.group("block"))
-    assert docs_tour.normalised(fresh) == docs_tour.normalised(m.group("block"))
-    assert "delta-e:" in fresh and "condition number" in fresh and "error: unknown CFA 'nosuch'" in fresh
+def test_every_tour_is_what_the_tour_prints_now():
+    files = docs_tour.tour_files(REPO)
+    assert REPO / "README.md" in files and REPO / "docs" / "sensor.md" in files
+    printed = []
+    for path in files:
+        for m in docs_tour.TOUR.finditer(path.read_text()):
+            fresh = docs_tour.run_tour_block(REPO, m.group("block"))
+            assert docs_tour.normalised(fresh) == docs_tour.normalised(m.group("block")), path.name
+            printed.append(fresh)
+    text = "\n".join(printed)
+    assert "delta-e:" in text and "condition number" in text and "error: unknown CFA 'nosuch'" in text
+    assert "(program: analogue gain 16" in text and "(auto at 100 cd/m^2)" in text

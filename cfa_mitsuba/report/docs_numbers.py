@@ -26,8 +26,8 @@ Paths are relative to the repository root.  ``python3 -m
 cfa_mitsuba.report.docs_numbers`` rewrites every marked span from its
 source; ``--check`` changes nothing and exits 1 listing each span whose
 text differs from its source (tests/test_docs_numbers.py runs the check);
-``--tour`` also re-runs the README's command-line tour
-(:mod:`.docs_tour`) and writes its output into the tour block.
+``--tour`` also re-runs every command-line tour block of README.md and
+docs/*.md (:mod:`.docs_tour`) and writes its output into the block.
 
 Hand-written: a 60-line marker parser; nothing in the field's libraries
 fills Markdown spans from CSV queries.
@@ -226,7 +226,7 @@ def main(argv=None) -> int:
                                  description="Fill the marked numbers of README.md and docs/*.md from committed "
                                              "results (--check: only compare).")
     ap.add_argument("--check", action="store_true", help="change nothing; exit 1 when a span differs from its source")
-    ap.add_argument("--tour", action="store_true", help="also re-run the README's command-line tour (minutes)")
+    ap.add_argument("--tour", action="store_true", help="also re-run the command-line tours of README.md and docs/*.md (minutes)")
     args = ap.parse_args(argv)
     try:
         if args.check:
@@ -238,7 +238,7 @@ def main(argv=None) -> int:
         if args.tour:
             from .docs_tour import run_tour
 
-            run_tour(REPO)
+            print(f"{run_tour(REPO)} tour block(s) re-run")
         n = fill()
         print(f"{n} span(s) rewritten from their sources")
         return 0

@@ -9,7 +9,7 @@ interval of exactly 1, otherwise the tied set.
 from __future__ import annotations
 
 __all__ = ["GENERATORS", "rank_table", "rank_summary", "timing_sentence", "decisions_table_md", "spearman_sentence",
-           "claims_sentence"]
+           "claims_sentence", "monotone_table", "low_light_table", "axis_table"]
 
 import json
 from pathlib import Path
@@ -170,6 +170,104 @@ def design_front(repo: Path, results: str) -> str:
             f"{', '.join(named['cfa'])}" + (f"; candidates dominated by {', '.join(beaten)}" if beaten else ""))
 
 
+def monotone_table(repo: Path, *texts: str) -> str:
+    """The colour-matrix rule before and after (docs/isp.md), from the committed
+    output of ``benchmarks/monotone_colour_matrix.py`` (one text file per
+    exposure policy): per CFA and rule, S-CIELAB, SSIM and the matrix's
+    condition number at each luminance."""
+    lines = []
+    for text in texts:
+        path = repo / text
+        if not path.is_file():
+            raise CfaMitsubaError(f"{text} not found (run benchmarks/monotone_colour_matrix.py)")
+        first, header, *rows = path.read_text().splitlines()
+        policy = first.split(";")[0].removeprefix("policy ").strip()
+        lums = [w.removeprefix("L=").rstrip(":") for w in header.split() if w.startswith("L=")]
+        if not lines:
+            head = ["policy", "CFA", "colour-matrix rule", *(f"S-CIELAB / SSIM / cond at {L} cd/m^2" for L in lums)]
+            lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+        for row in rows:
+            rule, cfa, *vals = row.split()
+            rule = {"capture": "capture's own (before)", "sensor": "sensor's (after)"}.get(rule, rule)
+            cells = [" / ".join(vals[3 * i:3 * i + 3]) for i in range(len(lums))]
+            lines.append("| " + " | ".join([policy, f"`{cfa}`", rule, *cells]) + " |")
+    return "\n\n" + "\n".join(lines) + "\n\n"
+
+
+def _num(v, spec: str = ".3g") -> str:
+    import math
+
+    return "—" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
+
+
+def low_light_table(repo: Path, folder: str) -> str:
+    """docs/study.md's RGBW and CMY answer, from the committed small study
+    under ``folder``/<protocol>/ (``docs/low-light/run.py`` writes it): per
+    protocol, demosaic and CFA, SNR10 with its 95 % interval, the
+    luminances at which the CFA is better or worse than Bayer on YSNR, chroma
+    SNR and S-CIELAB (intervals apart; the rest are ties: the report's
+    comparison, :func:`.low_light.versus_reference`), and its ΔE00 and MTF50
+    at 100 cd/m^2 beside Bayer's (the cost in colour and sharpness)."""
+    import pandas as pd
+
+    from .low_light import versus_reference
+
+    def levels(values) -> str:
+        return ", ".join(f"{v:g}" for v in values) or "—"
+
+    lines = ["| protocol | demosaic | CFA | SNR10 cd/m² (95 %) | YSNR better / worse at | chroma SNR better / worse at "
+             "| S-CIELAB better / worse at | ΔE00 (Bayer) | MTF50 (Bayer) |", "|---|---|---|---|---|---|---|---|---|"]
+    for policy in ("program", "bayer"):
+        path = repo / folder / policy
+        if not (path / "metrics.csv").is_file() or not (path / "snr10.csv").is_file():
+            raise CfaMitsubaError(f"{folder}/{policy}/metrics.csv or snr10.csv not found (run docs/low-light/run.py)")
+        m = pd.read_csv(path / "metrics.csv")
+        s10 = pd.read_csv(path / "snr10.csv").set_index(["cfa", "demosaic"])
+        for d in dict.fromkeys(m["demosaic"]):
+            if ("bayer", d) in s10.index:
+                r = s10.loc[("bayer", d)]
+                lines.append(f"| {policy} | {d} | bayer | {_num(r.snr10_cd_m2)} ({_num(r.ci_low)}-{_num(r.ci_high)}) "
+                             "| | | | | |")
+        for r in versus_reference(m):
+            s = s10.loc[(r["cfa"], r["demosaic"])]
+            cells = [f"{levels(r[f'{k}_wins'])} / {levels(r[f'{k}_losses'])}" for k in ("ysnr", "chroma_snr", "scielab")]
+            cost = [f"{_num(r[k][0])} ({_num(r[k][1])})" if k in r else "—" for k in ("delta-e", "mtf")]
+            lines.append(f"| {policy} | {r['demosaic']} | {r['cfa']} | {_num(s.snr10_cd_m2)} ({_num(s.ci_low)}-"
+                         f"{_num(s.ci_high)}) | " + " | ".join(cells + cost) + " |")
+    return "\n\n" + "\n".join(lines) + "\n\n"
+
+
+def axis_table(repo: Path, results: str, axis: str, *scene_metrics: str) -> str:
+    """A swept axis as a Markdown table from a study's metrics.csv: one row
+    per ``SCENE:METRIC`` given, CFA and demosaic, one column per value of
+    ``axis``; each cell the mean over the realisations with half its 95 %
+    interval in brackets."""
+    import pandas as pd
+
+    path = repo / results / "metrics.csv"
+    if not path.is_file():
+        raise CfaMitsubaError(f"{results}/metrics.csv not found")
+    m = pd.read_csv(path)
+    if axis not in m.columns:
+        raise CfaMitsubaError(f"{results}/metrics.csv has no column {axis!r}")
+    values = sorted(m[axis].unique())
+    lines = ["| CFA, demosaic | " + " | ".join(f"{axis} {v:g}" for v in values) + " |",
+             "|---|" + "---|" * len(values)]
+    for sm in scene_metrics:
+        scene, metric = sm.split(":")
+        rows = m[(m["scene"] == scene) & (m["metric"] == metric)]
+        if rows.empty:
+            raise CfaMitsubaError(f"{results}/metrics.csv has no {metric!r} rows on {scene!r}")
+        unit = rows["unit"].iloc[0]
+        unit = f" ({unit})" if isinstance(unit, str) and unit else ""
+        for (cfa, dem), g in rows.groupby(["cfa", "demosaic"], sort=False):
+            g = g.drop_duplicates(axis).set_index(axis)
+            cells = [f"{g.loc[v, 'value']:.4g} ({(g.loc[v, 'ci_high'] - g.loc[v, 'ci_low']) / 2:.2g})"
+                     if v in g.index else "—" for v in values]
+            lines.append(f"| {cfa}, {dem}: {scene} {metric}{unit} | " + " | ".join(cells) + " |")
+    return "\n\n" + "\n".join(lines) + "\n\n"
+
+
 #: {name: function(repo, *args) -> Markdown}
 GENERATORS = {
     "rank-table": rank_table,
@@ -180,4 +278,19 @@ GENERATORS = {
     "claims": claims_sentence,
     "design-table": design_table,
     "design-front": design_front,
+    "monotone-table": monotone_table,
+    "low-light-table": low_light_table,
+    "axis-table": axis_table,
 }
+
+
+def _register_more() -> None:
+    """Generators kept in modules of their own (one per page), under the same names space."""
+    from .docs_tables_convergence import GENERATORS as convergence
+    from .docs_tables_pages import GENERATORS as pages
+
+    GENERATORS.update(convergence)
+    GENERATORS.update(pages)
+
+
+_register_more()

@@ -1,8 +1,10 @@
-"""The README's command-line tour, produced by running it.
+"""Command-line examples in README.md and docs/*.md, produced by running them.
 
-The tour is the ```console block between ``<!-- tour -->`` and
-``<!-- /tour -->`` in README.md.  :func:`run_tour` runs each ``$
-cfa-mitsuba ...`` line in a fresh folder with an empty render cache (as
+A tour is a ```console block between ``<!-- tour -->`` and
+``<!-- /tour -->`` (README.md's tour of the command line, the capture
+examples of docs/sensor.md, ...).  :func:`run_tour` runs each ``$
+cfa-mitsuba ...`` line of each block in a fresh folder (one per block, so
+a block may make the files its later lines read) with an empty render cache (as
 ``python3 -m cfa_mitsuba``, the same program) and writes its output back
 under it, keeping the block's layout: a command shown without output stays
 so (a trailing ``# comment`` or no lines below it), a long output shown
@@ -16,7 +18,7 @@ are those of the code.  ``normalised`` masks what changes between runs
 
 from __future__ import annotations
 
-__all__ = ["TOUR", "tour_commands", "run_tour_block", "run_tour", "normalised"]
+__all__ = ["TOUR", "tour_files", "tour_commands", "run_tour_block", "run_tour", "normalised"]
 
 import os
 import re
@@ -100,15 +102,27 @@ def run_tour_block(repo: Path, block: str) -> str:
         return "\n".join(parts) + "\n"
 
 
-def run_tour(repo: Path) -> None:
-    """Rewrite README.md's tour block by running it (about a minute on 2 cores)."""
-    readme = repo / "README.md"
-    src = readme.read_text()
-    m = TOUR.search(src)
-    if not m:
-        raise CfaMitsubaError("README.md has no <!-- tour --> ```console ... ``` <!-- /tour --> block")
-    new = run_tour_block(repo, m.group("block"))
-    readme.write_text(src[:m.start("block")] + new + src[m.end("block"):])
+def tour_files(repo: Path) -> list[Path]:
+    """README.md and the docs/*.md that hold at least one tour block."""
+    files = [repo / "README.md", *sorted((repo / "docs").glob("*.md"))]
+    return [f for f in files if TOUR.search(f.read_text())]
+
+
+def run_tour(repo: Path) -> int:
+    """Rewrite every tour block of README.md and docs/*.md by running it
+    (a few minutes on 2 cores); returns the number of blocks."""
+    n = 0
+    for path in tour_files(repo):
+        src = path.read_text()
+        parts, last = [], 0
+        for m in TOUR.finditer(src):
+            parts += [src[last:m.start("block")], run_tour_block(repo, m.group("block"))]
+            last = m.end("block")
+            n += 1
+        path.write_text("".join(parts) + src[last:])
+    if not n:
+        raise CfaMitsubaError("no <!-- tour --> ```console ... ``` <!-- /tour --> block in README.md or docs/*.md")
+    return n
 
 
 def normalised(text: str) -> str:

@@ -5,7 +5,7 @@
 
 writes docs/low-light/<policy>/{metrics.csv, snr.csv, snr10.csv, cfas.json}
 (metrics.csv trimmed to the columns the table reads); then
-``python3 docs/low-light/table.py`` rewrites the table in docs/study.md.
+``python3 -m cfa_mitsuba.report.docs_numbers`` rewrites the table in docs/study.md.
 """
 
 from __future__ import annotations
