@@ -26,13 +26,8 @@ pytestmark = pytest.mark.slow
 CONFIG = """
 name = "rediscovery"
 seed = 5
-[layout]
-tiles = ["2x2"]
-alphabet = ["R", "G", "B"]
-spectra_set = "isetcam-rgb"
-[search]
-full_chain = 9            # every distinct 2x2 layout
-agreement_sample = 0
+layout = { tiles = ["2x2"], alphabet = ["R", "G", "B"], spectra_set = "isetcam-rgb" }
+search = { full_chain = 9, agreement_sample = 0 }    # every distinct 2x2 layout through the full chain
 [[objective]]
 metric = "mtf"
 scene = "slanted-edge"
@@ -50,21 +45,13 @@ scenes = ["macbeth", "slanted-edge", "gray-bar"]
 cfas = ["bayer"]
 demosaics = ["bilinear"]
 seeds = 6                 # narrow intervals: dominance within intervals needs them
-[study.render.macbeth]
-width = 120
-height = 106
-[study.render.slanted-edge]
-width = 320
-height = 288
-[study.render.gray-bar]
-width = 250
-height = 120
 [study.sensor]
 exposure_policy = "program"
 [study.output]
 figures = ["png"]
 thumbnails = false
-"""
+""" + "".join(f"[study.render.{scene}]\nwidth = {w}\nheight = {h}\n"
+              for scene, (w, h) in {"macbeth": (120, 106), "slanted-edge": (320, 288), "gray-bar": (250, 120)}.items())
 
 
 def _is_bayer(tile_text: str) -> bool:

@@ -225,7 +225,8 @@ def test_scene_registry_declares_defaults_and_metrics():
     rows = dict(cm.render.list_scenes())
     assert set(rows) == {"macbeth", "slanted-edge", "chirp", "gray-bar", "puppy"}
     assert all(cm.render.get_scene(name).name == name for name in rows)
-    expect = {"macbeth": ("delta-e",), "slanted-edge": ("mtf",), "chirp": ("moire",), "gray-bar": ("achromatic", "ysnr"),
+    expect = {"macbeth": ("delta-e",), "slanted-edge": ("mtf", "info-capacity"), "chirp": ("moire",),
+              "gray-bar": ("achromatic", "ysnr"),
               "puppy": ("scielab", "ssim", "mdsi", "haarpsi")}
     sizes = {"macbeth": (636, 720), "slanted-edge": (636, 720), "puppy": (636, 720), "chirp": (500, 500), "gray-bar": (500, 500)}
     for name, metrics in expect.items():

@@ -42,7 +42,7 @@ def test_render_writes_exr_and_sidecar_then_reuses_the_cache(tmp_path, monkeypat
     assert SIDECAR_KEYS <= set(meta)
     assert meta["width"] == 64 and meta["height"] == 48 and meta["oversample"] == 4
     assert meta["luminance_cd_m2"] == 100.0 and meta["kind"] == "slanted-edge"
-    assert cm.metrics.metrics_for_scene(meta["kind"]) == ("mtf",)
+    assert cm.metrics.metrics_for_scene(meta["kind"]) == ("mtf", "info-capacity")
     img = read_spectral_exr(exr)
     assert spectra.luminance_cd_m2(img.data).mean() == pytest.approx(100.0, rel=1e-4)
 

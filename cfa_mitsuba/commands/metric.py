@@ -55,7 +55,7 @@ def add_arguments(parser) -> None:
 
     names = metric_names()
     parser.add_argument("name", choices=list(names), metavar="NAME", help="metric: " + ", ".join(names))
-    parser.add_argument("images", nargs="+", metavar="IMAGE", help="REF TEST (mtf: one IMAGE)")
+    parser.add_argument("images", nargs="+", metavar="IMAGE", help="REF TEST (mtf, info-capacity: one IMAGE)")
     parser.add_argument("--input", choices=INPUTS, help="how to read the pixel values (default: from the file)")
     parser.add_argument("--samples-per-degree", type=float, metavar="N", help="S-CIELAB viewing: pixels per degree")
     parser.add_argument("--fov-deg", type=float, metavar="DEG", help="horizontal field of view (samples per degree = width / DEG)")
@@ -198,6 +198,10 @@ def _geometry(path, shape):
     return scene_geometry(read_sidecar(path), shape)  # read_sidecar checks it against the sidecar schema
 
 
+#: The metrics of one edge image (linear), not a REF TEST pair.
+SINGLE_IMAGE = ("mtf", "info-capacity")
+
+
 def run(args) -> int:
     import numpy as np
 
@@ -206,7 +210,7 @@ def run(args) -> int:
 
     _NOTICES.clear()
     info = cm.get_metric(args.name)
-    single = args.name == "mtf"
+    single = args.name in SINGLE_IMAGE
     need = 1 if single else 2
     require(len(args.images) == need,
             f"{args.name} takes {'one image (the edge)' if single else 'two images: REF TEST'}, got {len(args.images)}")
@@ -239,7 +243,7 @@ def run(args) -> int:
         roi = _floats(args.roi, 4, "--roi") if args.roi else geo.get("roi")
         inputs = cm.MetricInputs(white_xyz=white, geometry=geo, pixel_pitch_um=args.pixel_pitch_um,
                                  test_linear=_to_linear(imgs[0], white))
-        return _emit(args, cm.evaluate("mtf", inputs, roi=roi), imgs)
+        return _emit(args, cm.evaluate(args.name, inputs, roi=roi), imgs)
 
     ref, test = imgs
     require(ref.data.shape[:2] == test.data.shape[:2],

@@ -49,10 +49,12 @@ def front_figure(table, objectives):
     and 95 % interval; Pareto candidates filled, dominated ones hollow,
     named CFAs as labelled squares."""
     pairs = _pairs(objectives)
-    fig = new_figure(4.6 * len(pairs) + 0.4, 4.6)
     named = table[table["kind"] == "named"]
-    for k, (i, j) in enumerate(pairs):
-        ax = fig.add_axes((0.08 + k / len(pairs) * 0.95, 0.17, 0.95 / len(pairs) - 0.11, 0.63))
+    side = 3.2 if len(named) > 4 else 0.0   # many named CFAs: the legend in a column of its own at the right
+    width = 4.6 * len(pairs) + 0.4 + side
+    fig = new_figure(width, 4.6 if not side else max(4.6, 0.19 * (len(named) + 3)))
+    for k, (i, j) in enumerate(pairs):  # each panel 4.6 in wide: 1.0 in for the y label, 0.4 in of gap
+        ax = fig.add_axes(((1.0 + 4.6 * k) / width, 0.17, 3.2 / width, 0.63 if not side else 0.74))
         ox = objectives[i]
         oy = objectives[j] if j is not None else None
 
@@ -73,15 +75,18 @@ def front_figure(table, objectives):
                 ax.errorbar(x, y, xerr=xe, yerr=ye, linestyle="none", capsize=2, **style)
         for n, (_, r) in enumerate(named.iterrows()):  # named in the legend: labels never overlap
             x, y, xe, ye = xy(named.loc[[_]])
-            ax.errorbar(x, y, xerr=xe, yerr=ye, fmt="s", color=_NAMED[n % len(_NAMED)], capsize=2, ms=7,
-                        label=r["cfa"])
+            ax.errorbar(x, y, xerr=xe, yerr=ye, fmt="sDv^<>ph"[n // len(_NAMED) % 8], color=_NAMED[n % len(_NAMED)],
+                        capsize=2, ms=7, label=r["cfa"])
         ax.set_xlabel(_axis_title(ox), fontsize=8)
         if oy is not None:
             ax.set_ylabel(_axis_title(oy), fontsize=8)
         else:
             ax.set_yticks([])
     handles, labels = fig.axes[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="upper center", ncol=min(len(labels), 4), fontsize=7, frameon=False)
+    if side:
+        fig.legend(handles, labels, loc="center right", ncol=1, fontsize=7, frameon=False)
+    else:
+        fig.legend(handles, labels, loc="upper center", ncol=min(len(labels), 4), fontsize=7, frameon=False)
     return fig
 
 

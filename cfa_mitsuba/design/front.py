@@ -160,8 +160,9 @@ def agreement(table, objectives) -> dict:
         r = spearmanr(a, b).statistic
         return None if not np.isfinite(r) else float(r)
 
-    out["combined"] = rho(-cand["proxy_score"].to_numpy(), cand["score"].to_numpy())
-    out["combined_interval"] = spearman_interval(out["combined"], n)
+    ok = np.isfinite(cand["score"].to_numpy(dtype=float))  # a CFA whose objective was not measured has no score
+    out["combined"] = rho(-cand["proxy_score"].to_numpy()[ok], cand["score"].to_numpy()[ok]) if ok.sum() >= 3 else None
+    out["combined_interval"] = spearman_interval(out["combined"], int(ok.sum()))
     per, ci, sep = {}, {}, {}
     for o in objectives:
         sep[o.label] = separating(cand, o)
