@@ -60,3 +60,33 @@ def test_sweep_line_reads_the_config_as_written():
     cfg = {"sweeps": [{"scenes": ["puppy"], "metrics": ["scielab", "ssim"], "values": {"luminance": [12.0, 100.0]}}]}
     assert sweep_lines(cfg, str.upper) == ["SCIELAB, SSIM on puppy at luminance 12, 100 cd/m²"]
     assert "None" not in sweep_lines({"sweeps": [{"scenes": ["x"], "values": {"f_number": [2.8, 4]}}]}, str)[0]
+
+
+def test_low_light_level_passes_over_levels_where_every_cfa_clips_to_the_bound():
+    """At 0.3 cd/m^2 every CFA's S-CIELAB and SSIM lie past the range's worst end (all score 0: a
+    tie that says nothing); the low-light decision is taken at 1 cd/m^2, the lowest level at which
+    the scores differ, and the detail names the level passed over."""
+    from cfa_mitsuba.study.decisions import _lowlight, write_decisions  # noqa: F401
+
+    ranges = {"scielab": (10.0, 0.0), "ssim": (0.0, 1.0)}
+    rows = []
+    for lum, vals in ((0.3, {"bayer": (20.0, -0.1), "rgbw1": (25.0, -0.2)}),
+                      (1.0, {"bayer": (8.0, 0.30), "rgbw1": (5.0, 0.50)}),
+                      (100.0, {"bayer": (2.0, 0.90), "rgbw1": (2.5, 0.88)})):
+        for cfa, (sc, ss) in vals.items():
+            for r in range(3):
+                for metric, v, unit in (("scielab", sc + 0.01 * r, "dE00"), ("ssim", ss + 0.001 * r, "")):
+                    rows.append(dict(scene="puppy", cfa=cfa, demosaic="bilinear", luminance=lum, metric=metric,
+                                     value=v, unit=unit, realisation=r, base=lum == 100.0))
+    low, lum, skipped = _lowlight(pd.DataFrame(rows), ranges, True, {"scielab", "ssim"})
+    assert lum == 1.0 and skipped == (0.3,)
+    assert set(low["luminance"]) == {1.0} and low.groupby("cfa")["score"].mean()["rgbw1"] > 0
+    s = _scores([("bayer", "bilinear", 0.60, 0.01, 0.60, 0.02, 1, 1), ("rgbw1", "bilinear", 0.5, 0.01, 0.5, 0.02, 2, 2)])
+    d = decisions_table(s, pd.DataFrame(columns=["cfa", "metric", "realisation", "score"]), low, lum, skipped)
+    row = d.set_index("aspect").loc["low light"]
+    assert row["cfas"] == "rgbw1" and row["verdict"] == "winner"
+    assert "at 1 cd/m^2 (the lowest level at which the CFAs' scores differ; at 0.3 cd/m^2 every CFA" in row["detail"]
+    # no level differs: the lowest is kept (a tie, said as such)
+    flat = pd.DataFrame([r for r in rows if r["luminance"] != 1.0])
+    low2, lum2, skipped2 = _lowlight(flat, ranges, True, {"scielab", "ssim"})
+    assert lum2 == 0.3 and skipped2 == ()

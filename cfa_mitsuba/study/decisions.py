@@ -5,8 +5,10 @@ One row per aspect (``aspect``, ``cfas``, ``verdict``, ``detail``):
 - ``colour``: the mean score of ΔE00 (Macbeth) and S-CIELAB (puppy);
 - ``sharpness``: MTF50 (slanted edge);
 - ``moire``: the moire starting point (chirp);
-- ``low light``: S-CIELAB and SSIM at the study's lowest luminance below
-  its base one (the luminance sweep), scored with the study's ranges;
+- ``low light``: S-CIELAB and SSIM at the lowest swept luminance below
+  the base one at which the CFAs' scores differ (scored with the study's
+  ranges; lower levels, where every CFA clips to the range's bound, are
+  passed over and named in the detail);
 - ``overall``: the total score of Table 3 (scores.csv's ``total_rank``).
 
 Each aspect's score of a CFA is the mean, over the study's demosaics and
@@ -94,13 +96,15 @@ def _aspect_rows(aspect, metrics, scored_every, lowlight_every):
     return cfas, s, lo, hi, (best[pos], worst[pos])
 
 
-def decisions_table(scores, scored_every, lowlight_every=None, lowlight_luminance=None):
+def decisions_table(scores, scored_every, lowlight_every=None, lowlight_luminance=None, lowlight_skipped=()):
     """decisions.csv as a DataFrame.
 
     ``scores``: scores.csv; ``scored_every``: the scored rows per
     realisation (``cfa``, ``metric``, ``realisation``, ``score``), at the
     base luminance; ``lowlight_every``: the same for the low-light rows
-    (None: the study has none) at ``lowlight_luminance`` cd/m^2.
+    (None: the study has none) at ``lowlight_luminance`` cd/m^2;
+    ``lowlight_skipped``: the lower levels passed over, where every CFA
+    scored the same bound.
     """
     import pandas as pd
 
@@ -129,37 +133,55 @@ def decisions_table(scores, scored_every, lowlight_every=None, lowlight_luminanc
         what = {"colour": "mean score of dE00 and S-CIELAB", "sharpness": "MTF50 score",
                 "moire": "moire starting point score",
                 "low light": f"mean score of S-CIELAB and SSIM at {lowlight_luminance:g} cd/m^2"
+                + (f" (the lowest level at which the CFAs' scores differ; at "
+                   f"{', '.join(f'{v:g}' for v in lowlight_skipped)} cd/m^2 every CFA scores the range's bound)"
+                   if lowlight_skipped else "")
                 if lowlight_luminance is not None else ""}[aspect]
         out.append((aspect, " ".join(cfas), verdict, f"{what}, over the demosaics: {detail}"))
     return pd.DataFrame(out, columns=COLUMNS)
 
 
 def _lowlight(realisations, ranges, clip, scored_metrics_):
-    """(per-realisation scored rows at the lowest swept luminance, that luminance) or (None, None)."""
+    """(per-realisation scored rows at the low-light level, that luminance,
+    the lower levels passed over) or (None, None, ()).
+
+    The level is the lowest swept luminance below the base one at which the
+    CFAs' scores differ: below the range the study scores against, every
+    CFA's S-CIELAB and SSIM clip to the same bound (0), a tie that says
+    nothing about the CFAs, so such levels are passed over and named."""
     from .scoring import normalise
 
+    none = None, None, ()
     if realisations is None or realisations.empty or "base" not in realisations:
-        return None, None
+        return none
     base = realisations[realisations["base"].astype(bool)]
     if base.empty:
-        return None, None
+        return none
     base_lum = float(base["luminance"].astype(float).min())
     metrics = [m for m in ("scielab", "ssim") if m in ranges and m in scored_metrics_]
-    low = realisations[realisations["metric"].isin(metrics)
-                       & (realisations["luminance"].astype(float) < base_lum)]
-    if low.empty:
-        return None, None
-    lum = float(low["luminance"].astype(float).min())
-    low = low[low["luminance"].astype(float) == lum]
-    # only the other axes at their base values: a sweep over luminance alone
-    low = low.drop_duplicates(["scene", "cfa", "demosaic", "metric", "realisation"])
+    below = realisations[realisations["metric"].isin(metrics)
+                         & (realisations["luminance"].astype(float) < base_lum)]
+    if below.empty:
+        return none
     cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
-    cols += ["render_seed"] if "render_seed" in low.columns else []
+    cols += ["render_seed"] if "render_seed" in below.columns else []
     import pandas as pd
 
-    parts = [normalise(g[cols].drop(columns="realisation"), ranges, clip=clip).assign(realisation=r)
-             for r, g in low.groupby("realisation", sort=True)]
-    return pd.concat(parts, ignore_index=True), lum
+    def scored(lum):
+        low = below[below["luminance"].astype(float) == lum]
+        # only the other axes at their base values: a sweep over luminance alone
+        low = low.drop_duplicates(["scene", "cfa", "demosaic", "metric", "realisation"])
+        parts = [normalise(g[cols].drop(columns="realisation"), ranges, clip=clip).assign(realisation=r)
+                 for r, g in low.groupby("realisation", sort=True)]
+        return pd.concat(parts, ignore_index=True)
+
+    levels = sorted(below["luminance"].astype(float).unique())
+    for i, lum in enumerate(levels):
+        rows = scored(lum)
+        per_cfa = rows.groupby("cfa")["score"].mean()
+        if per_cfa.max() - per_cfa.min() > 1e-12:
+            return rows, lum, tuple(levels[:i])
+    return scored(levels[0]), levels[0], ()  # no level tells the CFAs apart: the lowest, a tie
 
 
 def write_decisions(out_dir: Path, realisations, scored_real, scores, ranges, *, clip: bool, constant=()) -> None:
@@ -172,7 +194,7 @@ def write_decisions(out_dir: Path, realisations, scored_real, scores, ranges, *,
     cols += ["render_seed"] if "render_seed" in scored_real.columns else []
     kept = scored_real[~scored_real["metric"].isin(list(constant))]
     every = _realisation_scores(kept[cols], ranges, clip) if len(kept) else kept
-    low, lum = _lowlight(realisations, ranges, clip, set(scored_metrics()) - set(constant))
-    table = decisions_table(scores, every, low, lum)
+    low, lum, skipped = _lowlight(realisations, ranges, clip, set(scored_metrics()) - set(constant))
+    table = decisions_table(scores, every, low, lum, skipped)
     with atomic_output(Path(out_dir) / "decisions.csv") as tmp:
         table.to_csv(tmp, index=False)
