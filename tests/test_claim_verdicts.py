@@ -54,18 +54,17 @@ def _intervals(folder: Path, metric: str, demosaic: str) -> dict:
 def _by_rule(folder: Path, claim: dict) -> str:
     """The verdict, from the rule's sentence on the CSV rows."""
     if claim["kind"] == "best":
+        # "best" needs a rank interval of exactly 1; another CFA is surely better when this one's best rank is
+        # above 1 (scores.csv's rank intervals: paired comparisons where the study kept its realisations)
         s = pd.read_csv(folder / "scores.csv")
         s = s[s["luminance"] == s["luminance"].min()]
         if claim["demosaic"] == "total":
-            rows = s.drop_duplicates("cfa").set_index("cfa")[["total_score_ci_low", "total_score_ci_high"]]
+            rows = s.drop_duplicates("cfa").set_index("cfa")[["total_rank_best", "total_rank_worst"]]
         else:
             rows = s[s["demosaic"] == claim["demosaic"]].drop_duplicates("cfa").set_index("cfa")[
-                ["mean_score_ci_low", "mean_score_ci_high"]]
-        lo, hi = rows.iloc[:, 0], rows.iloc[:, 1]
-        me = claim["cfa"]
-        above = [c for c in rows.index if c != me and lo[c] > hi[me]]
-        overlapping = [c for c in rows.index if c != me and not (hi[c] < lo[me]) and not (lo[c] > hi[me])]
-        return "differs" if above else "tie" if overlapping else "holds"
+                ["demosaic_rank_best", "demosaic_rank_worst"]]
+        best, worst = rows.loc[claim["cfa"]]
+        return "differs" if best > 1 else "holds" if worst == 1 else "tie"
     vals = _intervals(folder, claim["metric"], claim["demosaic"])
     hib = HIGHER_IS_BETTER[claim["metric"]]
     if claim["kind"] == "order":
