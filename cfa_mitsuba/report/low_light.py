@@ -212,14 +212,14 @@ def _versus_html(res: Results) -> str | None:
     if "bayer" not in set(m["cfa"]) or "ysnr" not in set(m["metric"]):
         return None
     head = "".join(f"<th>{_e(k)}: better / worse than Bayer at (cd/m²)</th>" for k, _, _ in VERSUS_METRICS)
-    rows = [f'<table class="data"><thead><tr><th>demosaic</th><th>CFA</th>{head}<th>ΔE00 (Bayer)</th>'
+    rows = [f'<div class="tablewrap"><table class="data wraphead"><thead><tr><th>demosaic</th><th>CFA</th>{head}<th>ΔE00 (Bayer)</th>'
             "<th>MTF50 (Bayer)</th></tr></thead><tbody>"]
     for r in versus_reference(m[m["cfa"].isin(res.cfas) & m["demosaic"].isin(res.demosaics)]):
         cells = "".join(f"<td>{_levels(r[f'{k}_wins'])} / {_levels(r[f'{k}_losses'])}</td>" for k, _, _ in VERSUS_METRICS)
         cost = "".join(f"<td>{_fmt(r[k][0], '.3g')} ({_fmt(r[k][1], '.3g')})</td>" if k in r else "<td>—</td>"
                        for k in ("delta-e", "mtf"))
         rows.append(f"<tr><td>{_e(r['demosaic'])}</td><th>{_e(r['cfa'])}</th>{cells}{cost}</tr>")
-    rows.append("</tbody></table>")
+    rows.append("</tbody></table></div>")
     return ('<p class="note">Better or worse: the 95 % intervals over the noise realisations do not overlap; '
             "any luminance not listed is a tie.</p>" + "".join(rows))
 

@@ -66,6 +66,7 @@ p.intro,p.note,.caption{color:var(--muted)}
 dl.run{display:grid;grid-template-columns:max-content 1fr;gap:2px 14px;margin:8px 0}
 dl.run dt{color:var(--muted)}dl.run dd{margin:0}
 .tablewrap{overflow-x:auto;margin:6px 0 4px}
+table.data.wraphead thead th{white-space:normal;max-width:190px}
 table.data{border-collapse:collapse;font-size:12.5px;font-variant-numeric:tabular-nums}
 table.data th,table.data td{border-bottom:1px solid #eaeef2;padding:3px 8px;text-align:right;white-space:nowrap}
 table.data thead th{position:sticky;top:0;background:var(--soft);border-bottom:2px solid var(--rule);
