@@ -136,6 +136,12 @@ def claims_sentence(repo: Path, results: str) -> str:
                      if v in by)
 
 
+def _g4(v) -> str:
+    """A design table cell's number, or '—' where the run has none (an SNR10
+    interval that never reaches YSNR 10 is open at that end)."""
+    return "—" if v in ("", None) else f"{float(v):.4g}"
+
+
 def design_table(repo: Path, results: str) -> str:
     """A design run's fullchain.csv as Markdown: each CFA's objectives with 95 % intervals and what dominates it."""
     import pandas as pd
@@ -150,7 +156,7 @@ def design_table(repo: Path, results: str) -> str:
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in f.to_dict("records"):
         name = f"**{r['cfa']}**" if str(r["pareto"]) == "True" else r["cfa"]
-        cells = [name, r["tile_text"]] + [f"{float(r[o]):.4g} [{float(r[o + ' low']):.4g}, {float(r[o + ' high']):.4g}]"
+        cells = [name, r["tile_text"]] + [f"{_g4(r[o])} [{_g4(r[o + ' low'])}, {_g4(r[o + ' high'])}]"
                                           for o in objectives]
         dom = r["dominated_by"] or ("— (Pareto)" if str(r["pareto"]) == "True" else "—")
         lines.append("| " + " | ".join([*cells, dom]) + " |")
