@@ -15,6 +15,7 @@ import json
 from pathlib import Path
 
 from ..errors import CfaMitsubaError
+from .low_light import _fmt, _levels
 
 
 def _scores(repo: Path, results: str):
@@ -136,12 +137,6 @@ def claims_sentence(repo: Path, results: str) -> str:
                      if v in by)
 
 
-def _g4(v) -> str:
-    """A design table cell's number, or '—' where the run has none (an SNR10
-    interval that never reaches YSNR 10 is open at that end)."""
-    return "—" if v in ("", None) else f"{float(v):.4g}"
-
-
 def design_table(repo: Path, results: str) -> str:
     """A design run's fullchain.csv as Markdown: each CFA's objectives with 95 % intervals and what dominates it."""
     import pandas as pd
@@ -156,7 +151,7 @@ def design_table(repo: Path, results: str) -> str:
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in f.to_dict("records"):
         name = f"**{r['cfa']}**" if str(r["pareto"]) == "True" else r["cfa"]
-        cells = [name, r["tile_text"]] + [f"{_g4(r[o])} [{_g4(r[o + ' low'])}, {_g4(r[o + ' high'])}]"
+        cells = [name, r["tile_text"]] + [f"{_fmt(r[o], '.4g')} [{_fmt(r[o + ' low'], '.4g')}, {_fmt(r[o + ' high'], '.4g')}]"
                                           for o in objectives]
         dom = r["dominated_by"] or ("— (Pareto)" if str(r["pareto"]) == "True" else "—")
         lines.append("| " + " | ".join([*cells, dom]) + " |")
@@ -200,12 +195,6 @@ def monotone_table(repo: Path, *texts: str) -> str:
     return "\n\n" + "\n".join(lines) + "\n\n"
 
 
-def _num(v, spec: str = ".3g") -> str:
-    import math
-
-    return "—" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
-
-
 def low_light_table(repo: Path, folder: str) -> str:
     """docs/study.md's RGBW and CMY answer, from the committed small study
     under ``folder``/<protocol>/ (``docs/low-light/run.py`` writes it): per
@@ -218,9 +207,6 @@ def low_light_table(repo: Path, folder: str) -> str:
 
     from .low_light import versus_reference
 
-    def levels(values) -> str:
-        return ", ".join(f"{v:g}" for v in values) or "—"
-
     lines = ["| protocol | demosaic | CFA | SNR10 cd/m² (95 %) | YSNR better / worse at | chroma SNR better / worse at "
              "| S-CIELAB better / worse at | ΔE00 (Bayer) | MTF50 (Bayer) |", "|---|---|---|---|---|---|---|---|---|"]
     for policy in ("program", "bayer"):
@@ -232,14 +218,15 @@ def low_light_table(repo: Path, folder: str) -> str:
         for d in dict.fromkeys(m["demosaic"]):
             if ("bayer", d) in s10.index:
                 r = s10.loc[("bayer", d)]
-                lines.append(f"| {policy} | {d} | bayer | {_num(r.snr10_cd_m2)} ({_num(r.ci_low)}-{_num(r.ci_high)}) "
+                lines.append(f"| {policy} | {d} | bayer | {_fmt(r.snr10_cd_m2, '.3g')} ({_fmt(r.ci_low, '.3g')}-{_fmt(r.ci_high, '.3g')}) "
                              "| | | | | |")
         for r in versus_reference(m):
             s = s10.loc[(r["cfa"], r["demosaic"])]
-            cells = [f"{levels(r[f'{k}_wins'])} / {levels(r[f'{k}_losses'])}" for k in ("ysnr", "chroma_snr", "scielab")]
-            cost = [f"{_num(r[k][0])} ({_num(r[k][1])})" if k in r else "—" for k in ("delta-e", "mtf")]
-            lines.append(f"| {policy} | {r['demosaic']} | {r['cfa']} | {_num(s.snr10_cd_m2)} ({_num(s.ci_low)}-"
-                         f"{_num(s.ci_high)}) | " + " | ".join(cells + cost) + " |")
+            cells = [f"{_levels(r[f'{k}_wins'], '—')} / {_levels(r[f'{k}_losses'], '—')}"
+                     for k in ("ysnr", "chroma_snr", "scielab")]
+            cost = [f"{_fmt(r[k][0], '.3g')} ({_fmt(r[k][1], '.3g')})" if k in r else "—" for k in ("delta-e", "mtf")]
+            lines.append(f"| {policy} | {r['demosaic']} | {r['cfa']} | {_fmt(s.snr10_cd_m2, '.3g')} ({_fmt(s.ci_low, '.3g')}-"
+                         f"{_fmt(s.ci_high, '.3g')}) | " + " | ".join(cells + cost) + " |")
     return "\n\n" + "\n".join(lines) + "\n\n"
 
 

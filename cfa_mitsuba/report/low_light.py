@@ -170,8 +170,9 @@ def _spectra_html(res: Results) -> str | None:
 VERSUS_METRICS = (("ysnr", "gray-bar", True), ("chroma_snr", "gray-bar", True), ("scielab", "puppy", False))
 
 
-def _levels(cmp: dict) -> str:
-    return ", ".join(f"{L:g}" for L in cmp) or "never"
+def _levels(levels, empty: str = "never") -> str:
+    """Luminances (cd/m^2) as a comma list, ``empty`` when there are none."""
+    return ", ".join(f"{L:g}" for L in levels) or empty
 
 
 def versus_reference(metrics, reference: str = "bayer") -> list[dict]:
