@@ -2,7 +2,7 @@
 
 Per phase, against another commit (issue 25)::
 
-    python benchmarks/bench_study.py --paper [--subset bayer,rgbw1] [--against REV] [--warm-only]
+    python benchmarks/bench_study.py --paper [--subset bayer,rgbw1] [--against REV [--same-config]] [--warm-only]
                                      [--keep DIR] [--workers 2]
 
 runs the study (configs/paper.toml with --paper, else --config) through
@@ -18,6 +18,8 @@ and REV alternate, so a change of machine load hits both), and the table
 adds the ratio REV / this tree.  ``--subset`` keeps only the listed CFAs
 (a reduced paper study in minutes); ``--warm-only`` skips the cold runs and
 uses the default render cache (renders made there first if missing);
+``--same-config`` runs REV's copy of the config in both trees (the same
+work where this tree's copy asks for more, e.g. ``render_seeds``);
 ``--keep DIR`` keeps each run's metrics CSVs and timing.json.  Each tree
 runs its own copy of the config (its own configs/ file).
 
@@ -145,6 +147,8 @@ def phases_main(args) -> int:
         try:
             configs = {name: _subset_config(tree, config, cfas, tmp / f"config-{i}") for i, (name, tree) in
                        enumerate(trees.items())}
+            if args.same_config and args.against:  # equal work: this tree runs REV's copy of the config
+                configs["this"] = configs[args.against]
             for mode in (("warm",) if args.warm_only else ("cold", "warm")):
                 for i, (name, tree) in enumerate(trees.items()):
                     cache = None if args.warm_only else tmp / f"cache-{i}"  # warm: the cold run's cache again
@@ -162,7 +166,8 @@ def phases_main(args) -> int:
                 subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(trees[args.against])],
                                capture_output=True)
     load = " ".join(f"{x:.2f}" for x in os.getloadavg())
-    what = f"{config}" + (f" reduced to {', '.join(cfas)}" if cfas else "")
+    what = f"{config}" + (f" reduced to {', '.join(cfas)}" if cfas else "") + (
+        f", {args.against}'s copy in both trees" if args.same_config and args.against else "")
     print(f"{what}, {args.workers} worker(s); load average (1, 5, 15 min) after the runs: {load}")
     names = list(runs)
     header = f"{'':<24}" + "".join(f"{n[:14] + ' ' + m:>20}" for n in names for m in runs[n])
@@ -188,6 +193,9 @@ def main() -> int:
     ap.add_argument("--paper", action="store_true", help="configs/paper.toml, phases per tree")
     ap.add_argument("--subset", metavar="CFAS", help="comma-separated CFAs: the study reduced to them")
     ap.add_argument("--against", metavar="REV", help="also run commit REV (git worktree beside this tree)")
+    ap.add_argument("--same-config", action="store_true",
+                    help="with --against: both trees run REV's copy of the config (the same work, when this "
+                         "tree's copy asks for more, e.g. render_seeds)")
     ap.add_argument("--warm-only", action="store_true", help="no cold runs; the default render cache")
     ap.add_argument("--keep", metavar="DIR", help="copy each run's metrics CSVs and timing.json into DIR/<tree>-<mode>/")
     ap.add_argument("--workers", type=int, default=2)
