@@ -16,7 +16,7 @@ intervals).
 
 from __future__ import annotations
 
-__all__ = ["candidate_name", "write_cfa_toml", "run_fullchain", "objective_table"]
+__all__ = ["candidate_name", "write_cfa_toml", "run_fullchain", "objective_table", "curve_line", "write_lines"]
 
 import dataclasses
 import hashlib
@@ -62,9 +62,18 @@ def write_cfa_toml(path: Path, name: str, row, config) -> Path:
         for letter in config.spectra.letters:
             if letter not in used:
                 continue
-            wl, qe = curves[letter]
-            lines.append(f"{letter} = {{ wavelengths = [{', '.join(f'{x:g}' for x in wl)}], "
-                         f"values = [{', '.join(f'{v:.6g}' for v in qe)}] }}")
+            lines.append(curve_line(letter, *curves[letter]))
+    return write_lines(path, lines)
+
+
+def curve_line(letter: str, wavelengths, qe, digits: int = 6) -> str:
+    """One letter's QE curve as a CFA TOML ``[spectra]`` line."""
+    return (f"{letter} = {{ wavelengths = [{', '.join(f'{x:g}' for x in wavelengths)}], "
+            f"values = [{', '.join(f'{v:.{digits}g}' for v in qe)}] }}")
+
+
+def write_lines(path, lines) -> Path:
+    """Write a TOML's lines at once (no half-written file)."""
     p = Path(path)
     with atomic_output(p) as tmp:
         tmp.write_text("\n".join(lines) + "\n")

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import atomic_output
+from .fullchain import curve_line, write_lines
 
 
 def transposed_pattern(pattern) -> np.ndarray:
@@ -62,14 +62,8 @@ def write_transposed_toml(path: Path, cfa) -> Path:
              f"description = {json.dumps(cfa.name + ' transposed: ' + text)}",
              "tile = [" + ", ".join(json.dumps(r) for r in rows) + "]",
              "", "[spectra]"]
-    for letter in cfa.channels:
-        wl, qe = cfa.curves[letter]
-        lines.append(f"{letter} = {{ wavelengths = [{', '.join(f'{x:g}' for x in wl)}], "
-                     f"values = [{', '.join(f'{v:.9g}' for v in qe)}] }}")
-    p = Path(path)
-    with atomic_output(p) as tmp:
-        tmp.write_text("\n".join(lines) + "\n")
-    return p
+    lines += [curve_line(letter, *cfa.curves[letter], digits=9) for letter in cfa.channels]
+    return write_lines(path, lines)
 
 
 def worse(a: tuple, b: tuple, goal: str) -> tuple:
