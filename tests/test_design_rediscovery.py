@@ -10,14 +10,15 @@ rediscovery"):
 * MTF50 in both directions (``orientation = "both"``, ISO 12233's two
   edges): the chart's one near-vertical edge sees horizontal frequencies
   only, so G G / B R (G in full rows) read as sharp as Bayer there; its
-  other direction, measured as its transposed tile G B / G R, is about 11 %
-  below Bayer.
+  other direction, measured as its transposed tile G B / G R, is about 12 %
+  below Bayer (noise off: 88.1 against 100.1 cy/mm).
 * A slanted edge long enough to average the tile's phases: at 288 render
   rows (72 sensor rows, 34 used) the ESF bins see the 2x2 tile's phases
   unevenly and R B / G R (R on Bayer's G sites) measured as sharp as Bayer
   even noise-free (98.5 against 97.7 cy/mm); at 864 render rows (216 rows,
   about 11 phase cycles of the 5 degree edge) it measures what the exact
-  phase-averaged line spread (the proxy) predicts, about 6 % below Bayer.
+  phase-averaged line spread (the proxy) predicts, about 6 % below Bayer
+  (93.9 against 100.1).  The numbers: ``python benchmarks/design_rediscovery.py``.
   R B / G R's YSNR, 2-5 % above Bayer's, is bilinear smoothing its sparse G
   (G carries 78 % of Y; each G pixel's noise reaches the output with gain
   0.5625 at density 1/4, 0.625 at 1/2), not more light: R collects 9 % fewer
