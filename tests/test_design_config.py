@@ -52,6 +52,8 @@ BAD = [
     ('alphabet = ["R", "G", "B"]', 'alphabet = ["R", "G", "Q"]', "layout.alphabet"),
     ('demosaics = ["bilinear"]', 'demosaics = ["bilinear"]\nluminances = [3]', "study.luminances"),
     ('tiles = ["2x2"]', 'tiles = ["2by2"]', "layout.tiles[0]"),
+    ('metric = "delta-e"', 'metric = "delta-e"\norientation = "both"', "objective[0].orientation"),
+    ('metric = "delta-e"', 'metric = "delta-e"\norientation = "diagonal"', "objective[0].orientation"),
 ]
 
 

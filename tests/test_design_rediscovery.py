@@ -1,17 +1,29 @@
 """A known answer found again (issue 26): among all 2x2 RGB layouts on the
 same filters, Bayer (up to translation and mirrors) is on the Pareto front
 of {MTF50, dE00, YSNR at 10 cd/m^2} under the exposure program, every 2x2
-layout run through the full chain (a brute force, not the proxy's guess).
+layout run through the full chain (a brute force, not the proxy's guess),
+under the Front rule of docs/design.md (dominance within 95 % intervals).
 
-Measured (6 noise realisations, ISETCam's RGB filters, bilinear): two
-layouts tie Bayer within a few per cent and sometimes dominate it within
-the intervals, depending on the realisations: G G / B R (G in full rows:
-as sharp across the near-vertical edge, which sees only horizontal
-frequencies; a horizontal edge would see its gaps) and R B / G R (R in
-Bayer's G sites), both 2-3 % above Bayer's YSNR.  So the test asks what
-holds every time: Bayer is on the front, or whatever dominates it is
-better by less than 5 % on every objective (Bayer on the front within the
-noise of the measurement), and most layouts are dominated."""
+Two measurements make the objectives physical (docs/design.md, "2x2
+rediscovery"):
+
+* MTF50 in both directions (``orientation = "both"``, ISO 12233's two
+  edges): the chart's one near-vertical edge sees horizontal frequencies
+  only, so G G / B R (G in full rows) read as sharp as Bayer there; its
+  other direction, measured as its transposed tile G B / G R, is about 12 %
+  below Bayer (noise off: 88.1 against 100.1 cy/mm).
+* A slanted edge long enough to average the tile's phases: at 288 render
+  rows (72 sensor rows, 34 used) the ESF bins see the 2x2 tile's phases
+  unevenly and R B / G R (R on Bayer's G sites) measured as sharp as Bayer
+  even noise-free (98.5 against 97.7 cy/mm); at 864 render rows (216 rows,
+  about 11 phase cycles of the 5 degree edge) it measures what the exact
+  phase-averaged line spread (the proxy) predicts, about 6 % below Bayer
+  (93.9 against 100.1).  The numbers: ``python benchmarks/design_rediscovery.py``.
+  R B / G R's YSNR, 2-5 % above Bayer's, is bilinear smoothing its sparse G
+  (G carries 78 % of Y; each G pixel's noise reaches the output with gain
+  0.5625 at density 1/4, 0.625 at 1/2), not more light: R collects 9 % fewer
+  electrons than G on the grey.  So it trades sharpness for pixel noise and
+  does not dominate Bayer."""
 
 import textwrap
 
@@ -30,6 +42,7 @@ layout = { tiles = ["2x2"], alphabet = ["R", "G", "B"], spectra_set = "isetcam-r
 search = { full_chain = 9, agreement_sample = 0 }    # every distinct 2x2 layout through the full chain
 [[objective]]
 metric = "mtf"
+orientation = "both"        # ISO 12233: both directions, the worse counts
 scene = "slanted-edge"
 luminance = 100
 [[objective]]
@@ -51,7 +64,7 @@ exposure_policy = "program"
 figures = ["png"]
 thumbnails = false
 """ + "".join(f"[study.render.{scene}]\nwidth = {w}\nheight = {h}\n"
-              for scene, (w, h) in {"macbeth": (120, 106), "slanted-edge": (320, 288), "gray-bar": (250, 120)}.items())
+              for scene, (w, h) in {"macbeth": (120, 106), "slanted-edge": (320, 864), "gray-bar": (250, 120)}.items())
 
 
 def _is_bayer(tile_text: str) -> bool:
@@ -73,13 +86,21 @@ def test_bayer_is_on_the_front_of_all_2x2_rgb_layouts(tmp_path):
     bayer = cand[cand["tile_text"].map(_is_bayer)]
     assert len(bayer) == 1, cand["tile_text"].tolist()
     row = bayer.iloc[0]
+    mtf, = [c for c in table.columns if c.startswith("mtf@") and c.endswith("/bilinear")]
     labels = [c for c in table.columns if c.endswith("/bilinear")]
-    if not bool(row["pareto"]):
-        better = table[table["cfa"] == row["dominated_by"]].iloc[0]
-        gap = {c: abs(better[c] / row[c] - 1) for c in labels}
-        assert max(gap.values()) < 0.05, (better["tile_text"], gap)
+    # the Front rule, strictly: no evaluated CFA dominates Bayer within the intervals
+    assert bool(row["pareto"]), (row["dominated_by"], table[["tile_text", *labels]].to_string())
     # and the front is not everyone: most layouts are dominated
-    assert int(cand["pareto"].sum()) <= 4, cand[["tile_text", "pareto"]]
+    assert int(cand["pareto"].sum()) <= 3, cand[["tile_text", "pareto"]]
+
+    def tile(text):
+        return cand[cand["tile_text"] == text].iloc[0]
+
+    # what the physics says of the two layouts that tied Bayer on the near-vertical edge alone:
+    # each is less sharp than Bayer with separated intervals (G in full rows: along the rows'
+    # normal; R on the G sites: in both directions)
+    for text in ("G G / B R", "R B / G R"):
+        assert tile(text)[f"{mtf} high"] < row[f"{mtf} low"], (text, tile(text)[mtf], row[mtf])
     # the candidate is the named Bayer seen through other noise realisations: equal within the intervals
     named = table[table["cfa"] == "bayer"].iloc[0]
     for col in labels:

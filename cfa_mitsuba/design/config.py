@@ -22,7 +22,7 @@ A config has five parts (docs/design.md lists every key):
 from __future__ import annotations
 
 __all__ = ["DesignConfig", "Objective", "SpectraSpec", "load_design", "parse_design", "PROXIES_OF",
-           "MAX_EXHAUSTIVE", "ENGINES", "FAMILIES", "SNR10", "SNR10_SWEEP", "BEST"]
+           "MAX_EXHAUSTIVE", "ENGINES", "FAMILIES", "SNR10", "SNR10_SWEEP", "BEST", "ORIENTATIONS", "EDGE_METRICS"]
 
 import dataclasses
 from dataclasses import dataclass
@@ -49,6 +49,12 @@ BEST = "best"
 #: Raw layouts (alphabet ** pixels) per tile size that exhaustive search takes on.
 MAX_EXHAUSTIVE = 50_000_000
 ENGINES = ("auto", "exhaustive", "nsga2")
+#: ``orientation``: the edge as rendered (near-vertical: horizontal
+#: frequencies only), or the worse of it and the transposed tile's (the
+#: near-horizontal edge's, ISO 12233's two directions; design/orientation.py).
+ORIENTATIONS = ("vertical", "both")
+#: The metrics measured across the slanted edge, which ``orientation`` applies to.
+EDGE_METRICS = ("mtf", "info-capacity")
 FAMILIES = ("bandpass", "mixture")
 
 
@@ -66,12 +72,14 @@ class Objective:
     goal: str
     bound: object = None
     sweep: tuple = ()        # snr10: the gray bar's luminances (cd/m^2)
+    orientation: str = "vertical"  # an edge metric: the edge as rendered, or "both" (design/orientation.py)
 
     @property
     def label(self) -> str:
         if self.metric == SNR10:
             return f"{self.metric}@{self.scene}/{self.demosaic}"
-        return f"{self.metric}@{self.scene}/L{self.luminance:g}/{self.demosaic}"
+        both = "+transposed" if self.orientation == "both" else ""
+        return f"{self.metric}@{self.scene}{both}/L{self.luminance:g}/{self.demosaic}"
 
     @property
     def unit(self) -> str:
@@ -90,7 +98,8 @@ class Objective:
             return f"SNR10: luminance at YSNR 10 ({self.scene}, {dem}) [cd/m²]"
         rec = get_metric(self.metric)
         names = {"delta-e": "ΔE00", "mtf": "MTF50", "ysnr": "YSNR", "info-capacity": "information capacity"}
-        return (f"{names.get(self.metric, rec.label)} ({self.scene}, {self.luminance:g} cd/m², {dem})"
+        scene = f"{self.scene}, worse of both directions" if self.orientation == "both" else self.scene
+        return (f"{names.get(self.metric, rec.label)} ({scene}, {self.luminance:g} cd/m², {dem})"
                 + (f" [{unit}]" if unit else ""))
 
     @property
@@ -240,7 +249,8 @@ def _spectra(ck: _Checker, data, alphabet, sset) -> SpectraSpec | None:
 def _objective(ck: _Checker, o, key: str, study, constraint: bool) -> Objective:
     from ..metrics import METRICS, get_metric
 
-    allowed = {"metric": None, "scene": None, "luminance": None, "demosaic": None, "goal": None, "luminances": None}
+    allowed = {"metric": None, "scene": None, "luminance": None, "demosaic": None, "goal": None, "luminances": None,
+               "orientation": None}
     if constraint:
         allowed.update(max=None, min=None)
     ck.table(o, key, allowed)
@@ -279,9 +289,19 @@ def _objective(ck: _Checker, o, key: str, study, constraint: bool) -> Objective:
             bound = v
         else:
             bound = ck.number(v, f"{key}.{side}")
-        return Objective(metric, scene, lum, demosaic, side, bound, sweep)
+        return Objective(metric, scene, lum, demosaic, side, bound, sweep, _orientation(ck, o, key, metric))
     goal = ck.string(o.get("goal", default_goal), f"{key}.goal", ("min", "max"))
-    return Objective(metric, scene, lum, demosaic, goal, sweep=sweep)
+    return Objective(metric, scene, lum, demosaic, goal, sweep=sweep, orientation=_orientation(ck, o, key, metric))
+
+
+def _orientation(ck: _Checker, o: dict, key: str, metric: str) -> str:
+    from ..metrics import get_metric
+
+    value = ck.string(o.get("orientation", "vertical"), f"{key}.orientation", ORIENTATIONS)
+    if value == "both" and (metric == SNR10 or (get_metric(metric).parent or metric) not in EDGE_METRICS):
+        ck.fail(f"{key}.orientation", f"applies to the slanted edge's metrics ({', '.join(EDGE_METRICS)}), "
+                                      f"not {metric!r}")
+    return value
 
 
 def _snr10_sweep(ck: _Checker, o: dict, key: str) -> tuple:

@@ -16,7 +16,7 @@ intervals).
 
 from __future__ import annotations
 
-__all__ = ["candidate_name", "write_cfa_toml", "run_fullchain", "objective_table"]
+__all__ = ["candidate_name", "write_cfa_toml", "run_fullchain", "objective_table", "curve_line", "write_lines"]
 
 import dataclasses
 import hashlib
@@ -62,9 +62,18 @@ def write_cfa_toml(path: Path, name: str, row, config) -> Path:
         for letter in config.spectra.letters:
             if letter not in used:
                 continue
-            wl, qe = curves[letter]
-            lines.append(f"{letter} = {{ wavelengths = [{', '.join(f'{x:g}' for x in wl)}], "
-                         f"values = [{', '.join(f'{v:.6g}' for v in qe)}] }}")
+            lines.append(curve_line(letter, *curves[letter]))
+    return write_lines(path, lines)
+
+
+def curve_line(letter: str, wavelengths, qe, digits: int = 6) -> str:
+    """One letter's QE curve as a CFA TOML ``[spectra]`` line."""
+    return (f"{letter} = {{ wavelengths = [{', '.join(f'{x:g}' for x in wavelengths)}], "
+            f"values = [{', '.join(f'{v:.{digits}g}' for v in qe)}] }}")
+
+
+def write_lines(path, lines) -> Path:
+    """Write a TOML's lines at once (no half-written file)."""
     p = Path(path)
     with atomic_output(p) as tmp:
         tmp.write_text("\n".join(lines) + "\n")
@@ -101,18 +110,29 @@ def _one(metrics, lab, o, demosaic):
     return float(r["value"]), float(r["ci_low"]), float(r["ci_high"]), int(r["n"])
 
 
-def objective_table(metrics, labels, objectives, demosaics=("bilinear",)):
+def objective_table(metrics, labels, objectives, demosaics=("bilinear",), transposed=None):
     """{cfa label: {objective label: (mean, low, high, n, demosaic)}} from a
     study's metrics.csv table; an objective with ``demosaic = "best"`` takes,
-    per CFA, the best mean over ``demosaics`` (the study's)."""
+    per CFA, the best mean over ``demosaics`` (the study's); one with
+    ``orientation = "both"`` the worse of the CFA's value and its transposed
+    tile's (``transposed``: {label: the transposed CFA's label}; a CFA not in
+    it is its own transpose; design/orientation.py)."""
+    from .orientation import worse
+
+    def value(lab, o):
+        tried = [(*_one(metrics, lab, o, d), d) for d in (demosaics if o.demosaic == BEST else (o.demosaic,))]
+        ok = [t for t in tried if np.isfinite(t[0])]
+        sign = -1.0 if o.goal == "max" else 1.0
+        return min(ok, key=lambda t: sign * t[0]) if ok else tried[0]
+
+    transposed = transposed or {}
     out = {}
     for lab in labels:
         got = {}
         for o in objectives:
-            tried = [(*_one(metrics, lab, o, d), d) for d in (demosaics if o.demosaic == BEST else (o.demosaic,))]
-            ok = [t for t in tried if np.isfinite(t[0])]
-            sign = -1.0 if o.goal == "max" else 1.0
-            got[o.label] = min(ok, key=lambda t: sign * t[0]) if ok else tried[0]
+            got[o.label] = value(lab, o)
+            if o.orientation == "both" and lab in transposed:
+                got[o.label] = worse(got[o.label], value(transposed[lab], o), o.goal)
         out[lab] = got
     return out
 
@@ -126,6 +146,7 @@ def run_fullchain(config, chosen, out_dir: Path, *, workers=None, scheduler=None
     """
     from ..sensor import get_cfa
     from ..study.runner import run_study
+    from .orientation import own_transpose, transposed_name, write_transposed_toml
 
     names = {}
     for _, row in chosen.iterrows():
@@ -133,12 +154,21 @@ def run_fullchain(config, chosen, out_dir: Path, *, workers=None, scheduler=None
         path = write_cfa_toml(out_dir / "cfas" / f"{name}.toml", name, row, config)
         names[row["key"]] = (name, str(path.resolve()))
     named = list(config.study.cfas)
+    transposed, extra = {}, []  # orientation = "both": each tile that is not its own transpose, transposed too
+    if any(o.orientation == "both" for o in (*config.objectives, *config.constraints)):
+        for c in named + [p for _, p in names.values()]:
+            cfa = get_cfa(c)
+            if not own_transpose(cfa.pattern):
+                p = write_transposed_toml(out_dir / "cfas" / "transposed" / f"{transposed_name(cfa.name)}.toml", cfa)
+                transposed[cfa.name] = transposed_name(cfa.name)
+                extra.append(str(p.resolve()))
     study = dataclasses.replace(config.study, name=f"{config.name}-fullchain",
-                                cfas=tuple(named) + tuple(p for _, p in names.values()),
+                                cfas=tuple(named) + tuple(p for _, p in names.values()) + tuple(extra),
                                 output={**config.study.output, "report": False},
                                 workers=config.workers)  # a config's workers are capped at the cores
     result = run_study(study, out_dir / "study", workers=workers, scheduler=scheduler,
                        progress=progress, log=log)
     labels = [get_cfa(c).name for c in named] + [n for n, _ in names.values()]
-    return (objective_table(result.metrics, labels, config.objectives + config.constraints, config.study.demosaics),
+    return (objective_table(result.metrics, labels, config.objectives + config.constraints, config.study.demosaics,
+                            transposed),
             names, result)

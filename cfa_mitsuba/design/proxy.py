@@ -49,7 +49,9 @@
   the demosaic, from the same impulse responses: a vertical edge sees each
   response summed down its columns, and the slanted edge's super-sampled
   ESF averages the tile's phases, so the measured MTF is that of the
-  phase-averaged line spread function (:func:`edge_mtf50`); a grey edge,
+  phase-averaged line spread function (:func:`edge_mtf50`); with
+  ``edge_both`` (an objective's ``orientation = "both"``) the worse of the
+  tile's and its transpose's (the near-horizontal edge); a grey edge,
   white balanced, carries no chrominance, so the colour carriers do not
   enter; the best over the objectives' demosaics.
 * ``neg_capacity`` (lower is better, bit/px): minus the slanted edge's
@@ -125,6 +127,7 @@ class ProxySettings:
     demosaics: tuple = ("bilinear",)  # the noise proxy is the best (lowest) over these
     reference_luminance_cd_m2: float = 100.0  # where the 'reference' policy meters
     edge_luminance_cd_m2: float = 100.0       # the slanted edge's luminance (the capacity proxy's)
+    edge_both: bool = False  # blur and capacity: the worse of the tile's and its transpose's (design/orientation.py)
 
 
 @dataclass(frozen=True)
@@ -443,9 +446,14 @@ def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings
             best, snr10, blur, cap = None, np.inf, np.inf, -np.inf
             for method in settings.demosaics:
                 gains, lsf, nps = _noise_gains(layouts[r], h, w, idx, m, method, _GAIN_CACHE)
-                blur = min(blur, 1.0 / edge_mtf50(lsf, settings.f_number, settings.pixel_pitch_um))
-                cap = max(cap, edge_capacity(lsf, nps, edge_var, _EDGE[1] - _EDGE[0], settings.f_number,
-                                             settings.pixel_pitch_um))
+                views = [(lsf, nps)]
+                if settings.edge_both:  # the near-horizontal edge: the transposed tile across a vertical one
+                    views.append(_noise_gains(layouts[r].reshape(h, w).T.ravel(), w, h, idx, m, method,
+                                              _GAIN_CACHE)[1:])
+                blur = min(blur, max(1.0 / edge_mtf50(v[0], settings.f_number, settings.pixel_pitch_um)
+                                     for v in views))
+                cap = max(cap, min(edge_capacity(v[0], v[1], edge_var, _EDGE[1] - _EDGE[0], settings.f_number,
+                                                 settings.pixel_pitch_um) for v in views))
                 xyz_var = var @ gains
                 if best is None or xyz_var[1] < best[1]:
                     best = xyz_var

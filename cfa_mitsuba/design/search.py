@@ -75,7 +75,8 @@ def proxy_settings(config) -> P.ProxySettings:
                            float(sensor.read_noise_e), ratio, policy=policy, luminance_cd_m2=float(min(lums)),
                            max_exposure_s=float(chain.max_exposure_s),
                            fill_factor=float(sensor.fill_factor), demosaics=demosaics,
-                           reference_luminance_cd_m2=ref, edge_luminance_cd_m2=edge)
+                           reference_luminance_cd_m2=ref, edge_luminance_cd_m2=edge,
+                           edge_both=any(o.orientation == "both" for o in config.objectives))
 
 
 def _bands(curves: dict, letters) -> np.ndarray:
