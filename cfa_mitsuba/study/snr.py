@@ -45,11 +45,15 @@ SNR10_COLUMNS = ["cfa", "demosaic", "snr10_cd_m2", "ci_low", "ci_high", "note"]
 SNR_TARGET = 10.0
 
 
-def snr_table(metrics):
-    """``snr.csv`` (module doc) from a metrics.csv table; empty when the study has no ``ysnr``."""
+def snr_table(metrics, metric: str = "ysnr"):
+    """``snr.csv`` (module doc) from a metrics.csv table; empty when the study has no ``ysnr``.
+
+    ``metric``: the rows read into the ``ysnr`` columns: ``'ysnr'`` (per
+    pixel, the study's snr.csv) or ``'ysnr-area'`` (the noise referred to an
+    area, which a demosaic's smoothing does not raise; metrics/snr.py)."""
     import pandas as pd
 
-    y = metrics[metrics["metric"] == "ysnr"]
+    y = metrics[metrics["metric"] == metric]
     if y.empty:
         return pd.DataFrame(columns=SNR_COLUMNS)
     keys = ["cfa", "demosaic", "luminance"]
