@@ -28,9 +28,8 @@ in the region).  A linear filter with unit gain at zero frequency (any
 interpolation) leaves NPS(0) unchanged: for uncorrelated noise YSNR_area
 equals YSNR, for noise smoothed over at most L pixels it is the YSNR the
 same light gives without the smoothing (a 3 x 3 or 5 x 5 box blur triples
-or quintuples YSNR and leaves YSNR_area within its sampling error, which is
-about 4 % on the paper's 44 x 494 px region and 12-17 % on a 19 x 114 px
-one).  NPS(0) = var(area mean) x area in the limit of large areas (Dainty
+or quintuples YSNR and leaves YSNR_area within its sampling error, which
+grows as the region shrinks).  NPS(0) = var(area mean) x area in the limit of large areas (Dainty
 & Shaw 1974, ch. 8): it is the noise of an area, not of a pixel.
 
 where the chroma noise is that of the white-normalised opponent signals
