@@ -77,6 +77,9 @@ def test_a_bad_marker_is_one_clear_problem(tmp_path):
     (repo / "docs" / "x.md").write_text("a <!--= docs/example-report/nosuch.csv value -->1<!--/=--> b\n")
     problems = docs_numbers.check(repo)
     assert any("nosuch.csv not found" in p for p in problems), problems
+    (repo / "docs" / "x.md").write_text("a <!--= docs/data/cuda-paper/timing.json phases.total_s :.1% -->1<!--/=--> b\n")
+    problems = docs_numbers.check(repo)
+    assert any("bad format ':.1%'" in p for p in problems), problems
 
 
 def _prose(text: str) -> str:

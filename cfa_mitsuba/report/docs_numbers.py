@@ -173,7 +173,12 @@ def evaluate(spec: str, repo: Path = REPO) -> str:
         raise CfaMitsubaError(f"source {words[0]} not found")
     data = _read(path)
     value = _json_value(data, words[1]) if path.suffix == ".json" else _csv_value(data, words[1])
-    return format(value, words[2]) if len(words) == 3 else str(value)
+    if len(words) == 2:
+        return str(value)
+    try:
+        return format(value, words[2])
+    except (ValueError, TypeError) as exc:
+        raise CfaMitsubaError(f"bad format {words[2]!r} in marker {spec!r}: {exc}") from None
 
 
 def _replace_all(path: Path, repo: Path) -> tuple[str, list[tuple[Span, str]]]:
