@@ -50,7 +50,7 @@ metric = "delta-e"
 scene = "macbeth"
 luminance = 100
 [[objective]]
-metric = "ysnr"
+metric = "ysnr-area"        # the noise referred to an area: bilinear smoothing a sparse G cannot raise it
 scene = "gray-bar"
 luminance = 10
 [study]
