@@ -54,6 +54,7 @@ BAD = [
     ('tiles = ["2x2"]', 'tiles = ["2by2"]', "layout.tiles[0]"),
     ('metric = "delta-e"', 'metric = "delta-e"\norientation = "both"', "objective[0].orientation"),
     ('metric = "delta-e"', 'metric = "delta-e"\norientation = "diagonal"', "objective[0].orientation"),
+    ('metric = "delta-e"', 'metric = "delta-e"\nbasis = "ysnr-area"', "objective[0].basis"),
 ]
 
 

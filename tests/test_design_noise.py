@@ -1,7 +1,10 @@
 """The design proxy's noise propagation (design/proxy.py) against a
 Monte-Carlo capture: a flat grey mosaic with independent per-channel noise
 of known variance, many realisations, through the real demosaic and the
-colour matrix."""
+colour matrix; per pixel, and referred to an area (design/noise_area.py)
+as the metric ``ysnr-area`` measures it."""
+
+import inspect
 
 import numpy as np
 import pytest
@@ -43,6 +46,69 @@ def test_propagated_noise_matches_a_monte_carlo_grey_within_two_percent(model, m
     predicted = np.sqrt(rel_sd ** 2 @ gains)
     measured = _monte_carlo(layout, method, model, rel_sd)
     np.testing.assert_allclose(predicted, measured, rtol=0.02)
+
+
+LAYOUTS = [[[1, 0], [2, 1]], [[0, 1, 2], [1, 2, 0], [2, 0, 1]], [[1, 1, 0, 2]], [[1, 0, 1], [2, 1, 2]],
+           [[2, 2], [2, 2], [2, 2], [1, 0]]]
+
+
+@pytest.mark.parametrize("method", ["bilinear", "laplacian"])
+@pytest.mark.parametrize("layout", LAYOUTS)
+def test_area_noise_matches_the_metric_on_a_monte_carlo_grey_within_four_percent(model, method, layout):
+    """NPS(0) of Y, as cm.metrics.ysnr measures it (``ysnr_area``: the
+    autocovariance summed over lags up to 4 px), on 16 realisations of a
+    ~240 x 240 px flat grey through the real demosaic and colour matrix,
+    against the proxy's prediction.  The estimator's sampling error is
+    about 1.5 % here; the last layout is B B / B B / B B / G R, whose
+    per-pixel YSNR bilinear smoothing inflates."""
+    layout = np.array(layout)
+    h, w = layout.shape
+    rel_sd = np.array([0.012, 0.005, 0.02])
+    area = P.demosaic_area_noise_gains(layout, LETTERS, model.matrix_rel, method, model.lum_weights)
+    predicted = np.sqrt(rel_sd ** 2 @ area[:, 1])             # relative Y noise x px, white = 1
+    rng = np.random.default_rng(1)
+    tile = P._Tile(np.array(LETTERS, dtype=object)[layout], LETTERS)
+    chan = np.tile(layout, (256 // h, 256 // w))
+    opts = {} if method == "bilinear" else {"luminance_weights": list(model.lum_weights)}
+    nps0 = []
+    for _ in range(16):
+        raw = 0.18 * (1 + rel_sd[chan] * rng.standard_normal(chan.shape))
+        xyz = (cm.isp.demosaic(raw, tile, method, **opts) @ model.matrix_rel)[8:-8, 8:-8]
+        r = cm.metrics.ysnr(np.full_like(xyz, 0.18), xyz, [1.0, 1.0, 1.0], margin=0)
+        nps0.append((r.details["ysnr_area"] / xyz[..., 1].mean()) ** -2)   # (YSNR_area / mean Y)^-2 = NPS(0)
+    measured = np.sqrt(np.mean(nps0)) / 0.18
+    assert predicted == pytest.approx(measured, rel=0.04)
+
+
+@pytest.mark.parametrize("layout, density", [([[1, 0], [2, 1]], [0.25, 0.5, 0.25]),
+                                             ([[0, 1, 2], [1, 2, 0], [2, 0, 1]], [1 / 3] * 3)])
+def test_bilinear_area_noise_of_a_channel_is_its_variance_over_its_density(layout, density):
+    """Bilinear with an identity matrix on tiles whose samples of a channel
+    are alike: each channel's NPS(0) is v_c / d_c (Dainty & Shaw: d_c
+    samples per pixel) and no channel leaks into another."""
+    area = P.demosaic_area_noise_gains(np.array(layout), LETTERS, np.eye(3), "bilinear")
+    np.testing.assert_allclose(area, np.diag(1.0 / np.array(density)), rtol=1e-9, atol=1e-12)
+
+
+def test_smoothing_a_sparse_channel_lowers_its_pixel_noise_not_its_area_noise():
+    """B B / B B / B B / G R: bilinear spreads each G sample (density 1/8)
+    over eight output pixels, so a G pixel's noise gain falls well below 1
+    while its area noise, over all lags, stays at least 1 / d = 8 (equal
+    only if the samples were alike); the metric's 4 px of lags keep most of
+    it."""
+    layout = np.array([[2, 2], [2, 2], [2, 2], [1, 0]])
+    pixel = P.demosaic_noise_gains(layout, LETTERS, np.eye(3), "bilinear")
+    full = P.demosaic_area_noise_gains(layout, LETTERS, np.eye(3), "bilinear", lag=12)
+    metric = P.demosaic_area_noise_gains(layout, LETTERS, np.eye(3), "bilinear")
+    assert pixel[1, 1] < 0.5
+    assert full[1, 1] >= 8.0 - 1e-9 and full[0, 0] >= 8.0 - 1e-9 and full[2, 2] >= 1 / 0.75 - 1e-9
+    assert 0.9 * full[1, 1] < metric[1, 1] <= full[1, 1] + 1e-12
+
+
+def test_the_area_lag_is_the_metrics():
+    from cfa_mitsuba.design.noise_area import AREA_LAG_PX
+
+    assert inspect.signature(cm.metrics.ysnr).parameters["correlation_px"].default == AREA_LAG_PX
 
 
 def test_the_exposure_program_gives_a_sensitive_channel_more_electrons_in_dim_light(model):

@@ -58,6 +58,26 @@ def test_snr10_keys_are_checked(change, key):
         parse_design(tomllib.loads(text))
 
 
+def test_snr10_on_the_area_ysnr_reads_its_rows_and_has_its_own_proxy():
+    cfg = parse_design(tomllib.loads(BASE.replace('demosaic = "best"', 'demosaic = "best"\nbasis = "ysnr-area"', 1)))
+    snr10 = cfg.objectives[0]
+    assert snr10.basis == "ysnr-area" and snr10.proxies == ("snr10_area",)
+    assert snr10.label == "snr10@gray-bar/ysnr-area/best" and "area-referred YSNR 10" in snr10.title
+    assert parse_design(tomllib.loads(BASE)).objectives[0].proxies == ("snr10",)   # the default: per pixel
+    area = parse_design(tomllib.loads(BASE.replace('metric = "snr10"', 'metric = "ysnr-area"')
+                                      .replace('luminances = [1, 3, 10, 30]', 'luminance = 10')))
+    assert area.objectives[0].proxies == ("noise_area",)
+    assert proxy_settings(area).luminance_cd_m2 == 10.0   # the area noise is predicted at its objective's light
+
+
+@pytest.mark.parametrize("where, line", [("snr10", 'basis = "area"'), ("info-capacity", 'basis = "ysnr-area"')])
+def test_a_bad_snr10_basis_is_refused_in_one_line(where, line):
+    text = BASE.replace(f'metric = "{where}"', f'metric = "{where}"\n{line}')
+    with pytest.raises(CfaMitsubaError, match=r"objective\[\d\]\.basis") as info:
+        parse_design(tomllib.loads(text))
+    assert "\n" not in str(info.value)
+
+
 def test_a_named_reference_policy_is_kept():
     cfg = load_design(REPO / "configs" / "design-quick.toml")
     assert proxy_settings(cfg).policy == "program"

@@ -1,10 +1,10 @@
 """A known answer found again (issue 26): among all 2x2 RGB layouts on the
 same filters, Bayer (up to translation and mirrors) is on the Pareto front
-of {MTF50, dE00, YSNR at 10 cd/m^2} under the exposure program, every 2x2
+of {MTF50, dE00, area-referred YSNR at 10 cd/m^2} under the exposure program, every 2x2
 layout run through the full chain (a brute force, not the proxy's guess),
 under the Front rule of docs/design.md (dominance within 95 % intervals).
 
-Two measurements make the objectives physical (docs/design.md, "2x2
+Three measurements make the objectives physical (docs/design.md, "2x2
 rediscovery"):
 
 * MTF50 in both directions (``orientation = "both"``, ISO 12233's two
@@ -18,12 +18,15 @@ rediscovery"):
   even noise-free (98.5 against 97.7 cy/mm); at 864 render rows (216 rows,
   about 11 phase cycles of the 5 degree edge) it measures what the exact
   phase-averaged line spread (the proxy) predicts, about 6 % below Bayer
-  (93.9 against 100.1).  The numbers: ``python benchmarks/design_rediscovery.py``.
-  R B / G R's YSNR, 2-5 % above Bayer's, is bilinear smoothing its sparse G
-  (G carries 78 % of Y; each G pixel's noise reaches the output with gain
-  0.5625 at density 1/4, 0.625 at 1/2), not more light: R collects 9 % fewer
-  electrons than G on the grey.  So it trades sharpness for pixel noise and
-  does not dominate Bayer."""
+  (93.9 against 100.1).  The numbers: ``python benchmarks/design_rediscovery.py``
+  (``--json docs/data/design-rediscovery.json``, which docs/design.md quotes).
+* YSNR referred to an area (``ysnr-area``): R B / G R's per-pixel YSNR is
+  2-5 % above Bayer's, but that is bilinear smoothing its sparse G (G
+  carries 78 % of Y; a G pixel's noise gain is 0.5625 at density 1/4, 0.625
+  at 1/2), not more light: R collects 9 % fewer electrons than G on the
+  grey.  Referred to an area a channel of density d keeps its noise / d
+  whatever the interpolation (G: 4 against Bayer's 2), so its area YSNR is
+  about a quarter below Bayer's and Bayer dominates it."""
 
 import textwrap
 
@@ -50,7 +53,7 @@ metric = "delta-e"
 scene = "macbeth"
 luminance = 100
 [[objective]]
-metric = "ysnr"
+metric = "ysnr-area"        # the noise referred to an area: bilinear smoothing a sparse G cannot raise it
 scene = "gray-bar"
 luminance = 10
 [study]
@@ -64,7 +67,7 @@ exposure_policy = "program"
 figures = ["png"]
 thumbnails = false
 """ + "".join(f"[study.render.{scene}]\nwidth = {w}\nheight = {h}\n"
-              for scene, (w, h) in {"macbeth": (120, 106), "slanted-edge": (320, 864), "gray-bar": (250, 120)}.items())
+              for scene, (w, h) in {"macbeth": (120, 106), "slanted-edge": (320, 864), "gray-bar": (500, 240)}.items())
 
 
 def _is_bayer(tile_text: str) -> bool:
@@ -101,6 +104,11 @@ def test_bayer_is_on_the_front_of_all_2x2_rgb_layouts(tmp_path):
     # normal; R on the G sites: in both directions)
     for text in ("G G / B R", "R B / G R"):
         assert tile(text)[f"{mtf} high"] < row[f"{mtf} low"], (text, tile(text)[mtf], row[mtf])
+    # R B / G R's per-pixel YSNR edge is bilinear smoothing its sparse G: referred to an area its
+    # luminance noise is higher than Bayer's, with separated intervals, and Bayer dominates it
+    ysnr, = [c for c in table.columns if c.startswith("ysnr-area@") and c.endswith("/bilinear")]
+    assert tile("R B / G R")[f"{ysnr} high"] < row[f"{ysnr} low"], (tile("R B / G R")[ysnr], row[ysnr])
+    assert not bool(tile("R B / G R")["pareto"])
     # the candidate is the named Bayer seen through other noise realisations: equal within the intervals
     named = table[table["cfa"] == "bayer"].iloc[0]
     for col in labels:

@@ -22,7 +22,8 @@ A config has five parts (docs/design.md lists every key):
 from __future__ import annotations
 
 __all__ = ["DesignConfig", "Objective", "SpectraSpec", "load_design", "parse_design", "PROXIES_OF",
-           "MAX_EXHAUSTIVE", "ENGINES", "FAMILIES", "SNR10", "SNR10_SWEEP", "BEST", "ORIENTATIONS", "EDGE_METRICS"]
+           "MAX_EXHAUSTIVE", "ENGINES", "FAMILIES", "SNR10", "SNR10_SWEEP", "SNR10_BASES", "BEST", "ORIENTATIONS",
+           "EDGE_METRICS"]
 
 import dataclasses
 from dataclasses import dataclass
@@ -37,13 +38,18 @@ PROXIES_OF = {
     "scielab": ("colour", "noise", "aliasing"), "scielab-interior": ("colour", "noise", "aliasing"),
     "ssim": ("noise", "aliasing"), "mdsi": ("noise", "aliasing"), "haarpsi": ("noise", "aliasing"),
     "mtf": ("blur",), "moire": ("aliasing",), "achromatic": ("noise",),
-    "ysnr": ("noise",), "chroma_snr": ("noise",), "info-capacity": ("neg_capacity",), "snr10": ("snr10",),
+    "ysnr": ("noise",), "ysnr-area": ("noise_area",), "chroma_snr": ("noise",), "info-capacity": ("neg_capacity",),
+    "snr10": ("snr10",),
 }
 #: The design objective read from a study's snr10.csv (study/snr.py), not
 #: metrics.csv: the luminance (cd/m^2) at which YSNR reaches 10 on a
 #: luminance sweep of the gray bar (``luminances``, default below).
 SNR10 = "snr10"
 SNR10_SWEEP = (0.3, 1.0, 3.0, 10.0, 30.0, 100.0)
+#: ``basis``: the YSNR that snr10 reads (metrics/snr.py): per pixel, or
+#: referred to an area (which a demosaic's smoothing does not raise), and
+#: the proxy that predicts each.
+SNR10_BASES = {"ysnr": "snr10", "ysnr-area": "snr10_area"}
 #: ``demosaic = "best"``: per CFA, the best of the study's demosaics on that objective.
 BEST = "best"
 #: Raw layouts (alphabet ** pixels) per tile size that exhaustive search takes on.
@@ -73,11 +79,13 @@ class Objective:
     bound: object = None
     sweep: tuple = ()        # snr10: the gray bar's luminances (cd/m^2)
     orientation: str = "vertical"  # an edge metric: the edge as rendered, or "both" (design/orientation.py)
+    basis: str = "ysnr"      # snr10: the YSNR rows it reads, "ysnr" or "ysnr-area" (SNR10_BASES)
 
     @property
     def label(self) -> str:
         if self.metric == SNR10:
-            return f"{self.metric}@{self.scene}/{self.demosaic}"
+            basis = "" if self.basis == "ysnr" else f"/{self.basis}"
+            return f"{self.metric}@{self.scene}{basis}/{self.demosaic}"
         both = "+transposed" if self.orientation == "both" else ""
         return f"{self.metric}@{self.scene}{both}/L{self.luminance:g}/{self.demosaic}"
 
@@ -95,7 +103,8 @@ class Objective:
         dem = "best demosaic" if self.demosaic == BEST else self.demosaic
         unit = self.unit
         if self.metric == SNR10:
-            return f"SNR10: luminance at YSNR 10 ({self.scene}, {dem}) [cd/m²]"
+            which = "area-referred YSNR" if self.basis == "ysnr-area" else "YSNR"
+            return f"SNR10: luminance at {which} 10 ({self.scene}, {dem}) [cd/m²]"
         rec = get_metric(self.metric)
         names = {"delta-e": "ΔE00", "mtf": "MTF50", "ysnr": "YSNR", "info-capacity": "information capacity"}
         scene = f"{self.scene}, worse of both directions" if self.orientation == "both" else self.scene
@@ -104,6 +113,8 @@ class Objective:
 
     @property
     def proxies(self) -> tuple[str, ...]:
+        if self.metric == SNR10:
+            return (SNR10_BASES[self.basis],)
         return PROXIES_OF.get(self.metric, ("colour", "noise", "aliasing"))
 
 
@@ -250,7 +261,7 @@ def _objective(ck: _Checker, o, key: str, study, constraint: bool) -> Objective:
     from ..metrics import METRICS, get_metric
 
     allowed = {"metric": None, "scene": None, "luminance": None, "demosaic": None, "goal": None, "luminances": None,
-               "orientation": None}
+               "orientation": None, "basis": None}
     if constraint:
         allowed.update(max=None, min=None)
     ck.table(o, key, allowed)
@@ -260,6 +271,9 @@ def _objective(ck: _Checker, o, key: str, study, constraint: bool) -> Objective:
         ck.fail(f"{key}.metric", f"unknown objective metric {metric!r} (known: {', '.join(known)})")
     if "luminances" in o and metric != SNR10:
         ck.fail(f"{key}.luminances", "applies to metric = \"snr10\" only (its gray-bar sweep)")
+    if "basis" in o and metric != SNR10:
+        ck.fail(f"{key}.basis", "applies to metric = \"snr10\" only (the YSNR it reads: \"ysnr\" or \"ysnr-area\")")
+    basis = ck.string(o.get("basis", "ysnr"), f"{key}.basis", tuple(SNR10_BASES))
     fed_by = "ysnr" if metric == SNR10 else metric
     feeding = [s.name for s in study.scenes if fed_by in s.metrics or get_metric(fed_by).parent in s.metrics]
     if not feeding:
@@ -289,9 +303,10 @@ def _objective(ck: _Checker, o, key: str, study, constraint: bool) -> Objective:
             bound = v
         else:
             bound = ck.number(v, f"{key}.{side}")
-        return Objective(metric, scene, lum, demosaic, side, bound, sweep, _orientation(ck, o, key, metric))
+        return Objective(metric, scene, lum, demosaic, side, bound, sweep, _orientation(ck, o, key, metric), basis)
     goal = ck.string(o.get("goal", default_goal), f"{key}.goal", ("min", "max"))
-    return Objective(metric, scene, lum, demosaic, goal, sweep=sweep, orientation=_orientation(ck, o, key, metric))
+    return Objective(metric, scene, lum, demosaic, goal, sweep=sweep, orientation=_orientation(ck, o, key, metric),
+                     basis=basis)
 
 
 def _orientation(ck: _Checker, o: dict, key: str, metric: str) -> str:

@@ -103,7 +103,9 @@ PROXY_TITLES = {
     "blur": "blur proxy: 1 / edge MTF50 [px/cy]",
     "neg_capacity": "minus edge information capacity [bit/px]",
     "noise": "noise proxy: rms Y noise / Y on the grey",
+    "noise_area": "area noise proxy: sqrt(NPS(0)) of Y / Y on the grey [px]",
     "snr10": "SNR10 proxy [cd/m²]",
+    "snr10_area": "SNR10 proxy on the area YSNR [cd/m²]",
     "colour": "colour proxy: training-fit ΔE00",
 }
 

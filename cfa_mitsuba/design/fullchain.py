@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import atomic_output
 from ..io.validate import safe_name
+from .cfa_toml import curve_line, write_lines
 from .config import BEST, SNR10
 from .spectra import letter_curves
 
@@ -66,27 +66,13 @@ def write_cfa_toml(path: Path, name: str, row, config) -> Path:
     return write_lines(path, lines)
 
 
-def curve_line(letter: str, wavelengths, qe, digits: int = 6) -> str:
-    """One letter's QE curve as a CFA TOML ``[spectra]`` line."""
-    return (f"{letter} = {{ wavelengths = [{', '.join(f'{x:g}' for x in wavelengths)}], "
-            f"values = [{', '.join(f'{v:.{digits}g}' for v in qe)}] }}")
-
-
-def write_lines(path, lines) -> Path:
-    """Write a TOML's lines at once (no half-written file)."""
-    p = Path(path)
-    with atomic_output(p) as tmp:
-        tmp.write_text("\n".join(lines) + "\n")
-    return p
-
-
 def _one(metrics, lab, o, demosaic):
     """(mean, low, high, n) of objective ``o`` for CFA ``lab`` with ``demosaic``."""
     if o.metric == SNR10:
         from ..study.snr import snr10_table, snr_table
 
         sel = metrics[(metrics["cfa"] == lab) & (metrics["scene"] == o.scene) & (metrics["demosaic"] == demosaic)]
-        t = snr10_table(snr_table(sel))
+        t = snr10_table(snr_table(sel, metric=o.basis))  # the per-pixel or the area-referred YSNR rows
 
         def num(v):  # an interval curve that never reaches YSNR 10 in the sweep: unbounded on that side
             return float(v) if v is not None and np.isfinite(float(v)) else float("nan")
@@ -94,7 +80,7 @@ def _one(metrics, lab, o, demosaic):
         if t.empty or not np.isfinite(num(t["snr10_cd_m2"].iloc[0])):
             return (float("nan"),) * 3 + (0,)
         r = t.iloc[0]
-        n = int(sel[sel["metric"] == "ysnr"]["n"].min()) if "n" in sel else 0
+        n = int(sel[sel["metric"] == o.basis]["n"].min()) if "n" in sel else 0
 
         low, high = num(r["ci_low"]), num(r["ci_high"])
         return (float(r["snr10_cd_m2"]), low if np.isfinite(low) else 0.0,

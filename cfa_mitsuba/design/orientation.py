@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .fullchain import curve_line, write_lines
+from .cfa_toml import curve_line, write_lines
 
 
 def transposed_pattern(pattern) -> np.ndarray:

@@ -44,6 +44,11 @@
   weights are read off the demosaic itself (an impulse at each tile
   position) and var Y averaged over the tile's phases.  A nonlinear
   demosaic gets the Laplacian's gains (its linear core).
+* ``noise_area`` (lower is better): the same Y noise referred to an area,
+  sqrt(NPS(0)) / Y, what the metric ``ysnr-area`` measures (1 / it), from
+  the same impulse responses (:mod:`.noise_area`): a demosaic's smoothing
+  does not lower it; ``snr10_area`` the luminance where 1 / ``noise_area``
+  reaches 10, as ``snr10`` below.
 * ``blur`` (lower is better, px per cycle): 1 / MTF50 of a grey slanted
   edge through the optics (diffraction at 550 nm, the pixel aperture) and
   the demosaic, from the same impulse responses: a vertical edge sees each
@@ -81,8 +86,8 @@ letters present (:class:`ColourModel`).
 from __future__ import annotations
 
 __all__ = ["ProxySettings", "ColourModel", "colour_model", "evaluate_layouts", "PROXY_NAMES",
-           "frequency_weights", "demosaic_noise_gains", "grey_electrons", "edge_mtf50", "edge_capacity",
-           "LINEAR_DEMOSAICS"]
+           "frequency_weights", "demosaic_noise_gains", "demosaic_area_noise_gains", "grey_electrons", "edge_mtf50",
+           "edge_capacity", "LINEAR_DEMOSAICS"]
 
 import dataclasses
 import functools
@@ -95,7 +100,8 @@ from ..colorimetry import delta_e00
 from ..isp.colour_matrix import electrons_per_radiance_of, fit_colour_matrix
 
 #: The proxies, each lower-is-better.
-PROXY_NAMES = ("aliasing", "aliasing_h", "blur", "neg_capacity", "noise", "snr10", "colour")
+PROXY_NAMES = ("aliasing", "aliasing_h", "blur", "neg_capacity", "noise", "noise_area", "snr10", "snr10_area",
+               "colour")
 _F0 = 0.05
 _GREY = 0.18
 _AE_LEVEL = 0.95
@@ -252,6 +258,18 @@ def demosaic_noise_gains(layout: np.ndarray, channels: tuple, matrix_rel: np.nda
     return _gains_and_lsf(layout, channels, matrix_rel, method, lum_weights)[0]
 
 
+def demosaic_area_noise_gains(layout: np.ndarray, channels: tuple, matrix_rel: np.ndarray, method: str,
+                              lum_weights=None, lag: int | None = None) -> np.ndarray:
+    """(C, 3) area noise gains A of the same (:mod:`.noise_area`): NPS_j(0) =
+    sum_c A[c, j] v_c over the lags up to ``lag`` px (default: the metric's)."""
+    if lag is None:
+        return _gains_and_lsf(layout, channels, matrix_rel, method, lum_weights)[3]
+    from .noise_area import area_noise_gains
+
+    return area_noise_gains(_impulse_responses(layout, channels, matrix_rel, method, lum_weights)[0], layout,
+                            len(channels), lag)
+
+
 #: Radial rings of the proxy's noise power spectrum over 0..0.5 cy/px.
 _NPS_RINGS = 12
 #: The slanted edge (render/charts.py EDGE_REFLECTANCES): dark 0.15, bright
@@ -284,7 +302,10 @@ def edge_capacity(lsf, nps_per_channel, level_var, step: float, f_number: float,
 
 def _gains_and_lsf(layout, channels, matrix_rel, method, lum_weights):
     """(noise gains (C, 3), the grey line spread function of Y across columns
-    averaged over the tile's phases: (offsets px, weights))."""
+    averaged over the tile's phases: (offsets px, weights, zipper), each
+    channel's radial noise power spectrum, the area noise gains (C, 3))."""
+    from .noise_area import area_noise_gains
+
     resp, c0 = _impulse_responses(layout, channels, matrix_rel, method, lum_weights)
     bh, n, bw, _ = resp.shape
     energy = (resp ** 2).sum(axis=(0, 2))                       # (n, 3): each impulse's
@@ -317,7 +338,7 @@ def _gains_and_lsf(layout, channels, matrix_rel, method, lum_weights):
     for k in range(n):  # each channel's noise spectrum, radially averaged, phases averaged
         ring = np.bincount(rings, weights=power[k].ravel(), minlength=_NPS_RINGS + 1)[:_NPS_RINGS]
         per_channel[layout.ravel()[k]] += ring / np.maximum(counts, 1) / n
-    return gains / n, (offsets, lsf / n, zipper), per_channel
+    return gains / n, (offsets, lsf / n, zipper), per_channel, area_noise_gains(resp, layout, len(channels))
 
 
 @functools.lru_cache(maxsize=8)
@@ -404,8 +425,9 @@ def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings
 
     ``models``: a function or dict from the tuple of letter indices present
     (ascending) to that set's :class:`ColourModel` (channels in that order).
-    Returns {name: (N,) array} for ``aliasing``, ``aliasing_h``, ``crosstalk``, ``sampling``,
-    ``noise``, ``noise_xyz``, ``colour``, ``vora_trussell``.
+    Returns {name: (N,) array} for ``aliasing``, ``aliasing_h``, ``crosstalk``, ``sampling``, ``blur``,
+    ``neg_capacity``, ``noise``, ``noise_xyz``, ``noise_area``, ``snr10``, ``snr10_area``, ``colour``,
+    ``vora_trussell``.
     """
     layouts = np.atleast_2d(np.asarray(layouts, dtype=np.uint8))
     n = len(layouts)
@@ -420,8 +442,8 @@ def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings
     crosstalk = per_channel.sum(axis=1)
     horizontal = np.einsum("nkj,j->nk", power[:, :, 0, :], s[0, :])  # carriers with f_y = 0
     present = dens > 0
-    out = {name: np.zeros(n) for name in ("sampling", "aliasing_h", "noise", "noise_xyz", "snr10", "blur", "neg_capacity",
-                                          "colour", "vora_trussell")}
+    out = {name: np.zeros(n) for name in ("sampling", "aliasing_h", "noise", "noise_xyz", "noise_area", "snr10",
+                                          "snr10_area", "blur", "neg_capacity", "colour", "vora_trussell")}
     dim = dataclasses.replace(settings, luminance_cd_m2=1.0,
                               luminance_ratio=1.0 / settings.reference_luminance_cd_m2)
     edge_settings = dataclasses.replace(settings, luminance_cd_m2=settings.edge_luminance_cd_m2,
@@ -443,9 +465,9 @@ def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings
                                 reference_level=mean_refl)
         edge_var = mean_refl ** 2 * (edge_e + settings.read_noise_e ** 2) / edge_e ** 2  # white = 1 units
         for r in rows:
-            best, snr10, blur, cap = None, np.inf, np.inf, -np.inf
+            best, snr10, blur, cap, area_var, snr10_area = None, np.inf, np.inf, -np.inf, np.inf, np.inf
             for method in settings.demosaics:
-                gains, lsf, nps = _noise_gains(layouts[r], h, w, idx, m, method, _GAIN_CACHE)
+                gains, lsf, nps, area = _noise_gains(layouts[r], h, w, idx, m, method, _GAIN_CACHE)
                 views = [(lsf, nps)]
                 if settings.edge_both:  # the near-horizontal edge: the transposed tile across a vertical one
                     views.append(_noise_gains(layouts[r].reshape(h, w).T.ravel(), w, h, idx, m, method,
@@ -458,9 +480,13 @@ def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings
                 if best is None or xyz_var[1] < best[1]:
                     best = xyz_var
                 snr10 = min(snr10, _snr10(gains[:, 1], per_lux, settings.read_noise_e))
+                area_var = min(area_var, float(var @ area[:, 1]))  # each its own best demosaic, as the full chain's
+                snr10_area = min(snr10_area, _snr10(area[:, 1], per_lux, settings.read_noise_e))
             out["noise"][r] = np.sqrt(best[1])
             out["noise_xyz"][r] = np.sqrt(best.mean())
             out["snr10"][r] = snr10
+            out["noise_area"][r] = np.sqrt(area_var)
+            out["snr10_area"][r] = snr10_area
             out["blur"][r] = blur
             out["neg_capacity"][r] = -cap
         out["colour"][rows] = m.colour_de00

@@ -151,7 +151,7 @@ def _agreement_html(agree) -> str:
 def _proxy_axes(objectives) -> tuple:
     """The proxies the objectives use, the non-noise ones first."""
     used = list(dict.fromkeys(p for o in objectives for p in o.proxies if p != "colour"))
-    return tuple(sorted(used, key=lambda p: p in ("noise", "snr10")))
+    return tuple(sorted(used, key=lambda p: p in ("noise", "noise_area", "snr10", "snr10_area")))
 
 
 def build_design_report(out: Path, config, cands, table, agree, named_proxies, study_dir) -> Path:

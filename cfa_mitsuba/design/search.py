@@ -62,13 +62,14 @@ def proxy_settings(config) -> P.ProxySettings:
     st = config.study
     chain = st.chain_settings()
     sensor = chain.sensor
-    lums = [o.luminance for o in config.objectives if "noise" in o.proxies] or list(st.luminances)
+    lums = [o.luminance for o in config.objectives if {"noise", "noise_area"} & set(o.proxies)] or list(st.luminances)
     policy = chain.exposure_policy
     ref = float(st.capture.get("reference_luminance_cd_m2", 100.0))
     ratio = 1.0 if policy == "each" else min(lums) / ref
     edge = min([o.luminance for o in config.objectives if o.scene == "slanted-edge"] or [100.0])
     f_number = float(st.optics.get("f_number", 4.0))
-    wanted = [d for o in config.objectives if {"noise", "snr10", "blur", "neg_capacity"} & set(o.proxies)
+    wanted = [d for o in config.objectives
+              if {"noise", "noise_area", "snr10", "snr10_area", "blur", "neg_capacity"} & set(o.proxies)
               for d in (st.demosaics if o.demosaic == "best" else (o.demosaic,))]
     demosaics = tuple(dict.fromkeys(d if d in P.LINEAR_DEMOSAICS else "laplacian" for d in wanted)) or ("bilinear",)
     return P.ProxySettings(f_number, float(sensor.pixel_pitch_um), float(sensor.well_capacity_e),
@@ -146,7 +147,7 @@ def _exhaustive(config, h, w, state: Path, settings, models, log) -> tuple[list[
     lo, hi = L.density_limits(config.density, config.alphabet, h * w)
     rows, evaluated, reused = [], 0, 0
     names = ("aliasing", "aliasing_h", "crosstalk", "sampling", "blur", "neg_capacity", "noise", "noise_xyz",
-             "snr10", "colour", "vora_trussell")
+             "noise_area", "snr10", "snr10_area", "colour", "vora_trussell")
     for i in range(L.n_chunks(h, w, k)):
         f = state / f"exhaustive-{h}x{w}-{_state_key(settings)}-{i:05d}.npz"
         if f.exists():

@@ -83,7 +83,8 @@ def find_spans(path: Path) -> list[Span]:
                  m.start("text"), m.end("text")) for m in MARKER.finditer(src) if not _in_code(src, m.start())]
 
 
-_CSV_QUERY = re.compile(r"^(?:(?P<agg>first|mean|min|max|sum|count|nunique):)?(?P<col>[\w-]+)"
+# a column may hold @, /, + and dots (a design's objective labels: ysnr-area@gray-bar/L10/best)
+_CSV_QUERY = re.compile(r"^(?:(?P<agg>first|mean|min|max|sum|count|nunique):)?(?P<col>[\w@/+.-]+)"
                         r"(?:\[(?P<filter>[^\]]*)\])?$")
 _CACHE: dict = {}
 
