@@ -77,9 +77,9 @@ def front_figure(table, objectives):
             x, y, xe, ye = xy(named.loc[[_]])
             ax.errorbar(x, y, xerr=xe, yerr=ye, fmt="sDv^<>ph"[n // len(_NAMED) % 8], color=_NAMED[n % len(_NAMED)],
                         capsize=2, ms=7, label=r["cfa"])
-        ax.set_xlabel(_axis_title(ox), fontsize=8)
+        ax.set_xlabel(_axis_title(ox, 56), fontsize=8)
         if oy is not None:
-            ax.set_ylabel(_axis_title(oy), fontsize=8)
+            ax.set_ylabel(_axis_title(oy, 40), fontsize=8)
         else:
             ax.set_yticks([])
     handles, labels = fig.axes[0].get_legend_handles_labels()
@@ -90,10 +90,14 @@ def front_figure(table, objectives):
     return fig
 
 
-def _axis_title(o) -> str:
-    """An axis named by metric, condition and unit, with its direction (line-wrapped)."""
+def _axis_title(o, width: int = 44) -> str:
+    """An axis named by metric, condition and unit, with its direction,
+    wrapped at ``width`` characters so that a long name stays within the
+    panel's height (a y label) or width (an x label)."""
+    import textwrap
+
     title = getattr(o, "title", o.label)
-    return f"{title}\n({'lower' if o.goal == 'min' else 'higher'} is better)"
+    return textwrap.fill(title, width) + f"\n({'lower' if o.goal == 'min' else 'higher'} is better)"
 
 
 #: Axis names of the proxies (design/proxy.py), each lower-is-better.
