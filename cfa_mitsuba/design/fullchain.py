@@ -16,7 +16,7 @@ intervals).
 
 from __future__ import annotations
 
-__all__ = ["candidate_name", "write_cfa_toml", "run_fullchain", "objective_table", "curve_line", "write_lines"]
+__all__ = ["candidate_name", "write_cfa_toml", "run_fullchain", "objective_table"]
 
 import dataclasses
 import hashlib

@@ -29,8 +29,9 @@ interpolation) leaves NPS(0) unchanged: for uncorrelated noise YSNR_area
 equals YSNR, for noise smoothed over at most L pixels it is the YSNR the
 same light gives without the smoothing (a 3 x 3 or 5 x 5 box blur triples
 or quintuples YSNR and leaves YSNR_area within its sampling error, which
-grows as the region shrinks).  NPS(0) = var(area mean) x area in the limit of large areas (Dainty
-& Shaw 1974, ch. 8): it is the noise of an area, not of a pixel.
+grows as the region shrinks).  NPS(0) = var(area mean) x area in the limit
+of large areas (Dainty & Shaw 1974, ch. 8): it is the noise of an area,
+not of a pixel.
 
 where the chroma noise is that of the white-normalised opponent signals
 x' - y' and z' - y' (x' = X / Xw, y' = Y / Yw, z' = Z / Zw; both 0 on a
