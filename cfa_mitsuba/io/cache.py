@@ -27,7 +27,6 @@ import hashlib
 import json
 import os
 import sys
-import time
 from pathlib import Path
 from typing import Callable
 
@@ -122,24 +121,17 @@ class RenderCache:
     def load(self, key: str) -> SpectralImage | None:
         """The cached image for ``key``, or None if absent.  An unreadable
         entry, or one whose bytes fail their checksum, counts as absent (it
-        will be rendered again and replaced).  A read that fails although the
-        bytes pass their checksum is tried twice more (0.1 s, then 0.2 s
-        later): with 16 study workers reading one entry at once, OpenEXR
-        3.3.5 was seen to fail now and then with 'file has 0 parts' on a file
-        whose bytes were intact, and each such failure re-rendered the scene."""
+        will be rendered again and replaced)."""
         from .exr import read_spectral_exr
 
         p = self.path(key)
         if not p.is_file() or not self._verified(key):
             return None
-        for attempt in range(3):
-            try:
-                return read_spectral_exr(p)
-            except CfaMitsubaError as exc:
-                error = exc
-                time.sleep(0.1 * (attempt + 1))
-        sys.stderr.write(f"cfa-mitsuba: ignoring unreadable cache entry {p} (read three times): {error}\n")
-        return None
+        try:
+            return read_spectral_exr(p)
+        except CfaMitsubaError as exc:
+            sys.stderr.write(f"cfa-mitsuba: ignoring unreadable cache entry {p}: {exc}\n")
+            return None
 
     def store(self, key: str, image: SpectralImage) -> Path:
         """Write the entry and its checksum: the EXR to a temporary name,
