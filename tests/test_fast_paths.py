@@ -65,7 +65,8 @@ def test_scielab_filtering_equals_fftconvolve_per_plane():
     n = kernels[0].shape[0]
     expected = np.stack([signal.fftconvolve(np.pad(opp[..., c], n // 2, mode="symmetric"), kernels[c], mode="valid")
                          for c in range(3)], axis=-1)
-    np.testing.assert_allclose(_symmetric_filter(opp, 23.0, "distribution", n), expected, rtol=0, atol=1e-12)
+    got = np.moveaxis(_symmetric_filter(opp, 23.0, "distribution", n), 0, -1)
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize("shape", [(2, 2), (3, 3), (2, 3), (3, 2)])

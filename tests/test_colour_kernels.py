@@ -1,0 +1,96 @@
+"""The compiled CIELAB and CIEDE2000 loops (cfa_mitsuba/colour_kernels.py)
+against the libraries they stand in for: scikit-image's and colour-science's
+CIEDE2000, colour-science's XYZ_to_Lab."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from cfa_mitsuba import colorimetry as cm
+from cfa_mitsuba.colour_kernels import ciede2000, lab_cie
+
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore")
+    import colour
+from skimage.color import deltaE_ciede2000
+
+
+def _lab_pairs(n=200_000, seed=3):
+    rng = np.random.default_rng(seed)
+    a = np.stack([rng.uniform(0, 100, n), rng.normal(0, 40, n), rng.normal(0, 40, n)], axis=-1)
+    b = a + rng.normal(0, 4, a.shape)
+    # the formula's special cases: zero chroma on one or both sides, hues either side of the 0/360 seam,
+    # hue differences just over and under 180 degrees
+    a[:50, 1:] = 0.0
+    b[25:75, 1:] = 0.0
+    a[100:200, 1], a[100:200, 2] = 30.0, rng.uniform(-1, 1, 100)
+    b[100:200, 1], b[100:200, 2] = 30.0, rng.uniform(-1, 1, 100)
+    ang = np.deg2rad(rng.uniform(0, 360, 300))
+    a[200:500, 1], a[200:500, 2] = 20 * np.cos(ang), 20 * np.sin(ang)
+    b[200:500, 1], b[200:500, 2] = 20 * np.cos(ang + np.pi + rng.normal(0, 1e-3, 300)), 20 * np.sin(
+        ang + np.pi + rng.normal(0, 1e-3, 300))
+    return a, b
+
+
+def test_ciede2000_equals_scikit_image_and_colour():
+    a, b = _lab_pairs()
+    got = ciede2000(a, b)
+    sk = deltaE_ciede2000(a, b, channel_axis=-1)
+    np.testing.assert_allclose(got, sk, rtol=1e-12, atol=1e-12)
+    cs = colour.delta_E(a[:20000], b[:20000], method="CIE 2000")
+    np.testing.assert_allclose(got[:20000], cs, rtol=1e-12, atol=1e-11)
+
+
+def test_ciede2000_shapes_broadcasting_and_nan():
+    a, b = _lab_pairs(1200)
+    img_a, img_b = a.reshape(30, 40, 3), b.reshape(30, 40, 3)
+    assert cm.delta_e_2000(img_a, img_b).shape == (30, 40)
+    one = cm.delta_e_2000(img_a, [50.0, 0.0, 0.0])
+    np.testing.assert_allclose(one, deltaE_ciede2000(img_a, np.broadcast_to([50.0, 0.0, 0.0], img_a.shape),
+                                                     channel_axis=-1), rtol=1e-12, atol=1e-12)
+    assert cm.delta_e_2000([50, 1, 2], [50, 1, 2]).shape == ()
+    assert cm.delta_e_2000(np.zeros((0, 3)), np.zeros((0, 3))).shape == (0,)
+    bad = img_b.copy()
+    bad[3, 4, 1] = np.nan
+    out = cm.delta_e_2000(img_a, bad)
+    assert np.isnan(out[3, 4]) and np.isfinite(np.delete(out.ravel(), 3 * 40 + 4)).all()
+
+
+def test_lab_equals_colour_science_across_the_dark_branch():
+    rng = np.random.default_rng(5)
+    white = np.array([95.05, 100.0, 108.9])
+    xyz = rng.uniform(0, 120, (100_000, 3))
+    xyz[:20000] *= 0.01  # below (24/116)^3 of the white: the linear branch
+    xyz[:100] = -xyz[:100]  # negative XYZ (a demosaic overshoot) takes the linear branch too
+    with colour.utilities.domain_range_scale("reference"):
+        ref = colour.XYZ_to_Lab(xyz / white[1], illuminant=colour.XYZ_to_xy(white / white[1]))
+    got = lab_cie(xyz, white)
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12 * 100)
+    np.testing.assert_allclose(cm.xyz_to_lab(xyz.reshape(100, 1000, 3), white).reshape(-1, 3), ref, atol=1e-10)
+
+
+def test_lab_rejects_a_last_axis_that_is_not_three():
+    from cfa_mitsuba.errors import CfaMitsubaError
+
+    with pytest.raises(CfaMitsubaError, match="3 values in its last axis"):
+        cm.xyz_to_lab(np.ones((4, 4, 2)), [95.05, 100.0, 108.9])
+
+
+def test_opponent_lab_equals_the_library_chain():
+    """opponent planes -> XYZ -> CIELAB in one pass against numpy's matrix
+    product then colour-science's XYZ_to_Lab."""
+    from cfa_mitsuba.colour_kernels import opponent_lab
+    from cfa_mitsuba.metrics.scielab import OPPONENT_MATRICES
+
+    rng = np.random.default_rng(8)
+    white = np.array([95.05, 100.0, 108.9])
+    m = OPPONENT_MATRICES["xyz2"]
+    xyz = rng.uniform(0.01, 100, (40, 50, 3))
+    xyz[:4] *= 0.001  # the linear branch
+    planes = np.moveaxis(xyz @ m.T, -1, 0)[:, 1:-1, 2:]  # a strided view, as S-CIELAB passes it
+    inv = np.linalg.inv(m)
+    with colour.utilities.domain_range_scale("reference"):
+        expected = colour.XYZ_to_Lab((np.moveaxis(planes, 0, -1) @ inv.T) / white[1],
+                                     illuminant=colour.XYZ_to_xy(white / white[1]))
+    np.testing.assert_allclose(opponent_lab(planes, inv, white), expected, rtol=0, atol=1e-11)
