@@ -166,8 +166,13 @@ def xyz_to_srgb8(xyz, white_xyz, *, quantize: bool = True) -> np.ndarray:
     >>> xyz_to_srgb8([[20.0, 21.0, 22.0]], [95.05, 100.0, 108.9]).tolist()
     [[128.0, 126.0, 124.0]]
     """
-    codes = 255.0 * xyz_to_srgb(xyz, white_xyz)
-    return np.round(codes) if quantize else codes
+    if not quantize:
+        return 255.0 * xyz_to_srgb(xyz, white_xyz)
+    # exactly np.round(255 x xyz_to_srgb(...)), by a table of the code boundaries (tests/test_colour_kernels.py)
+    from .colour_kernels import srgb8_codes
+
+    w = as_white(white_xyz)
+    return srgb8_codes(xyz_to_linear(np.asarray(xyz, dtype=np.float64), scale=w[1]))
 
 
 def xyz_to_lab(xyz, white_xyz, *, constants: str = "cie") -> np.ndarray:

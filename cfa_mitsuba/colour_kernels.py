@@ -1,5 +1,6 @@
-"""Compiled per-pixel loops for the two colour formulas a study evaluates
-hundreds of millions of times: CIE 1976 L*a*b* and CIEDE2000.
+"""Compiled per-pixel loops for the colour formulas a study evaluates
+hundreds of millions of times: CIE 1976 L*a*b*, CIEDE2000 and 8-bit sRGB
+codes.
 
 Written by hand (with Numba) for speed only: scikit-image's
 ``deltaE_ciede2000`` and colour-science's ``XYZ_to_Lab`` compute the same
@@ -16,7 +17,7 @@ beside this module by Numba (``cache=True``), so later processes load them.
 
 from __future__ import annotations
 
-__all__ = ["ciede2000", "lab_cie", "opponent_lab"]
+__all__ = ["ciede2000", "lab_cie", "opponent_lab", "srgb8_codes"]
 
 import math
 
@@ -178,4 +179,64 @@ def opponent_lab(planes, to_xyz, white) -> np.ndarray:
     if out.size:
         _opponent_lab_map(planes, np.ascontiguousarray(to_xyz, dtype=np.float64),
                           np.ascontiguousarray(white, dtype=np.float64), out)
+    return out
+
+
+_SRGB8_BINS = 8192
+_SRGB8_TABLES = None
+
+
+def _srgb8_tables():
+    """(thresholds (255,), first code per bin (BINS + 1,)): threshold k - 1 is
+    the smallest float64 v in [0, 1] whose code round(255 x sRGB(v)) (by
+    :func:`cfa_mitsuba.colorimetry.linear_to_srgb`, rounding half to even) is
+    at least k, found by bisection over the floats' bit patterns; bin b
+    starts at v = b / BINS."""
+    global _SRGB8_TABLES
+    if _SRGB8_TABLES is None:
+        from .colorimetry import linear_to_srgb
+
+        def code(v):
+            return np.round(255.0 * linear_to_srgb(v))
+
+        k = np.arange(1, 256, dtype=np.float64)
+        lo = np.zeros(255, dtype=np.int64)  # bits of 0.0: code 0 < k
+        hi = np.full(255, np.float64(1.0).view(np.int64))  # bits of 1.0: code 255 >= k
+        while np.any(hi - lo > 1):
+            mid = lo + (hi - lo) // 2
+            up = code(mid.view(np.float64)) >= k
+            hi = np.where(up, mid, hi)
+            lo = np.where(up, lo, mid)
+        thresholds = hi.view(np.float64).copy()
+        starts = np.searchsorted(thresholds, np.arange(_SRGB8_BINS + 1) / _SRGB8_BINS, side="right").astype(np.int64)
+        _SRGB8_TABLES = (thresholds, starts)
+    return _SRGB8_TABLES
+
+
+@nb.njit(cache=True, nogil=True)
+def _srgb8_values(lin, thresholds, starts, out):  # pragma: no cover - compiled
+    for i in range(out.shape[0]):
+        v = lin[i]
+        if v != v:
+            out[i] = v
+            continue
+        v = min(max(v, 0.0), 1.0)
+        c = starts[int(v * _SRGB8_BINS)]
+        while c < 255 and v >= thresholds[c]:
+            c += 1
+        out[i] = c
+
+
+def srgb8_codes(linear) -> np.ndarray:
+    """8-bit sRGB code values (float64) of linear sRGB: exactly
+    ``np.round(255 * linear_to_srgb(np.clip(linear, 0, 1)))`` (NaN stays
+    NaN), by table: the code is the number of thresholds at or below the
+    value (:func:`_srgb8_tables`), where the formula costs a power per value.
+    Exact wherever that formula is non-decreasing in its argument; the test
+    checks it on every threshold's neighbours and ten million values."""
+    a = np.asarray(linear, dtype=np.float64)
+    out = np.empty(a.shape, dtype=np.float64)
+    if out.size:
+        thresholds, starts = _srgb8_tables()
+        _srgb8_values(np.ascontiguousarray(a).reshape(-1), thresholds, starts, out.reshape(-1))
     return out

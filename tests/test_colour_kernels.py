@@ -94,3 +94,31 @@ def test_opponent_lab_equals_the_library_chain():
         expected = colour.XYZ_to_Lab((np.moveaxis(planes, 0, -1) @ inv.T) / white[1],
                                      illuminant=colour.XYZ_to_xy(white / white[1]))
     np.testing.assert_allclose(opponent_lab(planes, inv, white), expected, rtol=0, atol=1e-11)
+
+
+def test_srgb8_codes_equal_the_formula_rounded():
+    """The table's codes against round(255 x sRGB(clip(v))) at every code
+    boundary's float neighbours and on ten million values (a tenth near 0,
+    where the codes are densest); NaN stays NaN."""
+    from cfa_mitsuba.colour_kernels import _srgb8_tables, srgb8_codes
+
+    def formula(v):
+        return np.round(255.0 * cm.linear_to_srgb(np.clip(v, 0.0, 1.0)))
+
+    thresholds, _ = _srgb8_tables()
+    steps = [thresholds]
+    for direction in (-1.0, 2.0):
+        v = thresholds
+        for _ in range(3):
+            v = np.nextafter(v, direction)
+            steps.append(v)
+    near = np.concatenate(steps)
+    np.testing.assert_array_equal(srgb8_codes(near), formula(near))
+    rng = np.random.default_rng(11)
+    v = np.concatenate([rng.uniform(-0.2, 1.2, 9_000_000), rng.uniform(0, 0.005, 1_000_000)])
+    np.testing.assert_array_equal(srgb8_codes(v), formula(v))
+    np.testing.assert_array_equal(srgb8_codes(v[:1200].reshape(30, 40)), formula(v[:1200].reshape(30, 40)))
+    assert np.isnan(srgb8_codes([np.nan, 0.5])).tolist() == [True, False]
+    xyz = rng.uniform(0, 120, (50, 60, 3))
+    white = np.array([95.05, 100.0, 108.9])
+    np.testing.assert_array_equal(cm.xyz_to_srgb8(xyz, white), np.round(cm.xyz_to_srgb8(xyz, white, quantize=False)))

@@ -77,8 +77,9 @@ def code_range(reference, test, data_range: float, what: str):
     require(np.isfinite(data_range) and data_range > 0, f"data_range must be positive, got {data_range}")
     if data_range == 255.0:
         top = max(float(np.max(reference)), float(np.max(test)))
-        fractional = (np.any(reference != np.round(reference)) or np.any(test != np.round(test)))
-        require(not (0.0 < top <= 1.0 and fractional),
+        # the whole-image rounding test only where the range already looks like 0..1
+        fractional = 0.0 < top <= 1.0 and (np.any(reference != np.round(reference)) or np.any(test != np.round(test)))
+        require(not fractional,
                 f"{what}: values lie in 0..1 but data_range is 255 (8-bit codes); "
                 "pass data_range=1 or 8-bit code values")
         return reference, test

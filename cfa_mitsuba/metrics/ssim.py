@@ -73,12 +73,13 @@ def _ssim_plane(x, ux, uxx, y) -> float:
     sigma 1.5, population covariance, data_range 255) term for term, with the
     reference's window moments given: the same float64 operations in the same
     order (tests/test_ssim_moments.py checks the values equal)."""
+    from ._ssim_kernel import index_map
+
     uy, uyy, uxy = _gaussian(y), _gaussian(y * y), _gaussian(x * y)
-    vx, vy, vxy = uxx - ux * ux, uyy - uy * uy, uxy - ux * uy  # cov_norm = 1.0
     c1, c2 = (0.01 * 255.0) ** 2, (0.03 * 255.0) ** 2
-    a1, a2, b1, b2 = 2 * ux * uy + c1, 2 * vxy + c2, ux**2 + uy**2 + c1, vx + vy + c2
-    s = (a1 * a2) / (b1 * b2)
     pad = (WINDOW_PX - 1) // 2
+    # scikit-image's vx, vy, vxy (cov_norm = 1), a1, a2, b1, b2 and s = a1 a2 / (b1 b2) per pixel, compiled
+    s = index_map(ux, uxx, uy, uyy, uxy, c1, c2, pad)
     return s[pad:s.shape[0] - pad, pad:s.shape[1] - pad].mean(dtype=np.float64)
 
 
