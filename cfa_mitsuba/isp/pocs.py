@@ -201,6 +201,8 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
     phases = {c: mosaic.phases(c) for c in others}
     d, lowpassed, new = np.empty(shape), np.empty(shape), np.empty(shape)  # reused: no allocation per pass
     k = lowpass_kernel(levels)
+    from .column_filter import correlate_columns  # here, not at import: Numba takes a third of a second to load
+
     for _ in range(iterations):
         change = 0.0
         for c in others:
@@ -208,7 +210,7 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
             # path; T > 0 clips the subbands), then the observations; in place, into reused buffers
             np.subtract(x[c], refimg, out=d)
             if threshold == 0.0:
-                ndimage.correlate1d(d, k, axis=0, mode="mirror", output=lowpassed)
+                correlate_columns(d, k, lowpassed)  # ndimage.correlate1d(axis=0, mode="mirror"), 2.5-3x faster
                 ndimage.correlate1d(lowpassed, k, axis=1, mode="mirror", output=d)
                 np.add(refimg, d, out=new)
             else:
