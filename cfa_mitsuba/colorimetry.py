@@ -303,25 +303,23 @@ def realisable(xyz, *, tolerance: float = 1e-6) -> np.ndarray:
     [True, True, False, False]
     """
     a = np.asarray(xyz, dtype=np.float64)
-    x, y, z = np.moveaxis(a, -1, 0).copy()  # contiguous planes: the element-wise tests below run 3x faster
-    s = x + y + z  # what a.sum(axis=-1) adds, in its order, without the slow reduction over 3 values
-    floor = -tolerance * np.maximum(np.abs(s), np.finfo(float).tiny)
-    nonneg = (x >= floor) & (y >= floor) & (z >= floor)
+    require(a.ndim >= 1 and a.shape[-1] == 3, f"XYZ must have 3 values in its last axis, got shape {a.shape}")
     # Two stages, so a camera image costs little, not an (n_pixels, n_planes) product: sRGB's
     # triangle lies inside the locus, so a point inside it is realisable; only the points outside it
     # (saturated colours, errors) meet the locus's half-planes (:func:`_inside_locus`).
     # Inside the triangle of the 4-digit matrix's primaries <=> linear R, G, B all >= 0 (for X + Y + Z
-    # > 0); those primaries lie within 1e-4 of IEC 61966-2-1's, well inside the locus.
-    m = XYZ_TO_SRGB
-    inside = ((m[0, 0] * x + m[0, 1] * y + m[0, 2] * z >= 0.0) & (m[1, 0] * x + m[1, 1] * y + m[1, 2] * z >= 0.0)
-              & (m[2, 0] * x + m[2, 1] * y + m[2, 2] * z >= 0.0))
-    # A point that fails the sign test is not realisable whatever its chromaticity: test only the others.
-    rest = np.flatnonzero(~inside & nonneg & (s > 0))
-    if rest.size:
-        flat, s_flat = a.reshape(-1, 3), s.reshape(-1)
-        xy = flat[rest, :2] / s_flat[rest, None]
-        inside.reshape(-1)[rest] = _inside_locus(xy, tolerance)
-    return nonneg & ((s <= 0) | inside)
+    # > 0); those primaries lie within 1e-4 of IEC 61966-2-1's, well inside the locus.  A point that
+    # fails the sign test (any of X, Y, Z below -tolerance x (X + Y + Z)) is not realisable whatever
+    # its chromaticity.  The first stage is one compiled pass (colour_kernels.realisable_first_pass).
+    from .colour_kernels import realisable_first_pass
+
+    out, rest = realisable_first_pass(a, XYZ_TO_SRGB, tolerance)
+    idx = np.flatnonzero(rest)
+    if idx.size:
+        flat = a.reshape(-1, 3)[idx]
+        xy = flat[:, :2] / (flat[:, 0] + flat[:, 1] + flat[:, 2])[:, None]
+        out[idx] = _inside_locus(xy, tolerance)
+    return out.reshape(a.shape[:-1])
 
 
 def _locus_sectors():

@@ -17,7 +17,7 @@ beside this module by Numba (``cache=True``), so later processes load them.
 
 from __future__ import annotations
 
-__all__ = ["ciede2000", "lab_cie", "opponent_lab", "srgb8_codes"]
+__all__ = ["ciede2000", "lab_cie", "opponent_lab", "realisable_first_pass", "srgb8_codes"]
 
 import math
 
@@ -240,3 +240,33 @@ def srgb8_codes(linear) -> np.ndarray:
         thresholds, starts = _srgb8_tables()
         _srgb8_values(np.ascontiguousarray(a).reshape(-1), thresholds, starts, out.reshape(-1))
     return out
+
+
+@nb.njit(cache=True, nogil=True)
+def _realisable_rows(xyz, to_rgb, tolerance, tiny, out, rest):  # pragma: no cover - compiled
+    for i in range(out.shape[0]):
+        x = xyz[i, 0]
+        y = xyz[i, 1]
+        z = xyz[i, 2]
+        s = x + y + z
+        floor = -tolerance * max(abs(s), tiny)
+        nonneg = x >= floor and y >= floor and z >= floor
+        inside = (to_rgb[0, 0] * x + to_rgb[0, 1] * y + to_rgb[0, 2] * z >= 0.0
+                  and to_rgb[1, 0] * x + to_rgb[1, 1] * y + to_rgb[1, 2] * z >= 0.0
+                  and to_rgb[2, 0] * x + to_rgb[2, 1] * y + to_rgb[2, 2] * z >= 0.0)
+        out[i] = nonneg and (s <= 0.0 or inside)
+        rest[i] = nonneg and s > 0.0 and not inside
+
+
+def realisable_first_pass(xyz, to_rgb, tolerance: float):
+    """The per-pixel half of :func:`cfa_mitsuba.colorimetry.realisable` in
+    one pass: (the answer where the sign and sRGB-triangle tests decide it,
+    the pixels whose answer the spectral locus decides), both (N,) bool for
+    (N, 3) ``xyz``; the same expressions in the same order as numpy's."""
+    rows = _rows(xyz)
+    out = np.empty(rows.shape[0], dtype=np.bool_)
+    rest = np.empty(rows.shape[0], dtype=np.bool_)
+    if out.size:
+        _realisable_rows(rows, np.ascontiguousarray(to_rgb, dtype=np.float64), float(tolerance),
+                         float(np.finfo(float).tiny), out, rest)
+    return out, rest

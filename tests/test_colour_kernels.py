@@ -122,3 +122,13 @@ def test_srgb8_codes_equal_the_formula_rounded():
     xyz = rng.uniform(0, 120, (50, 60, 3))
     white = np.array([95.05, 100.0, 108.9])
     np.testing.assert_array_equal(cm.xyz_to_srgb8(xyz, white), np.round(cm.xyz_to_srgb8(xyz, white, quantize=False)))
+
+
+def test_realisable_shapes_nan_and_bad_axis():
+    from cfa_mitsuba.errors import CfaMitsubaError
+
+    xyz = np.array([[[95.05, 100.0, 108.9], [np.nan, 1.0, 1.0], [-5.0, 10.0, 10.0]]] * 2)
+    assert cm.realisable(xyz).tolist() == [[True, False, False]] * 2
+    assert cm.realisable(np.zeros((0, 3))).shape == (0,)
+    with pytest.raises(CfaMitsubaError, match="3 values in its last axis"):
+        cm.realisable(np.ones((4, 2)))
