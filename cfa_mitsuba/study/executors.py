@@ -151,6 +151,7 @@ class DaskExecutor:
         self.timeout_s = timeout_s
         self._Client = Client
         self.client = None
+        self.workers = 0  # known once connected
         self.description = f"Dask cluster at {address}"
 
     def __enter__(self):
@@ -169,6 +170,7 @@ class DaskExecutor:
             host = addr.rsplit(":", 1)[0]
             self._procs[host] = self._procs.get(host, 0) + 1
         n = len(workers)
+        self.workers = n
         self.description = f"Dask cluster at {self.address} ({n} worker{'s' if n != 1 else ''})"
         return self
 

@@ -47,7 +47,7 @@ from .sensor_curves import write_sensor_curves
 from .tables import mean_table, order_rows, write_tables
 from .snr import write_snr_tables
 from .render_seeds import is_3d as _is_3d, path_traced, render_seeded
-from .tasks import EvaluationTask, evaluate_task, render_task
+from .tasks import EvaluationTask, evaluate_group, evaluate_task, render_task
 
 #: Metrics that enter the scores (the paper's eight); other rows in
 #: metrics.csv (delta-l, delta-e76, scielab-interior) are reported only.
@@ -189,14 +189,42 @@ def _paper_ranges(config: StudyConfig, render_info: dict) -> dict:
     return dict(default_ranges(**kwargs))
 
 
-def _run_tasks(executor, fn, items, desc, progress, on_result):
-    bar = _progress(len(items), desc, progress)
+def _run_tasks(executor, fn, items, desc, progress, on_result, *, size=lambda item: 1):
+    bar = _progress(sum(size(i) for i in items), desc, progress)
     try:
         for item, result in executor.map_unordered(fn, items):
             on_result(item, result)
-            bar.update(1)
+            bar.update(size(item))
     finally:
         bar.close()
+
+
+def _task_groups(tasks: list, render_info: dict, workers: int) -> list[tuple]:
+    """The evaluation tasks in groups that share a render and a condition
+    (one per CFA), largest first, so that one worker makes a group's
+    optical and ideal images once (issue 25: on two workers a third of the
+    optics time was the other worker making the same images) and the
+    longest groups do not finish last.  Size = pixels x realisations x
+    demosaics.  A group is split in halves while there are fewer than four
+    groups per worker, so many workers still share the work."""
+    groups: dict = {}
+    for t in tasks:
+        key = (json.dumps(t.source, sort_keys=True, default=str), repr(t.condition), t.render_seed)
+        groups.setdefault(key, []).append(t)
+
+    def size(group) -> float:
+        info = render_info.get(_render_label(group[0].source)) or {}
+        pixels = float(info.get("width") or 1) * float(info.get("height") or 1)
+        return pixels * sum(max(1, t.realisations) * max(1, len(t.demosaics)) for t in group)
+
+    out = list(groups.values())
+    while len(out) < 4 * max(1, workers):
+        big = max(out, key=len, default=[])
+        if len(big) < 2:
+            break
+        out.remove(big)
+        out += [big[:len(big) // 2], big[len(big) // 2:]]
+    return [tuple(g) for g in sorted(out, key=size, reverse=True)]
 
 
 def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, scheduler: str | None = None,
@@ -273,7 +301,12 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
             for k, v in result["timing"].items():
                 timing["tasks"][k] = timing["tasks"].get(k, 0.0) + v
 
-        _run_tasks(executor, evaluate_task, todo, "evaluate", progress, got_eval)
+        def got_group(group, results):
+            for task, result in zip(group, results):
+                got_eval(task, result)
+
+        groups = _task_groups(todo, render_info, getattr(executor, "workers", 0) or 1)
+        _run_tasks(executor, evaluate_group, groups, "evaluate", progress, got_group, size=len)
         timing["phases"]["evaluate_s"] = time.perf_counter() - t
 
     rows = [r for task in tasks for r in done[_task_id(task)]["rows"]]

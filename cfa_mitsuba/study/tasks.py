@@ -246,6 +246,14 @@ def _details_extra(ev, raw, seed) -> dict:
     }
 
 
+def evaluate_group(tasks) -> list[dict]:
+    """:func:`evaluate_task` of each task of a group, in this process, in
+    order.  The runner sends the tasks of one render and condition (every
+    CFA) to one worker as a group, so that worker makes the optical and
+    ideal images once and the others do not make them again."""
+    return [evaluate_task(t) for t in tasks]
+
+
 def evaluate_task(task) -> dict:
     """Capture one CFA of one scene under one condition and evaluate every demosaic.
 
