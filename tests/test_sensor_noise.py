@@ -186,3 +186,18 @@ def test_poisson_quantile_is_scipys_and_stable_under_last_bit_changes():
     lam2 = lam.copy()
     lam2[100] *= 1.5
     assert np.count_nonzero(poisson_quantile(lam2, u) != k) <= 1
+
+
+def test_poisson_quantile_of_u_zero_is_zero():
+    """u = 0 (numpy's generator can return it) is the quantile 0, the
+    smallest k with P(X <= k) >= 0, not NaN (its normal quantile is -inf,
+    and -inf + inf was NaN).  scipy's ppf(0) is -1 by its own convention,
+    so the reference here is the definition."""
+    import warnings
+
+    from cfa_mitsuba.sensor.noise import poisson_quantile
+
+    lam = np.array([0.0, 0.3, 5.0, 400.0, 2e4])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert poisson_quantile(lam, np.zeros(lam.size)).tolist() == [0.0] * 5

@@ -131,9 +131,10 @@ def poisson_quantile(mean: np.ndarray, u: np.ndarray) -> np.ndarray:
     lam = np.asarray(mean, dtype=np.float64).ravel()
     uu = np.asarray(u, dtype=np.float64).ravel()
     z = special.ndtri(uu)
-    k = np.floor(lam + np.sqrt(lam) * z + (z * z - 1.0) / 6.0 + 0.5)
+    with np.errstate(invalid="ignore"):  # u = 0: z = -inf, k NaN, set to 0 below
+        k = np.floor(lam + np.sqrt(lam) * z + (z * z - 1.0) / 6.0 + 0.5)
     np.maximum(k, 0.0, out=k)
-    k[lam == 0] = 0.0
+    k[(lam == 0) | (uu == 0)] = 0.0  # u = 0 (one draw in 2^53) made k NaN through -inf + inf: its answer is 0
     cdf = special.pdtr(k, lam)
     below = cdf < uu  # k too small: step up until the CDF reaches u
     idx = np.flatnonzero(below)
