@@ -54,3 +54,14 @@ def test_moments_of_another_image_are_refused(pair):
     ref, test = pair
     with pytest.raises(CfaMitsubaError, match="reference_moments"):
         ssim(ref, test, reference_moments=ssim_reference_moments(ref[:40]))
+
+
+def test_gaussian_window_is_scikit_images_bit_for_bit():
+    """SSIM's window (a compiled column pass, ndimage's row pass) against
+    scikit-image's ``gaussian`` on a camera-sized plane."""
+    from skimage.filters import gaussian
+
+    from cfa_mitsuba.metrics.ssim import _gaussian
+
+    x = np.round(np.random.default_rng(3).random((317, 240)) * 255.0)
+    np.testing.assert_array_equal(_gaussian(x), gaussian(x, sigma=1.5, truncate=3.5, mode="reflect"))
