@@ -3,7 +3,7 @@
 Per phase, against another commit (issue 25)::
 
     python benchmarks/bench_study.py --paper [--subset bayer,rgbw1] [--against REV [--same-config] [--abba]]
-                                     [--warm-only] [--keep DIR] [--workers 2]
+                                     [--warm-only] [--keep DIR] [--json FILE] [--workers 2]
 
 runs the study (configs/paper.toml with --paper, else --config) through
 ``python -m cfa_mitsuba study`` twice per tree: *cold* (an empty render
@@ -24,7 +24,9 @@ work where this tree's copy asks for more, e.g. ``render_seeds``);
 faster run: a machine that slows (or speeds up) over the runs then favours
 neither (measured: run second, REV's evaluate grew from 158 to 193 s over
 four invocations while this tree's stayed at 108-111 s);
-``--keep DIR`` keeps each run's metrics CSVs and timing.json.  Each tree
+``--keep DIR`` keeps each run's metrics CSVs and timing.json; ``--json
+FILE`` writes the record (the kept runs, every run's evaluate phase, the
+ratios REV / this tree and the command).  Each tree
 runs its own copy of the config (its own configs/ file).
 
 The optics memo (the quick study with the optical image shared by every
@@ -140,6 +142,7 @@ def phases_main(args) -> int:
     config = "configs/paper.toml" if args.paper else os.path.relpath(given, REPO)
     cfas = args.subset.split(",") if args.subset else None
     runs: dict[str, dict[str, dict]] = {}
+    all_evaluate: dict[str, dict[str, list]] = {}  # every run's evaluate phase, in the order run
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         trees = {"this": REPO}
@@ -163,6 +166,7 @@ def phases_main(args) -> int:
                     if out.exists():
                         shutil.rmtree(out)
                     got = _study(tree, configs[name], out, cache, args.workers)
+                    all_evaluate.setdefault(name, {}).setdefault(mode, []).append(got["evaluate_s"])
                     seen = runs.setdefault(name, {}).get(mode)
                     # with --abba each tree runs twice: keep the faster run's numbers, each key the run's own
                     if seen is None or got["evaluate_s"] < seen["evaluate_s"]:
@@ -196,7 +200,17 @@ def phases_main(args) -> int:
                 a, b = runs[names[0]][m][key], runs[names[1]][m][key]
                 line += f"{(b / a if a > 0 else float('nan')):>14.2f}"
         print(line)
-    print(json.dumps({"config": what, "load_average": os.getloadavg(), "runs": runs}))
+    record = {"config": what, "load_average": os.getloadavg(), "runs": runs}
+    if len(names) == 2:
+        m = next(iter(runs[names[0]]))  # the ratio REV / this tree of the first mode run
+        record["against"] = names[1]
+        record["ratio"] = {k: runs[names[1]][m][k] / runs[names[0]][m][k] for k in runs[names[0]][m]
+                           if runs[names[0]][m][k] > 0}
+    record["command"] = "python3 benchmarks/bench_study.py " + " ".join(sys.argv[1:])
+    record["all_evaluate_s"] = all_evaluate
+    print(json.dumps(record))
+    if args.json:
+        Path(args.json).write_text(json.dumps(record, indent=1) + "\n")
     return 0
 
 
@@ -213,10 +227,11 @@ def main() -> int:
     ap.add_argument("--keep", metavar="DIR", help="copy each run's metrics CSVs and timing.json into DIR/<tree>-<mode>/")
     ap.add_argument("--abba", action="store_true",
                     help="with --against: run this, REV, REV, this and keep each tree's faster run (drift-fair)")
+    ap.add_argument("--json", metavar="FILE", help="also write the record (runs, ratio REV / this, command) to FILE")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--repeat", type=int, default=1, help="optics-memo mode: best of this many")
     args = ap.parse_args()
-    if args.paper or args.against or args.subset or args.warm_only or args.keep:
+    if args.paper or args.against or args.subset or args.warm_only or args.keep or args.json:
         return phases_main(args)
     return memo_main(args)
 
