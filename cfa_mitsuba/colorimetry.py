@@ -172,7 +172,7 @@ def xyz_to_srgb8(xyz, white_xyz, *, quantize: bool = True) -> np.ndarray:
     from .colour_kernels import srgb8_codes
 
     w = as_white(white_xyz)
-    return srgb8_codes(xyz_to_linear(np.asarray(xyz, dtype=np.float64), scale=w[1]))
+    return srgb8_codes(xyz_to_linear(np.asarray(xyz, dtype=np.float64), scale=w[1]), linear_to_srgb)
 
 
 def xyz_to_lab(xyz, white_xyz, *, constants: str = "cie") -> np.ndarray:

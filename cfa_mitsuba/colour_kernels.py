@@ -183,21 +183,19 @@ def opponent_lab(planes, to_xyz, white) -> np.ndarray:
 
 
 _SRGB8_BINS = 8192
-_SRGB8_TABLES = None
+_SRGB8_TABLES: dict = {}
 
 
-def _srgb8_tables():
-    """(thresholds (255,), first code per bin (BINS + 1,)): threshold k - 1 is
-    the smallest float64 v in [0, 1] whose code round(255 x sRGB(v)) (by
-    :func:`cfa_mitsuba.colorimetry.linear_to_srgb`, rounding half to even) is
-    at least k, found by bisection over the floats' bit patterns; bin b
-    starts at v = b / BINS."""
-    global _SRGB8_TABLES
-    if _SRGB8_TABLES is None:
-        from .colorimetry import linear_to_srgb
-
+def _srgb8_tables(encode):
+    """(thresholds (255,), first code per bin (BINS + 1,)) for the sRGB
+    encoding ``encode`` (linear 0..1 -> encoded 0..1; the project passes
+    :func:`cfa_mitsuba.colorimetry.linear_to_srgb`): threshold k - 1 is the
+    smallest float64 v in [0, 1] whose code round(255 x encode(v)) (rounding
+    half to even) is at least k, found by bisection over the floats' bit
+    patterns; bin b starts at v = b / BINS."""
+    if encode not in _SRGB8_TABLES:
         def code(v):
-            return np.round(255.0 * linear_to_srgb(v))
+            return np.round(255.0 * encode(v))
 
         k = np.arange(1, 256, dtype=np.float64)
         lo = np.zeros(255, dtype=np.int64)  # bits of 0.0: code 0 < k
@@ -209,8 +207,8 @@ def _srgb8_tables():
             lo = np.where(up, lo, mid)
         thresholds = hi.view(np.float64).copy()
         starts = np.searchsorted(thresholds, np.arange(_SRGB8_BINS + 1) / _SRGB8_BINS, side="right").astype(np.int64)
-        _SRGB8_TABLES = (thresholds, starts)
-    return _SRGB8_TABLES
+        _SRGB8_TABLES[encode] = (thresholds, starts)
+    return _SRGB8_TABLES[encode]
 
 
 @nb.njit(cache=True, nogil=True)
@@ -227,17 +225,17 @@ def _srgb8_values(lin, thresholds, starts, out):  # pragma: no cover - compiled
         out[i] = c
 
 
-def srgb8_codes(linear) -> np.ndarray:
+def srgb8_codes(linear, encode) -> np.ndarray:
     """8-bit sRGB code values (float64) of linear sRGB: exactly
-    ``np.round(255 * linear_to_srgb(np.clip(linear, 0, 1)))`` (NaN stays
-    NaN), by table: the code is the number of thresholds at or below the
-    value (:func:`_srgb8_tables`), where the formula costs a power per value.
-    Exact wherever that formula is non-decreasing in its argument; the test
-    checks it on every threshold's neighbours and ten million values."""
+    ``np.round(255 * encode(np.clip(linear, 0, 1)))`` (NaN stays NaN) for a
+    non-decreasing ``encode`` (:func:`cfa_mitsuba.colorimetry.linear_to_srgb`),
+    by table: the code is the number of thresholds at or below the value
+    (:func:`_srgb8_tables`), where the formula costs a power per value.  The
+    test checks it on every threshold's neighbours and ten million values."""
     a = np.asarray(linear, dtype=np.float64)
     out = np.empty(a.shape, dtype=np.float64)
     if out.size:
-        thresholds, starts = _srgb8_tables()
+        thresholds, starts = _srgb8_tables(encode)
         _srgb8_values(np.ascontiguousarray(a).reshape(-1), thresholds, starts, out.reshape(-1))
     return out
 

@@ -3,7 +3,8 @@
 - no import cycle anywhere in the package (imports inside functions count:
   a cycle hidden in a function is still a cycle);
 - data flows one way: render -> optics -> sensor -> isp -> metrics -> study
-  -> report (-> design), commands on top; io, spectra, values, colorimetry,
+  -> report (-> design), commands on top; io, spectra, values, colorimetry
+  (with its compiled loops, colour_kernels),
   errors and the version are shared leaves that import no stage;
 - no source file over 500 lines (package, tests, benchmarks).
 """
@@ -21,7 +22,7 @@ PACKAGE = REPO / "cfa_mitsuba"
 #: Stage order; a module may import its own stage, an earlier one, or a leaf.
 STAGES = {"render": 1, "optics": 2, "sensor": 3, "isp": 4, "metrics": 5, "study": 6, "report": 7, "design": 8,
           "commands": 9, "cli": 9, "__main__": 9}
-LEAVES = {"errors", "spectra", "values", "colorimetry", "_version", "io", "data"}
+LEAVES = {"errors", "spectra", "values", "colorimetry", "colour_kernels", "_version", "io", "data"}
 
 
 def _module_name(path: Path) -> str:
