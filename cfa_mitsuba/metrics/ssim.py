@@ -47,9 +47,9 @@ def _planes(image, channel: str, downsample: bool) -> list[np.ndarray]:
 
 
 def _gaussian(x: np.ndarray) -> np.ndarray:
-    """scikit-image's SSIM window: its ``gaussian`` with the arguments
-    ``structural_similarity`` passes (sigma 1.5, truncate 3.5: 11 taps,
-    'reflect'), which is ndimage's ``gaussian_filter``: the column pass, then
+    """The window of a plane (H, W): scikit-image's SSIM window, its
+    ``gaussian`` with the arguments ``structural_similarity`` passes (sigma
+    1.5, truncate 3.5: 11 taps, 'reflect'), which is ndimage's ``gaussian_filter``: the column pass, then
     the row pass.  The column pass is the compiled
     :func:`~cfa_mitsuba.isp.column_filter.correlate_columns` (ndimage's sums in
     its order: the same bits, 4x faster); tests/test_ssim_moments.py checks
@@ -58,11 +58,6 @@ def _gaussian(x: np.ndarray) -> np.ndarray:
 
     from ..isp.column_filter import correlate_columns
 
-    x = np.asarray(x, dtype=np.float64)
-    if x.ndim != 2:  # not a plane: scikit-image's own call
-        from skimage.filters import gaussian
-
-        return gaussian(x, sigma=SIGMA_PX, truncate=3.5, mode="reflect")
     return ndimage.correlate1d(correlate_columns(x, _window(), mode="reflect"), _window(), axis=1, mode="reflect")
 
 
