@@ -133,3 +133,12 @@ def test_realisable_shapes_nan_and_bad_axis():
     assert cm.realisable(np.zeros((0, 3))).shape == (0,)
     with pytest.raises(CfaMitsubaError, match="3 values in its last axis"):
         cm.realisable(np.ones((4, 2)))
+
+
+def test_ciede2000_degenerate_hue_pairs_take_the_angle_formula():
+    """Equal hues, exactly opposite hues, hues within the 1.15 degree band
+    of opposite and zero chroma: the pairs where the vector form of the hue
+    terms is degenerate or loses digits, against scikit-image."""
+    a = np.array([[50, 10, 5], [50, 10, 0], [50, 0, 10], [40, 10, 5], [60, 0, 0], [50, -20, 0.0]])
+    b = np.array([[60, 20, 10], [50, -10, 0], [55, 0.2, -12], [45, -12, -5.9], [70, 3, 4], [50, 20, 0.0]])
+    np.testing.assert_allclose(ciede2000(a, b), deltaE_ciede2000(a, b, channel_axis=-1), rtol=1e-12, atol=1e-12)

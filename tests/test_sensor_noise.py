@@ -201,3 +201,24 @@ def test_poisson_quantile_of_u_zero_is_zero():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert poisson_quantile(lam, np.zeros(lam.size)).tolist() == [0.0] * 5
+
+
+def test_poisson_quantile_recurrence_steps_give_the_exact_counts():
+    """The steps after the first CDF use the mass's recurrence; a draw placed
+    exactly on a CDF value (the tie the recurrence cannot decide) and draws
+    many counts from the normal start are settled by the exact CDF, so every
+    count is the definition's: the smallest k with P(X <= k) >= u."""
+    from scipy import special, stats
+
+    from cfa_mitsuba.sensor.noise import poisson_quantile
+
+    rng = np.random.default_rng(11)
+    lam = np.concatenate([rng.uniform(0, 1, 3000), rng.uniform(1, 50, 3000), rng.uniform(50, 2e5, 3000)])
+    k_true = stats.poisson.ppf(rng.random(lam.size), lam)
+    u_on = special.pdtr(k_true, lam)  # u exactly F(k): the answer is k
+    u_tail = np.concatenate([np.full(3000, 1e-12), np.full(3000, 1 - 1e-12), np.full(3000, 0.5)])
+    for u in (u_on, u_tail):
+        got = poisson_quantile(lam, u)
+        want = stats.poisson.ppf(u, lam)
+        assert np.array_equal(got, want), np.flatnonzero(got != want)[:5]
+    assert np.array_equal(poisson_quantile(lam, u_on), k_true)

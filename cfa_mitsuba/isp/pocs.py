@@ -182,7 +182,6 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
     levels = _levels(mosaic, levels)
     ref = reference_for(cfa, mosaic, reference, luminance_weights)
     n = len(mosaic.channels)
-    th, tw = mosaic.tile_shape
     shape = raw.shape
     ext, ph, pw = extend(raw, mosaic, max(tent_radius(mosaic, c) for c in range(n)))
     x = np.empty((n, *shape))
@@ -198,28 +197,26 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
         x[ref.channel] = refimg
     scale = max(float(np.sqrt(np.mean(raw * raw))), np.finfo(float).tiny)
     done, change = 0, 0.0
-    phases = {c: mosaic.phases(c) for c in others}
-    d, lowpassed, new = np.empty(shape), np.empty(shape), np.empty(shape)  # reused: no allocation per pass
+    observed = {c: mosaic.index == c for c in others}  # (th, tw): where each channel is sampled
+    d, lowpassed = np.empty(shape), np.empty(shape)  # reused: no allocation per pass
     k = lowpass_kernel(levels)
-    from .column_filter import correlate_columns  # here, not at import: Numba takes a third of a second to load
+    # here, not at import: Numba takes a third of a second to load
+    from ._pocs_kernel import project
+    from .column_filter import correlate_columns
 
     for _ in range(iterations):
         change = 0.0
         for c in others:
-            # the detail projection new = ref + P(x_c - ref) (module doc: for T = 0, P is the low-pass
-            # path; T > 0 clips the subbands), then the observations; in place, into reused buffers
+            # the detail projection ref + P(x_c - ref) (module doc: for T = 0, P is the low-pass path;
+            # T > 0 clips the subbands), then the observations, in one pass into x_c
             np.subtract(x[c], refimg, out=d)
             if threshold == 0.0:
                 correlate_columns(d, k, lowpassed)  # ndimage.correlate1d(axis=0, mode="mirror") bit for bit, 4-5x faster
                 ndimage.correlate1d(lowpassed, k, axis=1, mode="mirror", output=d)
-                np.add(refimg, d, out=new)
+                detail = d
             else:
-                np.add(refimg, _subbands(d, 0, levels, threshold), out=new)
-            for i, j in phases[c]:
-                new[i::th, j::tw] = raw[i::th, j::tw]
-            np.subtract(new, x[c], out=d)
-            change = max(change, float(np.sqrt(np.mean(np.multiply(d, d, out=d)))) / scale)
-            x[c] = new
+                detail = _subbands(d, 0, levels, threshold)
+            change = max(change, float(np.sqrt(project(x[c], refimg, detail, raw, observed[c]) / d.size)) / scale)
         done += 1
         if ref.channel is None:
             refimg = np.tensordot(w, x, axes=1)

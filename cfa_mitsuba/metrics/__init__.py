@@ -42,7 +42,7 @@ from .preprocess import mean_match
 from .inputs import MetricInputs
 from .record import NATURAL, MetricRecord
 from .registry import (METRICS, evaluate, evaluate_many, get_metric, list_metrics, metric_names, metric_parameters,
-                       metrics_for_scene, record_json, register_metric, result_rows, scored_metrics,
+                       metrics_for_scene, record_json, register_metric, result_rows, scored_metrics, study_options,
                        unregister_metric)
 from .scielab import scielab, scielab_filters
 from .ssim import ssim
@@ -50,7 +50,7 @@ from .ssim import ssim
 __all__ = [
     "MetricResult", "MetricRecord", "MetricInputs", "register_metric", "unregister_metric", "metric_parameters", "METRICS", "NATURAL", "get_metric",
     "list_metrics", "metric_names", "scored_metrics", "metrics_for_scene", "record_json", "evaluate",
-    "evaluate_many", "result_rows",
+    "evaluate_many", "result_rows", "study_options",
     "delta_e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi",
     "mean_match", "find_edge_roi", "scielab_filters", "scene_geometry", "colourspace",
 ]

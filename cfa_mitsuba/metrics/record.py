@@ -64,6 +64,10 @@ class MetricRecord:
         scielab_reference_lab)``; SSIM's window means); the adapter calls it once per ideal image
         and option set (the options it takes) and passes the result to the
         metric as ``keyword``.
+    study_options : ``((keyword, value), ...)``: options a study passes to
+        ``function`` unless its ``[metrics.<name>]`` table sets them (S-CIELAB's
+        ``fft_precision = 'single'``: the same numbers to 1e-5 dE00 in about half
+        the filtering time); a direct call gets the function's own defaults.
     """
 
     name: str
@@ -86,6 +90,7 @@ class MetricRecord:
     censored_key: str | None = None
     ideal_details: bool = False
     reference_cache: tuple[str, Callable[..., Any]] | None = None
+    study_options: tuple[tuple[str, Any], ...] = ()
 
     def __post_init__(self):
         if self.inputs not in INPUT_KINDS:

@@ -14,7 +14,7 @@ geometry holds (``patches``, ``roi``, ``row``, ``steps``,
 
 from __future__ import annotations
 
-__all__ = ["METRICS", "register_metric", "unregister_metric", "get_metric", "metric_names", "scored_metrics", "metrics_for_scene",
+__all__ = ["METRICS", "study_options", "register_metric", "unregister_metric", "get_metric", "metric_names", "scored_metrics", "metrics_for_scene",
            "list_metrics", "record_json", "evaluate", "evaluate_many", "result_rows", "metric_parameters",
            "GEOMETRY_KEYWORDS"]
 
@@ -124,12 +124,19 @@ def record_json(r: MetricRecord) -> dict:
                                                            "scaling": r.range_scaling},
         "label": r.label, "description": r.description, "paper": r.paper,
         "derived_from": r.parent, "censored_key": r.censored_key, "function": fn,
+        "study_options": dict(r.study_options),
     }
 
 
 @lru_cache(maxsize=None)
 def _parameters(fn) -> dict:
     return dict(inspect.signature(fn).parameters)
+
+
+def study_options() -> dict[str, dict]:
+    """{metric: {keyword: value}}: the records' ``study_options``, which a
+    study passes unless its config sets them."""
+    return {r.name: dict(r.study_options) for r in METRICS.values() if r.study_options}
 
 
 def metric_parameters(name: str) -> dict[str, inspect.Parameter]:

@@ -12,9 +12,11 @@ circularly.  Away from the border (one degree in) both agree to 1e-13.
 
 from __future__ import annotations
 
-__all__ = ["RECORDS", "scielab", "scielab_filters", "OPPONENT_MATRICES", "FILTER_PARAMETERS"]
+__all__ = ["RECORDS", "scielab", "scielab_filters", "scielab_reference", "scielab_reference_lab", "FilteredReference",
+           "OPPONENT_MATRICES", "FILTER_PARAMETERS", "FFT_PRECISIONS"]
 
 import functools
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -87,29 +89,41 @@ def scielab_filters(samples_per_degree: float, *, parameters: str = "distributio
     return kernels
 
 
-def _circular(plane: np.ndarray, k: np.ndarray) -> np.ndarray:
-    """Circular convolution with a centred kernel (ISETCam's FFT filtering)."""
+#: ``fft_precision`` -> the real dtype the filtering's transforms use
+FFT_PRECISIONS = {"double": np.float64, "single": np.float32}
+
+
+def _circular(plane: np.ndarray, k: np.ndarray, dtype=np.float64) -> np.ndarray:
+    """Circular convolution with a centred kernel (ISETCam's FFT filtering),
+    in ``dtype`` (float64: numpy's transforms, as before single precision
+    was offered; float32: scipy's, which keep it)."""
     h, w = plane.shape
     half = k.shape[0] // 2
     rows = (np.arange(k.shape[0]) - half) % h
     cols = (np.arange(k.shape[1]) - half) % w
     kp = np.zeros((h, w))
     np.add.at(kp, (rows[:, None], cols[None, :]), k)
-    return np.fft.irfft2(np.fft.rfft2(plane) * np.fft.rfft2(kp), s=(h, w))
+    if dtype == np.float64:
+        return np.fft.irfft2(np.fft.rfft2(plane) * np.fft.rfft2(kp), s=(h, w))
+    from scipy import fft
+
+    return fft.irfft2(fft.rfft2(plane.astype(dtype)) * fft.rfft2(kp.astype(dtype)), s=(h, w))
 
 
 @functools.lru_cache(maxsize=8)
-def _kernel_spectra(samples_per_degree: float, parameters: str, fshape: tuple) -> np.ndarray:
+def _kernel_spectra(samples_per_degree: float, parameters: str, fshape: tuple, dtype=np.float64) -> np.ndarray:
     """(3, fh, fw // 2 + 1) the kernels' real FFTs at the padded size ``fshape``
-    (one per image size and viewing geometry, reused for every image)."""
+    (one per image size, viewing geometry and precision, reused for every image)."""
     from scipy import fft
 
-    spectra = fft.rfft2(np.stack(scielab_filters(samples_per_degree, parameters=parameters)), s=fshape)
+    kernels = np.stack(scielab_filters(samples_per_degree, parameters=parameters)).astype(dtype)
+    spectra = fft.rfft2(kernels, s=fshape)
     spectra.flags.writeable = False
     return spectra
 
 
-def _symmetric_filter(opp: np.ndarray, samples_per_degree: float, parameters: str, n: int) -> np.ndarray:
+def _symmetric_filter(opp: np.ndarray, samples_per_degree: float, parameters: str, n: int,
+                      dtype=np.float64) -> np.ndarray:
     """Each opponent plane of ``opp`` (H, W, 3) convolved with its kernel after
     symmetric extension by n // 2, the map of the input's size: what
     ``scipy.signal.fftconvolve(padded, kernel, mode='valid')`` computes per
@@ -121,62 +135,89 @@ def _symmetric_filter(opp: np.ndarray, samples_per_degree: float, parameters: st
     kernel: a circular convolution at that length wraps only into outputs
     nearer than n - 1 to the start, and the valid outputs start at n - 1, so
     they equal the linear convolution's (to rounding: 1e-13, checked in
-    tests/test_fast_paths.py), with 17 % fewer points on the paper's puppy."""
+    tests/test_fast_paths.py), with 17 % fewer points on the paper's puppy.
+    The transforms run in ``dtype`` (float32: single precision, the planes
+    returned in float32)."""
     from scipy import fft
 
     half = n // 2
-    planes = np.pad(np.moveaxis(opp, -1, 0), ((0, 0), (half, half), (half, half)), mode="symmetric")
+    planes = np.pad(np.moveaxis(opp, -1, 0).astype(dtype, copy=False), ((0, 0), (half, half), (half, half)),
+                    mode="symmetric")
     fshape = tuple(fft.next_fast_len(d, True) for d in planes.shape[1:])
-    full = fft.irfft2(fft.rfft2(planes, s=fshape) * _kernel_spectra(samples_per_degree, parameters, fshape), s=fshape)
+    spectra = _kernel_spectra(samples_per_degree, parameters, fshape, dtype)
+    full = fft.irfft2(fft.rfft2(planes, s=fshape) * spectra, s=fshape)
     h, w = opp.shape[:2]
     return full[:, n - 1:n - 1 + h, n - 1:n - 1 + w]
 
 
-def _filter_opponent(xyz: np.ndarray, matrix: np.ndarray, kernels, boundary: str, samples_per_degree: float,
-                     parameters: str, *, planes: bool = False) -> np.ndarray:
-    """XYZ -> opponent, filter each channel, -> XYZ (H, W, 3); with ``planes``
-    the filtered opponent planes (3, H, W) before the return to XYZ."""
+def _filtered_planes(xyz: np.ndarray, matrix: np.ndarray, kernels, boundary: str, samples_per_degree: float,
+                     parameters: str, dtype=np.float64) -> np.ndarray:
+    """XYZ (H, W, 3) -> opponent, each channel filtered (transforms in
+    ``dtype``): the filtered opponent planes (3, H, W) in ``dtype``."""
     opp = xyz @ matrix.T
     if boundary == "symmetric":
-        out = _symmetric_filter(opp, samples_per_degree, parameters, kernels[0].shape[0])
-    else:  # ISETCam: wrap-around, and the map shifted by one pixel
-        out = np.stack([np.roll(_circular(opp[..., c], k), (-1, -1), axis=(0, 1)) for c, k in enumerate(kernels)])
-    if planes:
-        return out
-    return np.moveaxis(out, 0, -1) @ np.linalg.inv(matrix).T
+        return _symmetric_filter(opp, samples_per_degree, parameters, kernels[0].shape[0], dtype)
+    # ISETCam: wrap-around, and the map shifted by one pixel
+    return np.stack([np.roll(_circular(opp[..., c], k, dtype), (-1, -1), axis=(0, 1)) for c, k in enumerate(kernels)])
 
 
-def scielab_reference_lab(reference_xyz, white_xyz, *, samples_per_degree: float, matrix: str = "xyz2",
-                          parameters: str = "distribution", lab_constants: str = "cie",
-                          boundary: str = "symmetric") -> np.ndarray:
-    """The spatially filtered reference in CIELAB: the half of :func:`scielab`
-    that depends on the reference alone.  Pass it as ``reference_lab`` when
-    one reference is compared with many test images (same arguments)."""
-    ref = as_image(reference_xyz, "reference image")
-    kernels = scielab_filters(samples_per_degree, parameters=parameters)
-    if boundary == "isetcam":
-        n = kernels[0].shape[0]
-        h_in, w_in = ref.shape[:2]
-        ref = ref[:h_in - (h_in - n) % 2, :w_in - (w_in - n) % 2]
-    return _filtered_lab(ref, OPPONENT_MATRICES[matrix], kernels, boundary, samples_per_degree, parameters,
-                         as_white(white_xyz), lab_constants)
-
-
-def _filtered_lab(xyz, m, kernels, boundary, samples_per_degree, parameters, white, lab_constants):
-    """CIELAB of the filtered image; with CIE constants the return to XYZ and
-    CIELAB in one compiled pass (:func:`~cfa_mitsuba.colour_kernels.opponent_lab`)."""
+def _planes_lab(planes: np.ndarray, matrix: np.ndarray, white: np.ndarray, lab_constants: str) -> np.ndarray:
+    """CIELAB (H, W, 3) float64 of filtered opponent planes; with CIE
+    constants the return to XYZ and CIELAB in one compiled pass
+    (:func:`~cfa_mitsuba.colour_kernels.opponent_lab`)."""
     if lab_constants == "cie":
         from ..colour_kernels import opponent_lab
 
-        planes = _filter_opponent(xyz, m, kernels, boundary, samples_per_degree, parameters, planes=True)
-        return opponent_lab(planes, np.linalg.inv(m), white)
-    return xyz_to_lab(_filter_opponent(xyz, m, kernels, boundary, samples_per_degree, parameters), white,
-                      constants=lab_constants)
+        return opponent_lab(planes, np.linalg.inv(matrix), white)
+    return xyz_to_lab(np.moveaxis(planes, 0, -1) @ np.linalg.inv(matrix).T, white, constants=lab_constants)
+
+
+@dataclass(frozen=True)
+class FilteredReference:
+    """What :func:`scielab` keeps of a reference image: its filtered
+    opponent planes (3, H, W) and their CIELAB (H, W, 3), both float64
+    (:func:`scielab_reference`)."""
+
+    planes: np.ndarray
+    lab: np.ndarray
+
+
+def _crop_isetcam(img: np.ndarray, n: int) -> np.ndarray:
+    """ISETCam's crop: the last row/column dropped where (size - n) is odd."""
+    h, w = img.shape[:2]
+    return img[:h - (h - n) % 2, :w - (w - n) % 2]
+
+
+def scielab_reference(reference_xyz, white_xyz, *, samples_per_degree: float, matrix: str = "xyz2",
+                      parameters: str = "distribution", lab_constants: str = "cie",
+                      boundary: str = "symmetric") -> FilteredReference:
+    """The half of :func:`scielab` that depends on the reference alone, in
+    double precision: pass it as ``reference_lab`` when one reference is
+    compared with many test images (same arguments; any ``fft_precision``)."""
+    ref = as_image(reference_xyz, "reference image")
+    kernels = scielab_filters(samples_per_degree, parameters=parameters)
+    if boundary == "isetcam":
+        ref = _crop_isetcam(ref, kernels[0].shape[0])
+    m = OPPONENT_MATRICES[matrix]
+    planes = _filtered_planes(ref, m, kernels, boundary, samples_per_degree, parameters)
+    return FilteredReference(planes, _planes_lab(planes, m, as_white(white_xyz), lab_constants))
+
+
+def scielab_reference_lab(reference_xyz, white_xyz, **options) -> np.ndarray:
+    """The spatially filtered reference in CIELAB (:func:`scielab_reference`'s
+    ``lab``; the same keywords)."""
+    return scielab_reference(reference_xyz, white_xyz, **options).lab
+
+
+def _fft_dtype(fft_precision: str):
+    require(fft_precision in FFT_PRECISIONS,
+            f"unknown fft_precision {fft_precision!r} (expected {' or '.join(map(repr, FFT_PRECISIONS))})")
+    return FFT_PRECISIONS[fft_precision]
 
 
 def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, matrix: str = "xyz2",
             version: str = "2000", parameters: str = "distribution", lab_constants: str = "cie",
-            boundary: str = "symmetric", reference_lab=None) -> MetricResult:
+            boundary: str = "symmetric", fft_precision: str = "double", reference_lab=None) -> MetricResult:
     """S-CIELAB colour difference map and its mean.
 
     Parameters
@@ -199,9 +240,18 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
         odd, circular convolution, the map shifted by one pixel; only to
         reproduce ISETCam's whole-map numbers).  ``mean_interior`` is the same
         for both.
-    reference_lab : optional, :func:`scielab_reference_lab` of this
-        reference with the same arguments (a speed-up only: the result is
-        identical).
+    fft_precision : ``'double'`` (default: ISETCam's numbers to 1e-12) or
+        ``'single'``: the test image is filtered as the reference's filtered
+        planes (double) plus the filtered difference (test - reference),
+        whose transforms run in float32.  Filtering is linear, so only the
+        rounding differs, and it scales with the difference, not the image:
+        about twice as fast per test image, the dE map moves by less than
+        1e-5 dE00 (tests/test_scielab.py).  A study uses ``'single'`` unless
+        its ``[metrics.scielab]`` says otherwise (the record's
+        ``study_options``; docs/study.md).
+    reference_lab : optional, :func:`scielab_reference` (or its CIELAB,
+        :func:`scielab_reference_lab`) of this reference with the same
+        arguments: a speed-up only, the result is identical.
 
     Returns
     -------
@@ -228,21 +278,26 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
     require(matrix in OPPONENT_MATRICES, f"unknown opponent matrix {matrix!r} (expected 'xyz2' or 'xyz10')")
     require(version in ("2000", "1976"), f"unknown dE version {version!r} (expected '2000' or '1976')")
     require(boundary in ("symmetric", "isetcam"), f"unknown boundary {boundary!r} (expected 'symmetric' or 'isetcam')")
+    dtype = _fft_dtype(fft_precision)
     ref, test = as_pair(reference_xyz, test_xyz)
     white = as_white(white_xyz)
     kernels = scielab_filters(samples_per_degree, parameters=parameters)
     m = OPPONENT_MATRICES[matrix]
     h_in, w_in = ref.shape[:2]
     if boundary == "isetcam":
-        n = kernels[0].shape[0]
-        keep_h, keep_w = h_in - (h_in - n) % 2, w_in - (w_in - n) % 2
-        ref, test = ref[:keep_h, :keep_w], test[:keep_h, :keep_w]
-    if reference_lab is None:
-        lab_r = _filtered_lab(ref, m, kernels, boundary, samples_per_degree, parameters, white, lab_constants)
-    else:
-        lab_r = np.asarray(reference_lab, dtype=np.float64)
-        require(lab_r.shape == ref.shape, f"reference_lab has shape {lab_r.shape}, the reference {ref.shape}")
-    lab_t = _filtered_lab(test, m, kernels, boundary, samples_per_degree, parameters, white, lab_constants)
+        ref, test = _crop_isetcam(ref, kernels[0].shape[0]), _crop_isetcam(test, kernels[0].shape[0])
+    fref = reference_lab
+    if fref is None or (dtype != np.float64 and not isinstance(fref, FilteredReference)):
+        fref = scielab_reference(ref, white, samples_per_degree=samples_per_degree, matrix=matrix,
+                                 parameters=parameters, lab_constants=lab_constants, boundary=boundary)
+    lab_r = fref.lab if isinstance(fref, FilteredReference) else np.asarray(fref, dtype=np.float64)
+    require(lab_r.shape == ref.shape, f"reference_lab has shape {lab_r.shape}, the reference {ref.shape}")
+    if dtype == np.float64:
+        planes = _filtered_planes(test, m, kernels, boundary, samples_per_degree, parameters)
+    else:  # the reference's planes (double) + the filtered difference (single): the rounding scales with it
+        planes = fref.planes + _filtered_planes(test - ref, m, kernels, boundary, samples_per_degree, parameters,
+                                                dtype)
+    lab_t = _planes_lab(planes, m, white, lab_constants)
     de_map = delta_e_2000(lab_r, lab_t) if version == "2000" else delta_e_1976(lab_r, lab_t)
 
     b = int(np.floor(samples_per_degree + 0.5))
@@ -257,7 +312,7 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
         "median": stats["median"], "p95": stats["p95"], "max": stats["max"],
         "samples_per_degree": float(samples_per_degree),
         "support_px": kernels[0].shape[0],
-        "matrix": matrix, "version": version, "boundary": boundary,
+        "matrix": matrix, "version": version, "boundary": boundary, "fft_precision": fft_precision,
     }
     return MetricResult(stats["mean"], name="scielab", unit="dE00" if version == "2000" else "dE76",
                         details=details)
@@ -267,7 +322,8 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
 _SCIELAB = MetricRecord(
     name="scielab", function=scielab, scenes=(NATURAL,), inputs="xyz", unit="dE00", higher_is_better=False,
     scored=True, label="S-CIELAB", order=2, decimals=2, paper="ΔEs (s. 2.2.2, Fig 10)", score_range=(9.5, 2.5),
-    range_units=("dE00", "dE76"), reference_cache=("reference_lab", scielab_reference_lab),
+    range_units=("dE00", "dE76"), reference_cache=("reference_lab", scielab_reference),
+    study_options=(("fft_precision", "single"),),
     description="colour reproduction error, mean S-CIELAB ΔE00 over the image (Zhang-Wandell)")
 RECORDS = (
     _SCIELAB,

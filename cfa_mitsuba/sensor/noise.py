@@ -121,43 +121,48 @@ def poisson_quantile(mean: np.ndarray, u: np.ndarray) -> np.ndarray:
 
     Written here because numpy has no Poisson quantile and scipy's
     ``stats.poisson.ppf`` takes about 10x as long: a Cornish-Fisher start
-    (normal quantile z: k0 = mean + sqrt(mean) z + (z^2 - 1)/6), then exact
-    steps of one count using the Poisson CDF ``scipy.special.pdtr`` (the
-    regularised upper incomplete gamma function); one or two steps settle
-    almost every pixel at any mean.
+    (normal quantile z: k0 = mean + sqrt(mean) z + (z^2 - 1)/6), its exact
+    CDF by ``scipy.special.pdtr`` (the regularised upper incomplete gamma
+    function) and its probability mass, then steps of one count whose CDFs
+    follow from the mass's recurrence (:mod:`._poisson_kernel`); one or two
+    steps settle almost every pixel at any mean.  A pixel whose ``u`` lies
+    within 1e-9 (relative) of a CDF so obtained is settled by the exact CDF,
+    so the result is the same as stepping with ``pdtr`` throughout.
     """
     from scipy import special
 
-    lam = np.asarray(mean, dtype=np.float64).ravel()
-    uu = np.asarray(u, dtype=np.float64).ravel()
+    from ._poisson_kernel import settle
+
+    lam = np.ascontiguousarray(mean, dtype=np.float64).ravel()
+    uu = np.ascontiguousarray(u, dtype=np.float64).ravel()
     z = special.ndtri(uu)
     with np.errstate(invalid="ignore"):  # u = 0: z = -inf, k NaN, set to 0 below
         k = np.floor(lam + np.sqrt(lam) * z + (z * z - 1.0) / 6.0 + 0.5)
     np.maximum(k, 0.0, out=k)
     k[(lam == 0) | (uu == 0)] = 0.0  # u = 0 (one draw in 2^53) made k NaN through -inf + inf: its answer is 0
-    cdf = special.pdtr(k, lam)
-    below = cdf < uu  # k too small: step up until the CDF reaches u
-    idx = np.flatnonzero(below)
+    pmf = np.exp(special.xlogy(k, lam) - lam - special.gammaln(k + 1.0))
+    undecided = np.flatnonzero(settle(lam, uu, k, special.pdtr(k, lam), pmf))
+    if undecided.size:
+        k[undecided] = _exact_quantile(lam[undecided], uu[undecided], k[undecided])
+    return k.reshape(np.shape(mean))
+
+
+def _exact_quantile(lam: np.ndarray, u: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """The smallest count whose CDF (``scipy.special.pdtr``) reaches ``u``,
+    stepping one count at a time from the start ``k`` (1-D float64)."""
+    from scipy import special
+
+    k = k.copy()
+    idx = np.flatnonzero(special.pdtr(k, lam) < u)
     while idx.size:
         k[idx] += 1.0
-        idx = idx[special.pdtr(k[idx], lam[idx]) < uu[idx]]
-    # k may be too large: step down while k - 1 still reaches u.  The first test, for every pixel, reads
-    # P(X <= k - 1) as P(X <= k) - P(X = k) (one incomplete gamma per pixel instead of two); a pixel whose
-    # u lies within 1e-9 of that difference is decided by the exact CDF, so the result is the same.
-    idx = np.flatnonzero(~below & (k > 0))
-    if idx.size:
-        kk, ll = k[idx], lam[idx]
-        lower = cdf[idx] - np.exp(special.xlogy(kk, ll) - ll - special.gammaln(kk + 1.0))
-        near = np.abs(lower - uu[idx]) <= 1e-9 * np.maximum(cdf[idx], np.finfo(float).tiny)
-        lower[near] = special.pdtr(kk[near] - 1.0, ll[near])
-        idx = idx[lower >= uu[idx]]
-        k[idx] -= 1.0
-        idx = idx[k[idx] > 0]
+        idx = idx[special.pdtr(k[idx], lam[idx]) < u[idx]]
+    idx = np.flatnonzero(k > 0)
     while idx.size:
-        idx = idx[special.pdtr(k[idx] - 1.0, lam[idx]) >= uu[idx]]
+        idx = idx[special.pdtr(k[idx] - 1.0, lam[idx]) >= u[idx]]
         k[idx] -= 1.0
         idx = idx[k[idx] > 0]
-    return k.reshape(np.shape(mean))
+    return k
 
 
 def read_out(electrons: np.ndarray, *, sensor: SensorParams, noise: str,

@@ -84,8 +84,15 @@ class ChainSettings:
                 object.__setattr__(self, name, tuple(sorted((m, tuple(sorted(o.items()))) for m, o in value.items())))
 
     def options_of_metrics(self) -> dict:
-        """{metric: {keyword: value}}: the options every evaluation passes."""
-        return {m: dict(o) for m, o in self.metric_options}
+        """{metric: {keyword: value}}: the options every evaluation passes:
+        the metric records' ``study_options`` (S-CIELAB's single-precision
+        filtering), then the config's ``[metrics.<name>]`` over them."""
+        from ..metrics import study_options
+
+        out = study_options()
+        for m, o in self.metric_options:
+            out[m] = {**out.get(m, {}), **dict(o)}
+        return out
 
     def spectra_for(self, cfa, cond: Condition) -> str | None:
         """The spectra set a capture of ``cfa`` uses under ``cond`` when it
