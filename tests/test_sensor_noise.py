@@ -2,6 +2,8 @@
 set value on a large field, photon noise is exactly Poisson (scipy.stats),
 seeds reproduce, and 0.01..100000 cd/m^2 gives finite raw data."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy import stats
@@ -13,6 +15,7 @@ from cfa_mitsuba.sensor.noise import temporal_rng
 from cfa_mitsuba.values import SpectralImage
 
 WL = cm.spectra.DEFAULT_WAVELENGTHS
+REPO = Path(__file__).resolve().parents[1]
 FLAT = OpticsParams(relative_illumination=False)
 MONO = cm.sensor.make_cfa("mono", "W", {"W": (np.array([300.0, 800.0]), np.array([0.5, 0.5]))})
 N = 512  # 262 144 pixels: a variance is then known to 0.3 %
@@ -222,3 +225,29 @@ def test_poisson_quantile_recurrence_steps_give_the_exact_counts():
         want = stats.poisson.ppf(u, lam)
         assert np.array_equal(got, want), np.flatnonzero(got != want)[:5]
     assert np.array_equal(poisson_quantile(lam, u_on), k_true)
+
+
+def test_poisson_approximation_keeps_its_guard():
+    """Peizer and Pratt's CDF decides a count only where u is farther from
+    it than pp_guard: the guard stays several times the approximation's
+    error against scipy's pdtr at every count within 12 sd of means across
+    10 .. 1e6 (benchmarks/poisson_pp_error.py prints the whole table)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("pp_error", REPO / "benchmarks" / "poisson_pp_error.py")
+    pp_error = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(pp_error)
+    for lo, hi in zip(pp_error.EDGES[:-1], pp_error.EDGES[1:]):
+        err, ratio, _ = pp_error.band_errors(lo, hi, 40 if hi <= 1e4 else 4, seed=7)
+        assert ratio > 4, (lo, hi, err, ratio)
+
+
+def test_poisson_quantile_equals_scipy_where_the_approximation_decides():
+    from scipy import stats
+
+    from cfa_mitsuba.sensor.noise import poisson_quantile
+
+    rng = np.random.default_rng(21)
+    lam = np.exp(rng.uniform(np.log(5), np.log(2e6), 200_000))
+    u = rng.random(lam.size)
+    assert np.array_equal(poisson_quantile(lam, u), stats.poisson.ppf(u, lam))
