@@ -1,13 +1,14 @@
 """The per-unit costs of cfa_mitsuba/data/study_costs.toml, from a finished
-study: its timing.json divided by the units its config implies (the counts
-of cfa_mitsuba/study/sizing.py).  Run the study with --workers 1 so every
-optical image is made once:
+study: its timing.json divided by the units its config implies
+(cfa_mitsuba/study/sizing.py's ``scene_units``, the same counts the
+estimate uses, render seeds included).  Give the worker count the study
+ran with (each worker makes the optical images of the scenes it meets):
 
-    cfa-mitsuba study configs/quick.toml --out /tmp/quick1 --workers 1 --no-report
-    python benchmarks/bench_sizing.py /tmp/quick1
+    cfa-mitsuba study configs/paper.toml --out /tmp/paper --workers 2
+    python benchmarks/bench_sizing.py /tmp/paper --workers 2
 
-Prints the costs, then the study's estimate with them against its measured
-wall time.
+Prints the costs, then the study's estimate with data/study_costs.toml and
+with the costs just measured, beside its measured wall time.
 """
 
 from __future__ import annotations
@@ -22,38 +23,47 @@ sys.path.insert(0, str(REPO))
 
 
 def main() -> int:
-    from cfa_mitsuba.study.budget import _bands
+    from cfa_mitsuba.study import sizing
     from cfa_mitsuba.study.config import load_config
-    from cfa_mitsuba.study.sizing import _conditions, _scene_size, study_size
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("results", type=Path)
+    ap.add_argument("--workers", type=int, default=1, help="the workers the study ran with (default 1)")
     args = ap.parse_args()
     config = load_config(json.loads((args.results / "config.json").read_text())["path"])
     timing = json.loads((args.results / "timing.json").read_text())
-    bands = _bands(config.render)
-    units = {"optics": 0.0, "capture": 0.0, "output": 0.0}
+    units = {"optics_mpx_band": 0.0, "capture_mpx": 0.0, "output_mpx": 0.0}
     for spec in config.scenes:
-        w, h, spp, k = _scene_size(spec)
-        n = _conditions(config, spec)
-        units["optics"] += n * w * h / 1e6 * bands
-        units["capture"] += n * len(config.cfas) * config.seeds * w * h / 1e6
-        units["output"] += n * len(config.cfas) * config.seeds * len(config.demosaics) * w * h / 1e6 / k**2
+        u = sizing.scene_units(config, spec, args.workers)
+        for key in units:
+            units[key] += u[key]
     t = timing["tasks"]
-    print(f"optics_per_megapixel_band = {t['optics_s'] / units['optics']:.3g}")
-    print(f"capture_per_megapixel = {t['capture_s'] / units['capture']:.3g}")
-    print(f"output_per_megapixel = {(t['process_s'] + t['metrics_s']) / units['output']:.3g}")
-    renders = timing["renders"]
-    rendered = [(renders[s.name]["render_time_s"], s) for s in config.scenes
-                if s.name in renders and not renders[s.name]["reused"]]
+    measured = dict(sizing.unit_costs())
+    measured["optics_per_megapixel_band"] = t["optics_s"] / units["optics_mpx_band"]
+    measured["capture_per_megapixel"] = t["capture_s"] / units["capture_mpx"]
+    measured["output_per_megapixel"] = (t["process_s"] + t["metrics_s"]) / units["output_mpx"]
+    by_name = {spec.name: spec for spec in config.scenes}
+    rendered = [(r["render_time_s"], by_name[r["scene"]]) for r in timing["renders"].values()
+                if r["scene"] in by_name and not r["reused"]]  # keys carry the f-number and render seed
+    for key in ("optics_per_megapixel_band", "capture_per_megapixel", "output_per_megapixel"):
+        print(f"{key} = {measured[key]:.3g}")
     if rendered:
         seconds, spec = max(rendered, key=lambda r: r[0])
-        w, h, spp, _ = _scene_size(spec)
-        print(f"render_per_megasample_band = {seconds / (w * h / 1e6 * spp * bands):.3g}  (the slowest render, "
+        u = sizing.scene_units(config, spec, 1)
+        per_render = u["render_msample_band"] / max(1, u["tasks"] // (u["conditions"] * len(config.cfas)))
+        measured["render_per_megasample_band"] = seconds / per_render
+        print(f"render_per_megasample_band = {measured['render_per_megasample_band']:.3g}  (the slowest render, "
               f"{spec.name})")
-    size = study_size(config, 1)
-    print(f"estimate with data/study_costs.toml: {size.describe()}; "
-          f"measured {timing['phases']['total_s']:.1f} s")
+    wall = timing["phases"]["total_s"] - timing["phases"].get("report_s", 0.0)
+    print(f"measured: {wall:.1f} s without the report")
+    print(f"estimate with data/study_costs.toml: {sizing.study_size(config, args.workers).describe()}")
+    sizing.unit_costs.cache_clear()
+    committed = sizing.unit_costs
+    sizing.unit_costs = lambda: measured
+    try:
+        print(f"estimate with these costs: {sizing.study_size(config, args.workers).describe()}")
+    finally:
+        sizing.unit_costs = committed
     return 0
 
 

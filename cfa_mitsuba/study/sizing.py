@@ -31,7 +31,7 @@ the cores with a notice; ``--workers N`` is taken as given.
 
 from __future__ import annotations
 
-__all__ = ["StudySize", "study_size", "check_study_size", "resolve_workers", "MAX_HOURS", "MAX_TASKS",
+__all__ = ["StudySize", "study_size", "scene_units", "check_study_size", "resolve_workers", "MAX_HOURS", "MAX_TASKS",
            "unit_costs"]
 
 import functools
@@ -146,35 +146,51 @@ def _path_traced(spec, rule) -> bool:
         return True
 
 
-def study_size(config, workers: int | None, scheduler: str | None = None) -> StudySize:
-    """Count and estimate a study (module docstring) from its config."""
-    from ..io import limits
+def scene_units(config, spec, n_workers: int) -> dict:
+    """What one scene of ``config`` costs, in the units of
+    ``data/study_costs.toml`` (module docstring): its ``conditions``,
+    ``tasks``, ``captures`` and camera ``outputs``; ``optics_mpx_band``
+    (optical images, one per render seed, condition and worker that meets
+    it, x EXR megapixels x bands), ``capture_mpx`` (captures x EXR
+    megapixels), ``output_mpx`` (outputs x sensor megapixels) and
+    ``render_msample_band`` (renders x EXR megapixels x spp x bands).
+    benchmarks/bench_sizing.py divides a run's times by the same units."""
     from .budget import _bands
     from .render_seeds import path_traced
 
-    n_workers = int(workers) if workers else min(2, _cores())
     bands = _bands(config.render)
+    n_render = int(getattr(config, "render_seeds", 1))
+    w, h, spp, k = _scene_size(spec)
+    renders = n_render if n_render > 1 and _path_traced(spec, path_traced) else 1
+    exr_mpx = w * h / 1e6
+    n_cond = _conditions(config, spec)
+    n_tasks = n_cond * len(config.cfas) * renders  # a path-traced scene: one task per render seed
+    n_capt = n_cond * len(config.cfas) * config.seeds * n_render
+    n_out = n_capt * len(config.demosaics)
+    return {"conditions": n_cond, "tasks": n_tasks, "captures": n_capt, "outputs": n_out,
+            "optics_mpx_band": renders * n_cond * min(n_workers, max(1, n_tasks)) * exr_mpx * bands,
+            "capture_mpx": n_capt * exr_mpx, "output_mpx": n_out * exr_mpx / (k * k),
+            "render_msample_band": renders * exr_mpx * spp * bands, "size": (w, h, bands)}
+
+
+def study_size(config, workers: int | None, scheduler: str | None = None) -> StudySize:
+    """Count and estimate a study (module docstring) from its config."""
+    from ..io import limits
+
+    n_workers = int(workers) if workers else min(2, _cores())
     cost = unit_costs()
     conditions = tasks = captures = outputs = 0
     worker_s = render_s = 0.0
     render_peak = task_peak = 0
-    n_render = int(getattr(config, "render_seeds", 1))
     for spec in config.scenes:
-        w, h, spp, k = _scene_size(spec)
-        renders = n_render if n_render > 1 and _path_traced(spec, path_traced) else 1
-        exr_mpx = w * h / 1e6
-        sensor_mpx = exr_mpx / (k * k)
-        n_cond = _conditions(config, spec)
-        n_tasks = n_cond * len(config.cfas) * renders  # a path-traced scene: one task per render seed
-        n_capt = n_cond * len(config.cfas) * config.seeds * n_render
-        n_out = n_capt * len(config.demosaics)
-        conditions, tasks, captures, outputs = (conditions + n_cond, tasks + n_tasks, captures + n_capt,
-                                                outputs + n_out)
-        worker_s += (renders * n_cond * min(n_workers, max(1, n_tasks)) * cost["optics_per_megapixel_band"] * exr_mpx
-                     * bands
-                     + n_capt * cost["capture_per_megapixel"] * exr_mpx
-                     + n_out * cost["output_per_megapixel"] * sensor_mpx)
-        render_s += renders * cost["render_per_megasample_band"] * exr_mpx * spp * bands
+        u = scene_units(config, spec, n_workers)
+        conditions, tasks, captures, outputs = (conditions + u["conditions"], tasks + u["tasks"],
+                                                captures + u["captures"], outputs + u["outputs"])
+        worker_s += (u["optics_mpx_band"] * cost["optics_per_megapixel_band"]
+                     + u["capture_mpx"] * cost["capture_per_megapixel"]
+                     + u["output_mpx"] * cost["output_per_megapixel"])
+        render_s += u["render_msample_band"] * cost["render_per_megasample_band"]
+        w, h, bands = u["size"]
         render_peak = max(render_peak, limits.estimate_render_bytes(w, h, bands))
         task_peak = max(task_peak, limits.estimate_task_bytes(h, w, bands))
     seconds = render_s + cost["worker_start"] + worker_s / n_workers
