@@ -165,7 +165,7 @@ def _sweep_of_a_million() -> str:
 
 @pytest.mark.parametrize("case", ["seeds", "sweep"])
 def test_runaway_studies_are_refused_fast_with_the_estimate(tmp_path, case):
-    text = SMALL.replace("seeds = 2", "seeds = 1000000") if case == "seeds" else _sweep_of_a_million()
+    text = SMALL.replace("seeds = 2", "seeds = 10000000") if case == "seeds" else _sweep_of_a_million()
     config = tmp_path / f"{case}.toml"
     config.write_text(text)
     out = tmp_path / "out"
@@ -176,7 +176,7 @@ def test_runaway_studies_are_refused_fast_with_the_estimate(tmp_path, case):
     assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
     assert f"{case}.toml" in lines[0] and "--force" in lines[0]
     if case == "seeds":
-        assert "6,000,000 capture(s)" in lines[0] and "24 h limit" in lines[0]
+        assert "60,000,000 capture(s)" in lines[0] and "24 h limit" in lines[0]
     else:  # counted, not built: 100 x 100 x 100 crossed plus the base condition
         assert "1,000,001 condition(s)" in lines[0] and "100,000-task limit" in lines[0]
     assert re.search(r"about [\d.,]+ (h|days)", lines[0])
@@ -328,12 +328,12 @@ def test_force_starts_what_the_limits_refuse():
     from cfa_mitsuba.study.config import parse_config
     from cfa_mitsuba.study.sizing import check_study_size
 
-    config = parse_config(tomllib.loads(SMALL.replace("seeds = 2", "seeds = 1000000")), where="big.toml")
+    config = parse_config(tomllib.loads(SMALL.replace("seeds = 2", "seeds = 10000000")), where="big.toml")
     with pytest.raises(CfaMitsubaError, match="24 h limit"):
         check_study_size(config, 2)
     said = []
     size = check_study_size(config, 2, force=True, log=said.append)
-    assert size.captures == 6_000_000 and len(said) == 1 and said[0].endswith("(--force)")
+    assert size.captures == 60_000_000 and len(said) == 1 and said[0].endswith("(--force)")
 
 
 def test_a_sweep_listing_a_million_values_is_refused_before_parsing(tmp_path):
