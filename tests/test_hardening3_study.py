@@ -170,7 +170,7 @@ def test_runaway_studies_are_refused_fast_with_the_estimate(tmp_path, case):
     config.write_text(text)
     out = tmp_path / "out"
     t0 = time.perf_counter()
-    proc = _study(config, out)
+    proc = _study(config, out, timeout=60)  # a study the limits fail to refuse must not run on
     wall = time.perf_counter() - t0
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
