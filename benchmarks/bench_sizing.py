@@ -50,20 +50,13 @@ def main() -> int:
     if rendered:
         seconds, spec = max(rendered, key=lambda r: r[0])
         u = sizing.scene_units(config, spec, 1)
-        per_render = u["render_msample_band"] / max(1, u["tasks"] // (u["conditions"] * len(config.cfas)))
-        measured["render_per_megasample_band"] = seconds / per_render
+        measured["render_per_megasample_band"] = seconds / (u["render_msample_band"] / u["renders"])
         print(f"render_per_megasample_band = {measured['render_per_megasample_band']:.3g}  (the slowest render, "
               f"{spec.name})")
     wall = timing["phases"]["total_s"] - timing["phases"].get("report_s", 0.0)
     print(f"measured: {wall:.1f} s without the report")
     print(f"estimate with data/study_costs.toml: {sizing.study_size(config, args.workers).describe()}")
-    sizing.unit_costs.cache_clear()
-    committed = sizing.unit_costs
-    sizing.unit_costs = lambda: measured
-    try:
-        print(f"estimate with these costs: {sizing.study_size(config, args.workers).describe()}")
-    finally:
-        sizing.unit_costs = committed
+    print(f"estimate with these costs: {sizing.study_size(config, args.workers, costs=measured).describe()}")
     return 0
 
 

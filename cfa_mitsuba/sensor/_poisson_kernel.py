@@ -136,6 +136,7 @@ def _start_and_settle(lam, u, z, k, decided):  # pragma: no cover - compiled
         uu = u[i]
         if ll == 0.0 or uu == 0.0:  # u = 0 (one draw in 2^53): z = -inf, and the answer is 0
             k[i] = 0.0
+            decided[i] = True
             continue
         kk = math.floor(ll + math.sqrt(ll) * z[i] + (z[i] * z[i] - 1.0) / 6.0 + 0.5)  # Cornish-Fisher
         kk = max(kk, 0.0)
@@ -168,10 +169,10 @@ def start_and_settle(lam: np.ndarray, u: np.ndarray, z: np.ndarray) -> tuple[np.
     """(counts, decided) for means ``lam``, uniforms ``u`` and their normal
     quantiles ``z`` (1-D float64): each count starts at the Cornish-Fisher
     quantile lam + sqrt(lam) z + (z^2 - 1)/6 (rounded, at least 0; 0 where
-    ``lam`` or ``u`` is 0) and moves to the smallest count whose CDF reaches
-    ``u`` where Peizer and Pratt's approximation decides it (means within
-    :data:`PP_MEANS`, ``u`` farther than :func:`pp_guard` from the
-    approximate CDF of the answer and of the count below): those are
+    ``lam`` or ``u`` is 0, decided) and moves to the smallest count whose
+    CDF reaches ``u`` where Peizer and Pratt's approximation decides it
+    (means within :data:`PP_MEANS`, ``u`` farther than :func:`pp_guard` from
+    the approximate CDF of the answer and of the count below): those are
     ``decided``; the others keep their start."""
     k = np.empty(lam.shape, dtype=np.float64)
     decided = np.zeros(lam.shape, dtype=np.bool_)

@@ -125,10 +125,11 @@ def poisson_quantile(mean: np.ndarray, u: np.ndarray) -> np.ndarray:
     of one count (:mod:`._poisson_kernel`; one or two settle almost every
     pixel at any mean), each decided only where it is certain:
 
-    1. at means of 10 to 1e7, by Peizer and Pratt's normal approximation of
-       the CDF, where ``u`` is more than 1e-4 from it (4x its largest error
-       there): about 99.9 % of such pixels, at a third of the cost of an
-       incomplete gamma function;
+    1. at means of 10 to 1e6, by Peizer and Pratt's normal approximation of
+       the CDF, where ``u`` is farther from it than ``pp_guard`` (at least 8x
+       its largest error there, ``benchmarks/poisson_pp_error.py``): all but
+       about 0.4 % of such pixels at a mean of 30 and 5e-5 at 3,000, at under
+       half the cost of an incomplete gamma function;
     2. the rest by the exact CDF at the start (``scipy.special.pdtr``, the
        regularised upper incomplete gamma function) and the neighbouring
        CDFs by the mass's recurrence, and where ``u`` lies within 1e-9
@@ -148,7 +149,6 @@ def poisson_quantile(mean: np.ndarray, u: np.ndarray) -> np.ndarray:
     lam = np.ascontiguousarray(mean, dtype=np.float64).ravel()
     uu = np.ascontiguousarray(u, dtype=np.float64).ravel()
     k, decided = start_and_settle(lam, uu, special.ndtri(uu))
-    decided |= (lam == 0) | (uu == 0)
     rest = np.flatnonzero(~decided)
     if rest.size == k.size:
         _settle_by_cdf(lam, uu, k)

@@ -152,8 +152,9 @@ def scene_units(config, spec, n_workers: int) -> dict:
     ``tasks``, ``captures`` and camera ``outputs``; ``optics_mpx_band``
     (optical images, one per render seed, condition and worker that meets
     it, x EXR megapixels x bands), ``capture_mpx`` (captures x EXR
-    megapixels), ``output_mpx`` (outputs x sensor megapixels) and
-    ``render_msample_band`` (renders x EXR megapixels x spp x bands).
+    megapixels), ``output_mpx`` (outputs x sensor megapixels),
+    ``render_msample_band`` (renders x EXR megapixels x spp x bands), its
+    ``renders`` and its render ``size`` (width, height, bands).
     benchmarks/bench_sizing.py divides a run's times by the same units."""
     from .budget import _bands
     from .render_seeds import path_traced
@@ -170,15 +171,16 @@ def scene_units(config, spec, n_workers: int) -> dict:
     return {"conditions": n_cond, "tasks": n_tasks, "captures": n_capt, "outputs": n_out,
             "optics_mpx_band": renders * n_cond * min(n_workers, max(1, n_tasks)) * exr_mpx * bands,
             "capture_mpx": n_capt * exr_mpx, "output_mpx": n_out * exr_mpx / (k * k),
-            "render_msample_band": renders * exr_mpx * spp * bands, "size": (w, h, bands)}
+            "render_msample_band": renders * exr_mpx * spp * bands, "renders": renders, "size": (w, h, bands)}
 
 
-def study_size(config, workers: int | None, scheduler: str | None = None) -> StudySize:
-    """Count and estimate a study (module docstring) from its config."""
+def study_size(config, workers: int | None, scheduler: str | None = None, costs: dict | None = None) -> StudySize:
+    """Count and estimate a study (module docstring) from its config, with
+    the per-unit ``costs`` (default :func:`unit_costs`)."""
     from ..io import limits
 
     n_workers = int(workers) if workers else min(2, _cores())
-    cost = unit_costs()
+    cost = unit_costs() if costs is None else costs
     conditions = tasks = captures = outputs = 0
     worker_s = render_s = 0.0
     render_peak = task_peak = 0
