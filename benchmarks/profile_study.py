@@ -64,6 +64,7 @@ def main(argv=None) -> int:
     src.add_argument("--config", help="a study config")
     ap.add_argument("--cfas", help="comma-separated CFA labels to profile (default: all)")
     ap.add_argument("--top", type=int, default=25)
+    ap.add_argument("--dump", help="also write the raw cProfile statistics to this file (pstats/snakeviz read it)")
     args = ap.parse_args(argv)
     config_path = Path(args.config) if args.config else REPO / "configs" / ("paper.toml" if args.paper else "quick.toml")
     from cfa_mitsuba.study.tasks import evaluate_task, render_task
@@ -86,6 +87,8 @@ def main(argv=None) -> int:
     print(f"\nevaluation wall time {wall:.1f} s in one process\n")
     print(_table([[k, f"{v:.1f}", f"{100 * v / wall:.1f}"] for k, v in sorted(stages.items(), key=lambda kv: -kv[1])],
                  ["stage", "s", "% of wall"]))
+    if args.dump:
+        prof.dump_stats(args.dump)
     stats = pstats.Stats(prof, stream=io.StringIO())
     header = ["function [file:line]", "calls", "own s", "cum s", "%"]
     print(f"\nmost time of their own (% of wall in the function itself)\n")

@@ -172,12 +172,16 @@ def _lab_rows(xyz, white, out):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")
-def _opponent_lab_map(planes, to_xyz, white, out):  # pragma: no cover - compiled
+def _opponent_lab_map(planes, base, to_xyz, white, out):  # pragma: no cover - compiled
     for r in range(out.shape[0]):
         for c in range(out.shape[1]):
             o0 = planes[0, r, c]
             o1 = planes[1, r, c]
             o2 = planes[2, r, c]
+            if base is not None:  # pruned at compile time when there is none
+                o0 = base[0, r, c] + o0
+                o1 = base[1, r, c] + o1
+                o2 = base[2, r, c] + o2
             out[r, c, 0], out[r, c, 1], out[r, c, 2] = _lab_of(
                 to_xyz[0, 0] * o0 + to_xyz[0, 1] * o1 + to_xyz[0, 2] * o2,
                 to_xyz[1, 0] * o0 + to_xyz[1, 1] * o1 + to_xyz[1, 2] * o2,
@@ -215,15 +219,26 @@ def lab_cie(xyz, white) -> np.ndarray:
     return out
 
 
-def opponent_lab(planes, to_xyz, white) -> np.ndarray:
+def opponent_lab(planes, to_xyz, white, base=None) -> np.ndarray:
     """(H, W, 3) CIELAB of (3, H, W) opponent planes: XYZ by the (3, 3)
     matrix ``to_xyz``, then :func:`lab_cie` relative to ``white``.  One pass
     (no (H, W, 3) XYZ in between); a separate loop from :func:`ciede2000`
-    because the two fused into one ran slower (measured)."""
-    planes = np.asarray(planes, dtype=np.float64)
+    because the two fused into one ran slower (measured).
+
+    ``base`` (optional, (3, H, W) float64): the planes are ``base + planes``
+    (``planes`` then float32 or float64), added in the same pass with
+    numpy's promotion (the same bits as ``opponent_lab(base + planes, ...)``,
+    without the (3, H, W) sum in memory)."""
+    planes = np.asarray(planes)
+    if planes.dtype != np.float32 or base is None:
+        planes = np.asarray(planes, dtype=np.float64)
+    if base is not None:
+        base = np.asarray(base, dtype=np.float64)
+        if base.shape != planes.shape:
+            raise ValueError(f"opponent_lab: base {base.shape} and planes {planes.shape} differ")
     out = np.empty(planes.shape[1:] + (3,), dtype=np.float64)
     if out.size:
-        _opponent_lab_map(planes, np.ascontiguousarray(to_xyz, dtype=np.float64),
+        _opponent_lab_map(planes, base, np.ascontiguousarray(to_xyz, dtype=np.float64),
                           np.ascontiguousarray(white, dtype=np.float64), out)
     return out
 

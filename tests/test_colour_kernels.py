@@ -96,6 +96,25 @@ def test_opponent_lab_equals_the_library_chain():
     np.testing.assert_allclose(opponent_lab(planes, inv, white), expected, rtol=0, atol=1e-11)
 
 
+def test_opponent_lab_with_a_base_is_the_lab_of_the_sum_bit_for_bit():
+    """``base + planes`` added inside the pass (planes float32, S-CIELAB's
+    filtered difference, or float64) gives the same bits as the sum made by
+    numpy first; a base of another shape is refused."""
+    from cfa_mitsuba.colour_kernels import opponent_lab
+
+    rng = np.random.default_rng(9)
+    white = np.array([95.05, 100.0, 108.9])
+    inv = np.linalg.inv(rng.uniform(-1, 1, (3, 3)) + 3 * np.eye(3))
+    base = rng.uniform(1, 80, (3, 30, 41))
+    for dtype in (np.float32, np.float64):
+        full = rng.normal(0, 5, (3, 36, 45)).astype(dtype)
+        planes = full[:, 3:33, 2:43]  # a strided view, as the filter's crop is
+        np.testing.assert_array_equal(opponent_lab(planes, inv, white, base=base),
+                                      opponent_lab(base + planes, inv, white))
+    with pytest.raises(ValueError, match="differ"):
+        opponent_lab(base[:, :4], inv, white, base=base)
+
+
 def test_srgb8_codes_equal_the_formula_rounded():
     """The table's codes against round(255 x sRGB(clip(v))) at every code
     boundary's float neighbours and on ten million values (a tenth near 0,

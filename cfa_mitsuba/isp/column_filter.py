@@ -1,20 +1,25 @@
-"""Correlation down the columns of an image with a symmetric kernel, as a
-compiled loop (Numba): ``scipy.ndimage.correlate1d(x, k, axis=0, mode=...)``
-for 'mirror' and 'reflect' extension, bit for bit.
+"""Correlation of an image with a symmetric 1-D kernel down its columns and
+along its rows, as compiled loops (Numba):
+``scipy.ndimage.correlate1d(x, k, axis=0 | 1, mode=...)`` for 'mirror' and
+'reflect' extension, bit for bit.
 
 Written by hand for speed only.  ndimage walks each column with a stride of
-a row; this loop adds whole rows, which the compiler vectorises, 4-5x faster
-on a camera image.  It makes ndimage's own sums in ndimage's own order (for
-a symmetric kernel: the centre tap times the sample, then, from the
-outermost pair inwards, the pair's sum times its weight), so the result is
-identical (tests/test_column_filter.py asserts equality).  POCS's
-projections (isp/pocs.py) and SSIM's Gaussian windows (metrics/ssim.py)
-spend most of their filtering time in these passes.
+a row, and along a row it sums every output's taps in turn; these loops add
+whole rows (down the columns) or whole shifted copies of one extended row
+(along the rows), which the compiler vectorises: 4-5x faster down the
+columns and about 3x along the rows on a camera image
+(benchmarks/bench_demosaic.py times POCS, which spends its filtering here).
+Both make ndimage's own sums in ndimage's own order (for a symmetric kernel:
+the centre tap times the sample, then, from the outermost pair inwards, the
+pair's sum times its weight), so the results are identical
+(tests/test_column_filter.py asserts equality).  POCS's projections
+(isp/pocs.py) and SSIM's Gaussian windows (metrics/ssim.py) spend most of
+their filtering time in these passes.
 """
 
 from __future__ import annotations
 
-__all__ = ["correlate_columns"]
+__all__ = ["correlate_columns", "correlate_along_rows"]
 
 import numba as nb
 import numpy as np
@@ -56,23 +61,65 @@ def _correlate_rows(x, k, mode, out):  # pragma: no cover - compiled
                 o[j] += (a[j] + b[j]) * kt
 
 
+@nb.njit(cache=True, nogil=True)
+def _correlate_within_rows(x, k, mode, out):  # pragma: no cover - compiled
+    h, w = x.shape
+    r = k.shape[0] // 2
+    centre = k[r]
+    buf = np.empty(w + 2 * r)  # one row, extended by r at each end
+    for i in range(h):
+        src = x[i]
+        for j in range(w):
+            buf[r + j] = src[j]
+        for j in range(r):
+            buf[j] = src[_extend(j - r, w, mode)]
+            buf[r + w + j] = src[_extend(w + j, w, mode)]
+        o = out[i]
+        mid = buf[r:r + w]
+        for j in range(w):
+            o[j] = mid[j] * centre
+        for t in range(r, 0, -1):
+            kt = k[r - t]
+            a = buf[r - t:r - t + w]  # slices, not offset indices: the loop then vectorises
+            b = buf[r + t:r + t + w]
+            for j in range(w):
+                o[j] += (a[j] + b[j]) * kt
+
+
+def _checked(x, k, out, mode, name):
+    x = np.asarray(x, dtype=np.float64)
+    k = np.ascontiguousarray(k, dtype=np.float64)
+    if x.ndim != 2 or k.ndim != 1 or k.size % 2 == 0 or not np.array_equal(k, k[::-1]):
+        raise ValueError(f"{name} needs a 2-D image and a symmetric 1-D kernel of odd length, "
+                         f"got {x.shape} and {k.shape}")
+    if mode not in _MODES:
+        raise ValueError(f"{name}: mode must be 'mirror' or 'reflect', got {mode!r}")
+    if out is None:
+        out = np.empty(x.shape, dtype=np.float64)
+    elif np.shares_memory(out, x):
+        raise ValueError(f"{name}: out must not share memory with the input")
+    return x, k, out
+
+
+def correlate_along_rows(x: np.ndarray, k: np.ndarray, out: np.ndarray | None = None, *,
+                         mode: str = "mirror") -> np.ndarray:
+    """``ndimage.correlate1d(x, k, axis=1, mode=mode, output=out)`` for a
+    2-D float64 ``x`` and a symmetric 1-D kernel ``k`` of odd length
+    (origin 0), ``mode`` 'mirror' or 'reflect'.  ``out`` (optional) must not
+    share memory with ``x``."""
+    x, k, out = _checked(x, k, out, mode, "correlate_along_rows")
+    if x.size:
+        _correlate_within_rows(x, k, _MODES[mode], out)
+    return out
+
+
 def correlate_columns(x: np.ndarray, k: np.ndarray, out: np.ndarray | None = None, *,
                       mode: str = "mirror") -> np.ndarray:
     """``ndimage.correlate1d(x, k, axis=0, mode=mode, output=out)`` for a
     2-D float64 ``x`` and a symmetric 1-D kernel ``k`` of odd length
     (origin 0), ``mode`` 'mirror' or 'reflect'.  ``out`` (optional) must not
     share memory with ``x``."""
-    x = np.asarray(x, dtype=np.float64)
-    k = np.ascontiguousarray(k, dtype=np.float64)
-    if x.ndim != 2 or k.ndim != 1 or k.size % 2 == 0 or not np.array_equal(k, k[::-1]):
-        raise ValueError(f"correlate_columns needs a 2-D image and a symmetric 1-D kernel of odd length, "
-                         f"got {x.shape} and {k.shape}")
-    if mode not in _MODES:
-        raise ValueError(f"correlate_columns: mode must be 'mirror' or 'reflect', got {mode!r}")
-    if out is None:
-        out = np.empty(x.shape, dtype=np.float64)
-    elif np.shares_memory(out, x):
-        raise ValueError("correlate_columns: out must not share memory with the input")
+    x, k, out = _checked(x, k, out, mode, "correlate_columns")
     if x.size:
         _correlate_rows(x, k, _MODES[mode], out)
     return out

@@ -202,7 +202,7 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
     k = lowpass_kernel(levels)
     # here, not at import: Numba takes a third of a second to load
     from ._pocs_kernel import project
-    from .column_filter import correlate_columns
+    from .column_filter import correlate_along_rows, correlate_columns
 
     for _ in range(iterations):
         change = 0.0
@@ -211,8 +211,9 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
             # T > 0 clips the subbands), then the observations, in one pass into x_c
             np.subtract(x[c], refimg, out=d)
             if threshold == 0.0:
-                correlate_columns(d, k, lowpassed)  # ndimage.correlate1d(axis=0, mode="mirror") bit for bit, 4-5x faster
-                ndimage.correlate1d(lowpassed, k, axis=1, mode="mirror", output=d)
+                # ndimage.correlate1d(axis=0, then 1, mode="mirror") bit for bit, 4-5x and 2x faster
+                correlate_columns(d, k, lowpassed)
+                correlate_along_rows(lowpassed, k, d)
                 detail = d
             else:
                 detail = _subbands(d, 0, levels, threshold)

@@ -72,17 +72,42 @@ def _rebuild(value, name, unit, details):
     return MetricResult(value, name=name, unit=unit, details=details)
 
 
+def median_and_p95(values: np.ndarray) -> tuple[float, float]:
+    """``np.median(values)`` and ``np.percentile(values, 95)`` of a 1-D
+    finite float64 array from one partition where numpy makes two (a
+    S-CIELAB map spent 15 ms of its 100 in them, measured): numpy's own
+    formulas, so the same bits (tests/test_result_summary.py checks
+    equality): the middle value or the mean of the middle pair, and the
+    'linear' method's interpolation between the order statistics either side
+    of (n - 1) x 0.95, from the upper one where the fraction is at least 1/2
+    (numpy's ``_lerp``)."""
+    n = values.size
+    if n < 2:
+        return float(np.median(values)), float(np.percentile(values, 95))
+    mid = n // 2
+    vi = (n - 1) * 0.95
+    lo = int(math.floor(vi))  # lo + 1 <= n - 1: vi < n - 1
+    part = np.partition(values, sorted({mid - 1 + n % 2, mid, lo, lo + 1}))
+    median = part[mid] if n % 2 else (part[mid - 1] + part[mid]) / 2.0
+    a, b, t = part[lo], part[lo + 1], vi - lo
+    d = b - a
+    p95 = b - d * (1.0 - t) if t >= 0.5 else a + d * t
+    return float(median), float(p95)
+
+
 def summarise_array(arr) -> dict:
     """Shape and order statistics of an array (NaNs ignored)."""
     a = np.asarray(arr, dtype=np.float64)
-    finite = a[np.isfinite(a)]
+    flat = a.ravel()
+    finite = flat if np.isfinite(flat.sum()) else flat[np.isfinite(flat)]  # a finite sum: every value finite
     if finite.size == 0:
         return {"shape": list(a.shape), "n": 0}
+    median, p95 = median_and_p95(finite)
     return {
         "shape": list(a.shape),
         "mean": float(finite.mean()),
-        "median": float(np.median(finite)),
-        "p95": float(np.percentile(finite, 95)),
+        "median": median,
+        "p95": p95,
         "min": float(finite.min()),
         "max": float(finite.max()),
     }

@@ -150,6 +150,23 @@ def _symmetric_filter(opp: np.ndarray, samples_per_degree: float, parameters: st
     return full[:, n - 1:n - 1 + h, n - 1:n - 1 + w]
 
 
+def _filtered_difference(test: np.ndarray, ref: np.ndarray, matrix: np.ndarray, samples_per_degree: float,
+                         parameters: str, n: int) -> np.ndarray:
+    """:func:`_filtered_planes` of ``test - ref`` with symmetric extension and
+    float32 transforms, its input made in one compiled pass straight into
+    the transform's buffer (:mod:`._scielab_kernel`): (3, H, W) float32."""
+    from scipy import fft
+
+    from ._scielab_kernel import opponent_difference_padded
+
+    half = n // 2
+    h, w = test.shape[:2]
+    fshape = tuple(fft.next_fast_len(d + 2 * half, True) for d in (h, w))
+    spectra = _kernel_spectra(samples_per_degree, parameters, fshape, np.float32)
+    full = fft.irfft2(fft.rfft2(opponent_difference_padded(test, ref, matrix, half, fshape)) * spectra, s=fshape)
+    return full[:, n - 1:n - 1 + h, n - 1:n - 1 + w]
+
+
 def _filtered_planes(xyz: np.ndarray, matrix: np.ndarray, kernels, boundary: str, samples_per_degree: float,
                      parameters: str, dtype=np.float64) -> np.ndarray:
     """XYZ (H, W, 3) -> opponent, each channel filtered (transforms in
@@ -161,14 +178,18 @@ def _filtered_planes(xyz: np.ndarray, matrix: np.ndarray, kernels, boundary: str
     return np.stack([np.roll(_circular(opp[..., c], k, dtype), (-1, -1), axis=(0, 1)) for c, k in enumerate(kernels)])
 
 
-def _planes_lab(planes: np.ndarray, matrix: np.ndarray, white: np.ndarray, lab_constants: str) -> np.ndarray:
-    """CIELAB (H, W, 3) float64 of filtered opponent planes; with CIE
-    constants the return to XYZ and CIELAB in one compiled pass
+def _planes_lab(planes: np.ndarray, matrix: np.ndarray, white: np.ndarray, lab_constants: str,
+                base: np.ndarray | None = None) -> np.ndarray:
+    """CIELAB (H, W, 3) float64 of filtered opponent planes (of ``base +
+    planes`` when a float64 ``base`` is given); with CIE constants the sum,
+    the return to XYZ and CIELAB in one compiled pass
     (:func:`~cfa_mitsuba.colour_kernels.opponent_lab`)."""
     if lab_constants == "cie":
         from ..colour_kernels import opponent_lab
 
-        return opponent_lab(planes, np.linalg.inv(matrix), white)
+        return opponent_lab(planes, np.linalg.inv(matrix), white, base=base)
+    if base is not None:
+        planes = base + planes
     return xyz_to_lab(np.moveaxis(planes, 0, -1) @ np.linalg.inv(matrix).T, white, constants=lab_constants)
 
 
@@ -293,11 +314,14 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
     lab_r = fref.lab if isinstance(fref, FilteredReference) else np.asarray(fref, dtype=np.float64)
     require(lab_r.shape == ref.shape, f"reference_lab has shape {lab_r.shape}, the reference {ref.shape}")
     if dtype == np.float64:
-        planes = _filtered_planes(test, m, kernels, boundary, samples_per_degree, parameters)
+        lab_t = _planes_lab(_filtered_planes(test, m, kernels, boundary, samples_per_degree, parameters), m, white,
+                            lab_constants)
     else:  # the reference's planes (double) + the filtered difference (single): the rounding scales with it
-        planes = fref.planes + _filtered_planes(test - ref, m, kernels, boundary, samples_per_degree, parameters,
-                                                dtype)
-    lab_t = _planes_lab(planes, m, white, lab_constants)
+        if boundary == "symmetric":
+            diff = _filtered_difference(test, ref, m, samples_per_degree, parameters, kernels[0].shape[0])
+        else:
+            diff = _filtered_planes(test - ref, m, kernels, boundary, samples_per_degree, parameters, dtype)
+        lab_t = _planes_lab(diff, m, white, lab_constants, base=fref.planes)
     de_map = delta_e_2000(lab_r, lab_t) if version == "2000" else delta_e_1976(lab_r, lab_t)
 
     b = int(np.floor(samples_per_degree + 0.5))
