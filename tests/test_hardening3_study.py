@@ -18,6 +18,7 @@ import sys
 import time
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
 from conftest import REPO
@@ -227,6 +228,34 @@ def test_the_memory_check_covers_every_worker(tmp_path):
     assert proc.returncode == 2 and len(lines) == 1, proc.stderr
     assert "1000 worker(s) need more than" in lines[0] and "fewer --workers" in lines[0]
     assert not (tmp_path / "out").exists()
+
+
+def test_result_rows_are_counted_as_the_study_writes_them(small):
+    from cfa_mitsuba.study.config import load_config
+    from cfa_mitsuba.study.sizing import study_size
+
+    config, out = small
+    size = study_size(load_config(config), 2)
+    written = len(pd.read_csv(out / "metrics_realisations.csv"))
+    # macbeth: 6 CFAs x 2 seeds x 2 demosaics x (delta-e and the two values read from its details)
+    assert size.rows == written == 72
+    assert size.rows_bytes > 0 and size.peak_bytes > size.rows_bytes
+
+
+def test_rows_that_cannot_fit_are_refused_even_with_force(tmp_path, monkeypatch):
+    """A study of many realisations on a small chart: inside the time limit,
+    but its result rows alone outgrow the memory (here 10,000 seeds: 360,000
+    rows, 1.5 GB, against a 1 GB limit that the render fits); --force does
+    not lift it."""
+    config = tmp_path / "small.toml"
+    config.write_text(SMALL.replace("seeds = 2", "seeds = 10000"))
+    env = {**os.environ, "CFA_MITSUBA_MEMORY_LIMIT": "1G"}
+    proc = subprocess.run(_cmd(config, tmp_path / "out", "--force"), cwd=REPO, capture_output=True, text=True,
+                          env=env, timeout=60)
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert "its 360,000 result rows alone need about 1.47 GB" in lines[0] and "--force does not lift" in lines[0]
+    assert "h limit" not in lines[0] and not (tmp_path / "out").exists()
 
 
 DESIGN_CASES = {

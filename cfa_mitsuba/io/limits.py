@@ -90,6 +90,11 @@ _RENDER = (270 * _MIB, 80, 36)
 _CAPTURE = (200 * _MIB, 6, 26)
 _PROCESS = (200 * _MIB, 250, 9)
 _TASK = (290 * _MIB, 6, 26)
+#: Bytes the main process holds per result row of a study at its peak: the
+#: row (a dict of about 22 values, 0.8-1.1 kB) and the tables made from all
+#: of them (tracemalloc over the paper study's 18,720 realisation rows put
+#: through ``order_rows`` and ``mean_table``: 3.9 kB a row at the peak).
+_RESULT_ROW = 4096
 
 _SUFFIX = {"": 1, "k": 1 << 10, "m": 1 << 20, "g": 1 << 30, "t": 1 << 40}
 
@@ -193,6 +198,13 @@ def estimate_task_bytes(height: int, width: int, n_bands: int) -> int:
     CFA, every demosaic and metric) on an EXR of ``height`` x ``width``
     pixels and ``n_bands`` bands, bytes."""
     return _linear(_TASK, int(width) * int(height), n_bands)
+
+
+def estimate_result_rows_bytes(n_rows: int) -> int:
+    """Peak memory the main process of a study needs for ``n_rows`` result
+    rows (realisation rows: camera outputs x the values each metric gives)
+    and the tables made from them, bytes."""
+    return int(n_rows) * _RESULT_ROW
 
 
 def check_render(width: int, height: int, spp: int, n_bands: int, *, name=None) -> None:

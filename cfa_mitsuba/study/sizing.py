@@ -13,19 +13,23 @@ them is a product, building them is 1.6 GB):
   sensor-noise seeds crossed with render seeds; a chart's render is shared
   by its render seeds, a path-traced scene is rendered, and its optical
   image computed, once per render seed);
-* **camera outputs**: captures x demosaics.
+* **camera outputs**: captures x demosaics;
+* **result rows**: camera outputs x the values their metrics give (a metric
+  and the values read from its details, ``delta-e`` three), per condition
+  (an upper bound as for the conditions).
 
 The time is estimated from measured per-unit costs (``data/study_costs.toml``:
 worker seconds per optical image, capture and camera output, per megapixel,
 measured on the quick study) divided among the workers; the peak memory is
-the main process's largest render plus one evaluation task per worker
-(:mod:`cfa_mitsuba.io.limits`' measured models), so the memory check covers
-N workers, not one task.
+the main process's largest render and its result rows plus one evaluation
+task per worker (:mod:`cfa_mitsuba.io.limits`' measured models), so the
+memory check covers N workers, not one task, and the rows a study of
+millions of realisations collects.
 
 Limits (docs/study.md): a study is refused, before anything is written, when
 its estimated time exceeds :data:`MAX_HOURS` or its tasks exceed
-:data:`MAX_TASKS`, unless ``--force``; and always when N workers would not
-fit in memory (fewer workers fit).  ``workers`` from a config is capped at
+:data:`MAX_TASKS`, unless ``--force``; and always when its result rows would
+not fit in memory, or N workers would not (fewer workers fit).  ``workers`` from a config is capped at
 the cores with a notice; ``--workers N`` is taken as given.
 """
 
@@ -70,6 +74,8 @@ class StudySize:
     workers: int
     seconds: float
     peak_bytes: int
+    rows: int = 0
+    rows_bytes: int = 0
 
     def describe(self) -> str:
         from ..io.limits import format_bytes
@@ -137,6 +143,29 @@ def _conditions(config, scene) -> int:
     return n
 
 
+def _values_per_output(names) -> int:
+    """Result rows one camera output gives for the metrics ``names``: each
+    metric's own and the values read from its details."""
+    from ..metrics.registry import METRICS
+
+    return sum(1 + sum(1 for r in METRICS.values() if r.parent == n) for n in names)
+
+
+def _rows_per_capture(config, scene) -> int:
+    """Result rows per capture and demosaic over the scene's conditions,
+    counted as :func:`_conditions` counts them (a sweep's metrics are the
+    scene's that it names, or all of them)."""
+    n = len(config.luminances) * _values_per_output(scene.metrics)
+    for sw in config.sweeps:
+        if scene.name not in sw.scenes:
+            continue
+        bases = len(sw.values["luminance"]) if "luminance" in sw.values else len(config.luminances)
+        wanted = [m for m in scene.metrics if not sw.metrics or m in sw.metrics]
+        n += (bases * math.prod(len(v) for axis, v in sw.values.items() if axis != "luminance")
+              * _values_per_output(wanted))
+    return n
+
+
 def _path_traced(spec, rule) -> bool:
     """``rule(spec)`` (runner.path_traced), True where the scene cannot be
     loaded (an estimate errs on the larger side)."""
@@ -154,7 +183,8 @@ def scene_units(config, spec, n_workers: int) -> dict:
     it, x EXR megapixels x bands), ``capture_mpx`` (captures x EXR
     megapixels), ``output_mpx`` (outputs x sensor megapixels),
     ``render_msample_band`` (renders x EXR megapixels x spp x bands), its
-    ``renders`` and its render ``size`` (width, height, bands).
+    result ``rows``, its ``renders`` and its render ``size`` (width, height,
+    bands).
     benchmarks/bench_sizing.py divides a run's times by the same units."""
     from .budget import _bands
     from .render_seeds import path_traced
@@ -168,7 +198,9 @@ def scene_units(config, spec, n_workers: int) -> dict:
     n_tasks = n_cond * len(config.cfas) * renders  # a path-traced scene: one task per render seed
     n_capt = n_cond * len(config.cfas) * config.seeds * n_render
     n_out = n_capt * len(config.demosaics)
-    return {"conditions": n_cond, "tasks": n_tasks, "captures": n_capt, "outputs": n_out,
+    n_rows = (len(config.cfas) * config.seeds * n_render * len(config.demosaics)
+              * _rows_per_capture(config, spec))
+    return {"conditions": n_cond, "tasks": n_tasks, "captures": n_capt, "outputs": n_out, "rows": n_rows,
             "optics_mpx_band": renders * n_cond * min(n_workers, max(1, n_tasks)) * exr_mpx * bands,
             "capture_mpx": n_capt * exr_mpx, "output_mpx": n_out * exr_mpx / (k * k),
             "render_msample_band": renders * exr_mpx * spp * bands, "renders": renders, "size": (w, h, bands)}
@@ -181,13 +213,14 @@ def study_size(config, workers: int | None, scheduler: str | None = None, costs:
 
     n_workers = int(workers) if workers else min(2, _cores())
     cost = unit_costs() if costs is None else costs
-    conditions = tasks = captures = outputs = 0
+    conditions = tasks = captures = outputs = rows = 0
     worker_s = render_s = 0.0
     render_peak = task_peak = 0
     for spec in config.scenes:
         u = scene_units(config, spec, n_workers)
         conditions, tasks, captures, outputs = (conditions + u["conditions"], tasks + u["tasks"],
                                                 captures + u["captures"], outputs + u["outputs"])
+        rows += u["rows"]
         worker_s += (u["optics_mpx_band"] * cost["optics_per_megapixel_band"]
                      + u["capture_mpx"] * cost["capture_per_megapixel"]
                      + u["output_mpx"] * cost["output_per_megapixel"])
@@ -196,8 +229,9 @@ def study_size(config, workers: int | None, scheduler: str | None = None, costs:
         render_peak = max(render_peak, limits.estimate_render_bytes(w, h, bands))
         task_peak = max(task_peak, limits.estimate_task_bytes(h, w, bands))
     seconds = render_s + cost["worker_start"] + worker_s / n_workers
-    peak = render_peak + (0 if scheduler else n_workers * task_peak)
-    return StudySize(conditions, tasks, captures, outputs, n_workers, seconds, peak)
+    rows_bytes = limits.estimate_result_rows_bytes(rows)
+    peak = render_peak + rows_bytes + (0 if scheduler else n_workers * task_peak)
+    return StudySize(conditions, tasks, captures, outputs, n_workers, seconds, peak, rows, rows_bytes)
 
 
 def check_study_size(config, workers: int | None, *, scheduler: str | None = None, force: bool = False,
@@ -208,17 +242,22 @@ def check_study_size(config, workers: int | None, *, scheduler: str | None = Non
 
     size = study_size(config, workers, scheduler)
     where = f"{Path(config.path).name}: " if config.path else ""
-    if not scheduler:
-        have, source = available_memory_bytes()
-        if have is not None and size.peak_bytes > have:
-            raise CfaMitsubaError(
-                f"{where}{size.describe()}: {size.workers} worker(s) need more than the {format_bytes(have)} "
-                f"available ({source}); use fewer --workers or smaller renders")
     over = []
     if size.seconds > MAX_HOURS * 3600:
         over.append(f"more than the {MAX_HOURS:g} h limit")
     if size.tasks > MAX_TASKS:
         over.append(f"more than the {MAX_TASKS:,}-task limit")
+    have, source = available_memory_bytes()
+    if have is not None and size.rows_bytes > have:  # the main process's, with or without a scheduler
+        also = f"{' and '.join(over)}, and " if over else ""
+        raise CfaMitsubaError(
+            f"{where}{size.describe()}: {also}its {size.rows:,} result rows alone need about "
+            f"{format_bytes(size.rows_bytes)}, more than the {format_bytes(have)} available ({source}); "
+            "fewer seeds, sweep values, CFAs or demosaics (--force does not lift a memory limit)")
+    if not scheduler and have is not None and size.peak_bytes > have:
+        raise CfaMitsubaError(
+            f"{where}{size.describe()}: {size.workers} worker(s) need more than the {format_bytes(have)} "
+            f"available ({source}); use fewer --workers or smaller renders")
     if over and not force:
         raise CfaMitsubaError(f"{where}{size.describe()}: {' and '.join(over)} (fewer seeds, sweep values, CFAs "
                               "or demosaics; or --force to run it anyway)")
