@@ -350,19 +350,28 @@ def test_an_unparseable_exr_illuminant_is_called_unparseable(tmp_path):
     assert "the file names none" in notes["plain"]
 
 
-def test_force_starts_what_the_limits_refuse():
+def test_force_starts_what_the_limits_refuse(monkeypatch):
     import tomllib
 
     from cfa_mitsuba.errors import CfaMitsubaError
     from cfa_mitsuba.study.config import parse_config
     from cfa_mitsuba.study.sizing import check_study_size
 
-    config = parse_config(tomllib.loads(SMALL.replace("seeds = 2", "seeds = 10000000")), where="big.toml")
-    with pytest.raises(CfaMitsubaError, match="24 h limit"):
+    # over the time limit with result rows that fit (1.44 M rows, 5.9 GB, on 1.3-megapixel renders; on the small
+    # renders a study this long has more rows than a machine holds, which --force does not lift)
+    text = (SMALL.replace("seeds = 2", "seeds = 40000").replace("width = 120", "width = 1200")
+            .replace("height = 106", "height = 1060"))
+    config = parse_config(tomllib.loads(text), where="big.toml")
+    monkeypatch.setenv("CFA_MITSUBA_MEMORY_LIMIT", "16G")
+    with pytest.raises(CfaMitsubaError, match="24 h limit") as refused:
         check_study_size(config, 2)
+    assert "result rows" not in str(refused.value) and "--force to run it anyway" in str(refused.value)
     said = []
     size = check_study_size(config, 2, force=True, log=said.append)
-    assert size.captures == 60_000_000 and len(said) == 1 and said[0].endswith("(--force)")
+    assert size.captures == 240_000 and size.rows == 1_440_000 and len(said) == 1 and said[0].endswith("(--force)")
+    monkeypatch.setenv("CFA_MITSUBA_MEMORY_LIMIT", "4G")  # less than the rows need: --force does not help
+    with pytest.raises(CfaMitsubaError, match="--force does not lift a memory limit"):
+        check_study_size(config, 2, force=True)
 
 
 def test_a_sweep_listing_a_million_values_is_refused_before_parsing(tmp_path):

@@ -18,12 +18,12 @@ import numpy as np
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")
 def _project(x, ref, detail, raw, observed):  # pragma: no cover - compiled
-    th, tw = observed.shape
+    th = observed.shape[0]  # observed: the tile mask repeated across the width, (th, W)
     total = 0.0
     for r in range(x.shape[0]):
-        rr = r % th
+        seen = observed[r % th]
         for c in range(x.shape[1]):
-            if observed[rr, c % tw]:
+            if seen[c]:
                 v = raw[r, c]
             else:
                 v = ref[r, c] + detail[r, c]
@@ -38,4 +38,6 @@ def project(x: np.ndarray, ref: np.ndarray, detail: np.ndarray, raw: np.ndarray,
     detail``, except where the tile mask ``observed`` (th, tw bool) says the
     channel is sampled, where it takes ``raw``; returns the sum of the
     squared changes."""
-    return float(_project(x, ref, detail, raw, np.ascontiguousarray(observed, dtype=np.bool_)))
+    observed = np.asarray(observed, dtype=np.bool_)
+    reps = -(-x.shape[1] // observed.shape[1])
+    return float(_project(x, ref, detail, raw, np.ascontiguousarray(np.tile(observed, (1, reps))[:, :x.shape[1]])))
