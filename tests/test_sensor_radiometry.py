@@ -227,3 +227,53 @@ def test_default_sensor_is_documented_scale():
     assert s.conversion_gain_uv_per_e == pytest.approx(1e6 / 6200)
     assert s.read_noise_e == pytest.approx(1e-3 / (1 / 6200), rel=1e-3)  # ISETCam's 1 mV
     assert s.dn_per_electron == pytest.approx((4095 - 64) / 6200)
+
+
+def test_noise_seeds_of_one_capture_reuse_its_noise_free_part_exactly(monkeypatch):
+    """A study captures several noise seeds of one optical image in a row;
+    the exposure metering and mean response are reused from the last
+    capture (capture._LAST_SIGNAL) and give the same raw, bit for bit, as
+    a capture that computes them afresh; anything else that differs (the
+    CFA, the luminance, the sensor, the optical image) computes afresh."""
+    import importlib
+
+    capture_module = importlib.import_module("cfa_mitsuba.sensor.capture")
+
+    rng = np.random.default_rng(4)
+    img = uniform_scene(80.0, 40, 44)
+    img = SpectralImage(img.data * rng.uniform(0.2, 1.0, (40, 44, 1)), WL, img.meta)
+    oi = compute_optics(img, OpticsParams(), pixel_pitch_um=2.2)
+    kw = dict(luminance_cd_m2=3.0, sensor=SensorParams(), exposure_policy="program")
+
+    def fresh(cfa, seed, **extra):
+        capture_module._LAST_SIGNAL[0] = None
+        return capture(oi, cfa, seed=seed, **{**kw, **extra})
+
+    for cfa in ("bayer", "rgbw1"):
+        for seed in (1, 2, 3):
+            reused = capture(oi, cfa, seed=seed, **kw)
+            assert capture_module._LAST_SIGNAL[0][0] is oi
+            want = fresh(cfa, seed)
+            np.testing.assert_array_equal(reused.raw, want.raw)
+            np.testing.assert_array_equal(reused.electrons_per_radiance, want.electrons_per_radiance)
+            assert reused.settings == want.settings and reused.meta == want.meta
+    # three seeds in a row: computed once
+    made = []
+    real = capture_module._noise_free_signal
+    monkeypatch.setattr(capture_module, "_noise_free_signal", lambda *a: made.append(1) or real(*a))
+    capture_module._LAST_SIGNAL[0] = None
+    for seed in (7, 8, 9):
+        capture(oi, "rgbw1", seed=seed, **kw)
+    assert len(made) == 1
+    # a change of luminance, sensor or CFA is a new signal, not the last one's
+    base = capture(oi, "bayer", seed=5, **kw)
+    brighter = capture(oi, "bayer", seed=5, **{**kw, "luminance_cd_m2": 30.0})
+    assert brighter.settings["luminance_scale"] != base.settings["luminance_scale"]
+    np.testing.assert_array_equal(brighter.raw, fresh("bayer", 5, luminance_cd_m2=30.0).raw)
+    noisy = capture(oi, "bayer", seed=5, **{**kw, "sensor": SensorParams(read_noise_e=20.0)})
+    np.testing.assert_array_equal(noisy.raw, fresh("bayer", 5, sensor=SensorParams(read_noise_e=20.0)).raw)
+    # the RawImage's arrays are its own: changing one leaves the next capture alone
+    got = capture(oi, "bayer", seed=6, **kw)
+    got.electrons_per_radiance[:] = 0.0
+    np.testing.assert_array_equal(capture(oi, "bayer", seed=6, **kw).electrons_per_radiance,
+                                  fresh("bayer", 6).electrons_per_radiance)
