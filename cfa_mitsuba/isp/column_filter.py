@@ -44,7 +44,7 @@ def _extend(i, n, mode):
 
 
 @nb.njit(cache=True, nogil=True)
-def _correlate_rows(x, k, mode, out):  # pragma: no cover - compiled
+def _column_pass(x, k, mode, out):  # pragma: no cover - compiled
     h, w = x.shape
     r = k.shape[0] // 2
     centre = k[r]
@@ -62,7 +62,7 @@ def _correlate_rows(x, k, mode, out):  # pragma: no cover - compiled
 
 
 @nb.njit(cache=True, nogil=True)
-def _correlate_within_rows(x, k, mode, out):  # pragma: no cover - compiled
+def _row_pass(x, k, mode, out):  # pragma: no cover - compiled
     h, w = x.shape
     r = k.shape[0] // 2
     centre = k[r]
@@ -86,7 +86,8 @@ def _correlate_within_rows(x, k, mode, out):  # pragma: no cover - compiled
                 o[j] += (a[j] + b[j]) * kt
 
 
-def _checked(x, k, out, mode, name):
+def _correlate(kernel, name: str, x, k, out, mode: str) -> np.ndarray:
+    """Check the arguments (one error naming ``name``) and run the compiled pass ``kernel``."""
     x = np.asarray(x, dtype=np.float64)
     k = np.ascontiguousarray(k, dtype=np.float64)
     if x.ndim != 2 or k.ndim != 1 or k.size % 2 == 0 or not np.array_equal(k, k[::-1]):
@@ -98,7 +99,9 @@ def _checked(x, k, out, mode, name):
         out = np.empty(x.shape, dtype=np.float64)
     elif np.shares_memory(out, x):
         raise ValueError(f"{name}: out must not share memory with the input")
-    return x, k, out
+    if x.size:
+        kernel(x, k, _MODES[mode], out)
+    return out
 
 
 def correlate_along_rows(x: np.ndarray, k: np.ndarray, out: np.ndarray | None = None, *,
@@ -107,19 +110,11 @@ def correlate_along_rows(x: np.ndarray, k: np.ndarray, out: np.ndarray | None = 
     2-D float64 ``x`` and a symmetric 1-D kernel ``k`` of odd length
     (origin 0), ``mode`` 'mirror' or 'reflect'.  ``out`` (optional) must not
     share memory with ``x``."""
-    x, k, out = _checked(x, k, out, mode, "correlate_along_rows")
-    if x.size:
-        _correlate_within_rows(x, k, _MODES[mode], out)
-    return out
+    return _correlate(_row_pass, "correlate_along_rows", x, k, out, mode)
 
 
 def correlate_columns(x: np.ndarray, k: np.ndarray, out: np.ndarray | None = None, *,
                       mode: str = "mirror") -> np.ndarray:
-    """``ndimage.correlate1d(x, k, axis=0, mode=mode, output=out)`` for a
-    2-D float64 ``x`` and a symmetric 1-D kernel ``k`` of odd length
-    (origin 0), ``mode`` 'mirror' or 'reflect'.  ``out`` (optional) must not
-    share memory with ``x``."""
-    x, k, out = _checked(x, k, out, mode, "correlate_columns")
-    if x.size:
-        _correlate_rows(x, k, _MODES[mode], out)
-    return out
+    """``ndimage.correlate1d(x, k, axis=0, ...)``, otherwise as
+    :func:`correlate_along_rows`."""
+    return _correlate(_column_pass, "correlate_columns", x, k, out, mode)
