@@ -138,15 +138,31 @@ def _symmetric_filter(opp: np.ndarray, samples_per_degree: float, parameters: st
     tests/test_fast_paths.py), with 17 % fewer points on the paper's puppy.
     The transforms run in ``dtype`` (float32: single precision, the planes
     returned in float32)."""
-    from scipy import fft
-
     half = n // 2
     planes = np.pad(np.moveaxis(opp, -1, 0).astype(dtype, copy=False), ((0, 0), (half, half), (half, half)),
                     mode="symmetric")
-    fshape = tuple(fft.next_fast_len(d, True) for d in planes.shape[1:])
+    return _convolve_extended(planes, opp.shape[:2], samples_per_degree, parameters, n, dtype)
+
+
+def _transform_shape(h: int, w: int, n: int) -> tuple[int, int]:
+    """The transform's size for an (h, w) image extended by n // 2 each side: the next fast lengths."""
+    from scipy import fft
+
+    return tuple(fft.next_fast_len(d + 2 * (n // 2), True) for d in (h, w))
+
+
+def _convolve_extended(planes: np.ndarray, size: tuple[int, int], samples_per_degree: float, parameters: str, n: int,
+                       dtype) -> np.ndarray:
+    """The (3, H, W) map of ``size`` = (H, W) from the planes of the image
+    extended by n // 2 each side (zero-padded up to :func:`_transform_shape`
+    or not), each convolved with its kernel at that transform size
+    (:func:`_symmetric_filter`'s argument for the length)."""
+    from scipy import fft
+
+    h, w = size
+    fshape = _transform_shape(h, w, n)
     spectra = _kernel_spectra(samples_per_degree, parameters, fshape, dtype)
     full = fft.irfft2(fft.rfft2(planes, s=fshape) * spectra, s=fshape)
-    h, w = opp.shape[:2]
     return full[:, n - 1:n - 1 + h, n - 1:n - 1 + w]
 
 
@@ -155,16 +171,11 @@ def _filtered_difference(test: np.ndarray, ref: np.ndarray, matrix: np.ndarray, 
     """:func:`_filtered_planes` of ``test - ref`` with symmetric extension and
     float32 transforms, its input made in one compiled pass straight into
     the transform's buffer (:mod:`._scielab_kernel`): (3, H, W) float32."""
-    from scipy import fft
-
     from ._scielab_kernel import opponent_difference_padded
 
-    half = n // 2
     h, w = test.shape[:2]
-    fshape = tuple(fft.next_fast_len(d + 2 * half, True) for d in (h, w))
-    spectra = _kernel_spectra(samples_per_degree, parameters, fshape, np.float32)
-    full = fft.irfft2(fft.rfft2(opponent_difference_padded(test, ref, matrix, half, fshape)) * spectra, s=fshape)
-    return full[:, n - 1:n - 1 + h, n - 1:n - 1 + w]
+    buf = opponent_difference_padded(test, ref, matrix, n // 2, _transform_shape(h, w, n))
+    return _convolve_extended(buf, (h, w), samples_per_degree, parameters, n, np.float32)
 
 
 def _filtered_planes(xyz: np.ndarray, matrix: np.ndarray, kernels, boundary: str, samples_per_degree: float,

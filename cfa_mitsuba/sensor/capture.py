@@ -366,16 +366,12 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     inputs = (cfa.name, cfa.pattern.shape, cfa.pattern.tobytes(), qe.tobytes(), s, exposure_s, sensor, policy,
               reference_luminance_cd_m2, limits, repr(oi.meta.get("on_axis_factor")))
     last = _LAST_SIGNAL[0]
-    if last is not None and last[0] is oi and last[1] == inputs:  # another noise seed of the same capture
-        choice, mode, sensor, photo, epr, well, gain, (h, w) = last[2]
-        epr = epr.copy()  # returned in the RawImage, which its caller may change
-    else:
+    if last is None or last[0] is not oi or last[1] != inputs:  # not another noise seed of the last capture
         _LAST_SIGNAL[0] = None
-        signal = _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, policy, reference_luminance_cd_m2,
-                                    limits)
-        _LAST_SIGNAL[0] = (oi, inputs, signal)
-        choice, mode, sensor, photo, epr, well, gain, (h, w) = signal
-        epr = epr.copy()
+        _LAST_SIGNAL[0] = last = (oi, inputs, _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, policy,
+                                                                 reference_luminance_cd_m2, limits))
+    choice, mode, sensor, photo, epr, well, gain, (h, w) = last[2]
+    epr = epr.copy()  # returned in the RawImage, which its caller may change
     exposure = choice.exposure_s
     th, tw = cfa.tile_shape
     rng = temporal_rng(seed) if noise != "off" else None

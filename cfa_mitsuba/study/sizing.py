@@ -133,14 +133,22 @@ def _scene_size(spec) -> tuple[int, int, int, int]:
             int(over.get("oversample", k) or 1))
 
 
-def _conditions(config, scene) -> int:
-    n = len(config.luminances)
+def _tables(config, scene):
+    """(conditions, metric names) of each table that reaches ``scene``: the
+    base luminances with the scene's metrics, then each sweep naming it, its
+    luminances (else the base ones) times the product of its other axes'
+    lengths, with the scene's metrics it names (or all of them)."""
+    yield len(config.luminances), scene.metrics
     for sw in config.sweeps:
         if scene.name not in sw.scenes:
             continue
         bases = len(sw.values["luminance"]) if "luminance" in sw.values else len(config.luminances)
-        n += bases * math.prod(len(v) for axis, v in sw.values.items() if axis != "luminance")
-    return n
+        yield (bases * math.prod(len(v) for axis, v in sw.values.items() if axis != "luminance"),
+               [m for m in scene.metrics if not sw.metrics or m in sw.metrics])
+
+
+def _conditions(config, scene) -> int:
+    return sum(n for n, _ in _tables(config, scene))
 
 
 def _values_per_output(names) -> int:
@@ -153,17 +161,8 @@ def _values_per_output(names) -> int:
 
 def _rows_per_capture(config, scene) -> int:
     """Result rows per capture and demosaic over the scene's conditions,
-    counted as :func:`_conditions` counts them (a sweep's metrics are the
-    scene's that it names, or all of them)."""
-    n = len(config.luminances) * _values_per_output(scene.metrics)
-    for sw in config.sweeps:
-        if scene.name not in sw.scenes:
-            continue
-        bases = len(sw.values["luminance"]) if "luminance" in sw.values else len(config.luminances)
-        wanted = [m for m in scene.metrics if not sw.metrics or m in sw.metrics]
-        n += (bases * math.prod(len(v) for axis, v in sw.values.items() if axis != "luminance")
-              * _values_per_output(wanted))
-    return n
+    counted as :func:`_conditions` counts them."""
+    return sum(n * _values_per_output(names) for n, names in _tables(config, scene))
 
 
 def _path_traced(spec, rule) -> bool:
