@@ -42,6 +42,20 @@ def test_ciede2000_equals_scikit_image_and_colour():
     np.testing.assert_allclose(got[:20000], cs, rtol=1e-12, atol=1e-11)
 
 
+def test_ciede2000_blocks_do_not_leak_into_each_other():
+    """Pairs go through in blocks of BLOCK, the special cases (zero chroma,
+    hues opposite) across block boundaries: every value equals the pair's
+    own, computed alone, and scikit-image's."""
+    from cfa_mitsuba.colour_kernels import BLOCK
+
+    a, b = _lab_pairs(2 * BLOCK + 7)
+    a, b = np.roll(a, BLOCK - 60, axis=0), np.roll(b, BLOCK - 60, axis=0)
+    got = ciede2000(a, b)
+    np.testing.assert_allclose(got, deltaE_ciede2000(a, b, channel_axis=-1), rtol=1e-12, atol=1e-12)
+    for i in [*range(BLOCK - 70, BLOCK + 520), 2 * BLOCK - 1, 2 * BLOCK, 2 * BLOCK + 6]:
+        np.testing.assert_allclose(got[i], ciede2000(a[i], b[i]), rtol=1e-15, atol=0)
+
+
 def test_ciede2000_shapes_broadcasting_and_nan():
     a, b = _lab_pairs(1200)
     img_a, img_b = a.reshape(30, 40, 3), b.reshape(30, 40, 3)
@@ -78,16 +92,16 @@ def test_lab_rejects_a_last_axis_that_is_not_three():
 
 
 def test_opponent_lab_equals_the_library_chain():
-    """opponent planes -> XYZ -> CIELAB in one pass against numpy's matrix
-    product then colour-science's XYZ_to_Lab."""
+    """opponent planes -> XYZ -> CIELAB in blocks of rows against numpy's
+    matrix product then colour-science's XYZ_to_Lab."""
     from cfa_mitsuba.colour_kernels import opponent_lab
     from cfa_mitsuba.metrics.scielab import OPPONENT_MATRICES
 
     rng = np.random.default_rng(8)
     white = np.array([95.05, 100.0, 108.9])
     m = OPPONENT_MATRICES["xyz2"]
-    xyz = rng.uniform(0.01, 100, (40, 50, 3))
-    xyz[:4] *= 0.001  # the linear branch
+    xyz = rng.uniform(0.01, 100, (150, 130, 3))  # three blocks of rows
+    xyz[60:70] *= 0.001  # the linear branch, across a block's edge
     planes = np.moveaxis(xyz @ m.T, -1, 0)[:, 1:-1, 2:]  # a strided view, as S-CIELAB passes it
     inv = np.linalg.inv(m)
     with colour.utilities.domain_range_scale("reference"):
