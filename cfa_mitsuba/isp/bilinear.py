@@ -24,10 +24,11 @@ Research notes: research/cfa-demosaic.md s. 3.1.
 
 from __future__ import annotations
 
-__all__ = ["bilinear", "interpolate_channel"]
+__all__ = ["bilinear", "bilinear_image", "interpolate_channel"]
 
 import numpy as np
 
+from ._memo import LastImage
 from .demosaic import DemosaicMethod
 from .mosaic import Mosaic, apply_stencils, extend, geometry, tent_radius, tent_stencil
 
@@ -64,14 +65,27 @@ def bilinear(raw: np.ndarray, cfa) -> np.ndarray:
     >>> demosaic(raw, "bayer", "bilinear")[0, 0].tolist()  # R, G, B at a G site
     [4.0, 0.0, 2.0]
     """
-    mosaic = geometry(cfa)
-    shape = raw.shape
-    radius = max(tent_radius(mosaic, c) for c in range(len(mosaic.channels)))
-    ext, ph, pw = extend(raw, mosaic, radius)
-    out = np.empty((*shape, len(mosaic.channels)))
-    for c in range(len(mosaic.channels)):
-        interpolate_channel(ext, ph, pw, shape, mosaic, c, out[..., c])
-    return out
+    return bilinear_image(raw, geometry(cfa)).copy()
+
+
+#: the last mosaic's bilinear image: 'pocs' starts from it (:mod:`._memo`)
+_LAST = LastImage()
+
+
+def bilinear_image(raw: np.ndarray, mosaic: Mosaic) -> np.ndarray:
+    """(H, W, C) bilinear estimate of every channel, read-only: kept for the
+    next call on an equal mosaic (:class:`~._memo.LastImage`)."""
+
+    def make():
+        shape = raw.shape
+        radius = max(tent_radius(mosaic, c) for c in range(len(mosaic.channels)))
+        ext, ph, pw = extend(raw, mosaic, radius)
+        out = np.empty((*shape, len(mosaic.channels)))
+        for c in range(len(mosaic.channels)):
+            interpolate_channel(ext, ph, pw, shape, mosaic, c, out[..., c])
+        return out
+
+    return _LAST.get(mosaic, raw, make)
 
 
 #: This module's method (registered by :func:`.demosaic.collect_demosaics`).

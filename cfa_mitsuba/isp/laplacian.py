@@ -73,6 +73,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import CfaMitsubaError
+from ._memo import LastImage
 from .bilinear import interpolate_channel
 from .demosaic import DemosaicMethod
 from .mosaic import (
@@ -258,7 +259,20 @@ def reference_adaptive(raw: np.ndarray, mosaic: Mosaic, ref: Reference, alpha: f
     the chirp (docs/isp.md).  The cost is ``|ref(t+) - ref(t-)| +
     2 |y - lin_k|`` (the second term omitted where k has no sample along d).
     With fewer than two directions, the non-adaptive estimate.
+
+    Read-only: kept for the next call on an equal mosaic with the same
+    arguments, which 'pocs' makes after 'adaptive-laplacian'
+    (:class:`~._memo.LastImage`).
     """
+    return _LAST_REFERENCE.get((mosaic, ref, float(alpha), weighting), raw,
+                               lambda: _reference_adaptive(raw, mosaic, ref, alpha, weighting))
+
+
+#: the last mosaic's edge-directed reference (:func:`reference_adaptive`)
+_LAST_REFERENCE = LastImage()
+
+
+def _reference_adaptive(raw, mosaic, ref, alpha, weighting):
     if ref.channel is None:
         return reference_laplacian(raw, mosaic, ref, alpha)
     th, tw = mosaic.tile_shape

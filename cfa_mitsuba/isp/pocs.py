@@ -57,10 +57,10 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import CfaMitsubaError
-from .bilinear import interpolate_channel
+from .bilinear import bilinear_image
 from .demosaic import DemosaicMethod
 from .laplacian import MHC_ALPHA, reference_adaptive, reference_for
-from .mosaic import extend, geometry, tent_radius
+from .mosaic import geometry
 
 _H0 = np.array([1.0, 2.0, 1.0]) / 4.0
 _H1 = np.array([1.0, -2.0, 1.0]) / 4.0
@@ -183,15 +183,14 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
     ref = reference_for(cfa, mosaic, reference, luminance_weights)
     n = len(mosaic.channels)
     shape = raw.shape
-    ext, ph, pw = extend(raw, mosaic, max(tent_radius(mosaic, c) for c in range(n)))
-    x = np.empty((n, *shape))
-    for c in range(n):
-        interpolate_channel(ext, ph, pw, shape, mosaic, c, x[c])
+    # both made by 'bilinear' and 'adaptive-laplacian' just before on the same mosaic, in a study (._memo)
+    x = np.moveaxis(bilinear_image(raw, mosaic), -1, 0).copy()  # (C, H, W), C order
     others = [c for c in range(n) if c != ref.channel]
     w = np.asarray(ref.weights)
     refimg = reference_adaptive(raw, mosaic, ref, alpha)
     if ref.channel is not None:
         if update_reference:
+            refimg = refimg.copy()
             for c in others:
                 _update_reference(refimg, raw, mosaic, c)
         x[ref.channel] = refimg

@@ -1,0 +1,51 @@
+"""A one-entry memo of an image made from a mosaic, for the steps that two
+demosaicing methods share.
+
+A study demosaics each capture by several methods in a row: 'bilinear',
+'laplacian', 'adaptive-laplacian', 'pocs' (the paper's four).  POCS starts
+from the other channels' bilinear estimates and from the edge-directed
+reference of 'adaptive-laplacian', which were just made from the same
+mosaic.  A :class:`LastImage` keeps the last one it made, with a copy of the
+mosaic it came from; a call with an equal key and a mosaic equal value for
+value gets it back instead of computing it again (the same bits: the same
+function of the same numbers).
+
+One entry per memo and process: the memory is one mosaic and one result.
+The entry is replaced whole, so threads sharing it see either the old or
+the new one, never a mixture.
+"""
+
+from __future__ import annotations
+
+__all__ = ["LastImage"]
+
+from typing import Callable
+
+import numpy as np
+
+
+class LastImage:
+    """The last image a function made, with the mosaic and key it came from."""
+
+    def __init__(self) -> None:
+        self._entry: tuple | None = None
+
+    def get(self, key, raw: np.ndarray, make: Callable[[], np.ndarray]) -> np.ndarray:
+        """``make()``, or the kept result when ``key`` equals the last call's
+        and ``raw`` equals its mosaic (shape, dtype and every value; NaN
+        never equals, so it recomputes).  The result is read-only: copy it
+        before changing it."""
+        entry = self._entry
+        if (entry is not None and entry[0] == key and entry[1].shape == raw.shape and entry[1].dtype == raw.dtype
+                and np.array_equal(entry[1], raw)):
+            return entry[2]
+        self._entry = None  # a failing make() leaves nothing stale behind
+        result = np.array(make(), copy=True)
+        result.flags.writeable = False
+        kept = np.array(raw, copy=True)
+        kept.flags.writeable = False
+        self._entry = (key, kept, result)
+        return result
+
+    def clear(self) -> None:
+        self._entry = None
