@@ -234,9 +234,9 @@ def _opponent_ratios(planes, base, to_xyz, white, out):  # pragma: no cover - co
             out[r, c, 2] = (to_xyz[2, 0] * o0 + to_xyz[2, 1] * o1 + to_xyz[2, 2] * o2) / white[2]
 
 
-#: pixels a block: the intermediate arrays of a block (about 0.5 MB) stay in
+#: pixels a block: the intermediate arrays of a block (about 1 MB) stay in
 #: the core's cache; 2k to 32k ran at one speed, the whole image 1.6x slower (measured)
-BLOCK = 32768
+BLOCK = 16384
 
 
 def _rows(a: np.ndarray) -> np.ndarray:
