@@ -1,6 +1,6 @@
 """How far one study's values moved from another's, per metric.
 
-    python benchmarks/compare_values.py NEW/metrics.csv OLD/metrics.csv [--expected]
+    python benchmarks/compare_values.py NEW/metrics.csv OLD/metrics.csv [--expected] [--json PATH]
 
 Joins the two tables on (scene, cfa, demosaic, luminance, metric) and, for
 ``realisation`` tables, the realisation; prints per metric the rows
@@ -9,11 +9,15 @@ With ``--expected`` OLD is tests/data/quick_expected.csv (its ``value`` and
 ``tolerance``): NEW must be a quick study's metrics_realisations.csv (its
 first realisation is compared, as tests/test_study_run.py does) and the
 table adds the largest difference as a fraction of the stored tolerance.
+``--json PATH`` also writes the numbers (per metric: rows, rows with the
+same value, largest absolute and relative difference), for the docs to
+quote.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 
 import pandas as pd
@@ -26,6 +30,7 @@ def main(argv=None) -> int:
     ap.add_argument("new")
     ap.add_argument("old")
     ap.add_argument("--expected", action="store_true", help="OLD is quick_expected.csv (value, tolerance)")
+    ap.add_argument("--json", help="also write the per-metric numbers to this file")
     args = ap.parse_args(argv)
     new = pd.read_csv(args.new, comment="#")
     old = pd.read_csv(args.old, comment="#")
@@ -55,6 +60,16 @@ def main(argv=None) -> int:
         if args.expected:
             line += f"{g['frac'].max():>13.3g}"
         print(line + f"   {worst['scene']} {worst['cfa']} {worst['demosaic']} L{worst['luminance']:g}")
+    if args.json:
+        def numbers(g):
+            return {"rows": int(len(g)), "identical": int((g["value_new"] == g["value_old"]).sum()),
+                    "max_abs": float(g["abs"].max()), "max_rel": float(g["rel"].fillna(0.0).max())}
+
+        with open(args.json, "w") as f:
+            json.dump({"new": args.new, "old": args.old, "all": numbers(both),
+                       "per_metric": {m: numbers(g) for m, g in both.groupby("metric")},
+                       "command": "python3 benchmarks/compare_values.py " + " ".join(sys.argv[1:] if argv is None else argv)},
+                      f, indent=1)
     print(f"{'all':<18}{len(both):>6}{both['abs'].max():>13.3g}{both['rel'].max():>13.3g}"
           + (f"{both['frac'].max():>13.3g}" if args.expected else ""))
     if args.expected:

@@ -200,7 +200,7 @@ def xyz_to_lab(xyz, white_xyz, *, constants: str = "cie") -> np.ndarray:
         lum = np.where(ty > 0.008856, 116.0 * f[..., 1] - 16.0, 903.3 * ty)
         return np.stack([lum, 500.0 * (f[..., 0] - f[..., 1]), 200.0 * (f[..., 1] - f[..., 2])], axis=-1)
     # colour-science's ``XYZ_to_Lab`` gives the same values to 1e-12 (tests/test_colour_kernels.py);
-    # the compiled pass takes a fraction of its time on a camera image.
+    # the compiled loops take a fraction of its time on a camera image.
     from .colour_kernels import lab_cie
 
     return lab_cie(xyz, w)
@@ -232,11 +232,12 @@ def delta_e_2000(lab1, lab2) -> np.ndarray:
     """CIEDE2000 (Sharma, Wu & Dalal 2005; kL = kC = kH = 1) between
     broadcastable (..., 3) CIELAB arrays.
 
-    One compiled pass per pixel (:func:`cfa_mitsuba.colour_kernels.ciede2000`):
-    scikit-image's ``deltaE_ciede2000`` and colour-science's give the same
-    numbers to 1e-12 (tests/test_colour_kernels.py), at 2.3x the time on a
-    camera image, and the S-CIELAB map of every CFA, demosaic and noise
-    realisation goes through it.
+    Compiled loops and numpy's SIMD ufuncs
+    (:func:`cfa_mitsuba.colour_kernels.ciede2000`): scikit-image's
+    ``deltaE_ciede2000`` and colour-science's give the same numbers to
+    1e-12 (tests/test_colour_kernels.py) in several times the time, and the
+    S-CIELAB map of every CFA, demosaic and noise realisation goes through
+    it.
 
     Examples
     --------
