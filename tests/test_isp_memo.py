@@ -7,14 +7,13 @@ import numpy as np
 import pytest
 
 from cfa_mitsuba.isp import demosaic
-from cfa_mitsuba.isp._memo import LastImage
 from cfa_mitsuba.isp import bilinear as bilinear_module
 from cfa_mitsuba.isp import laplacian as laplacian_module
+from cfa_mitsuba.isp._memo import LastImage, clear_all
 
 
 def _clear():
-    bilinear_module._LAST.clear()
-    laplacian_module._LAST_REFERENCE.clear()
+    clear_all()
 
 
 def test_last_image_returns_the_kept_result_only_for_an_equal_key_and_mosaic():
@@ -97,3 +96,12 @@ def test_pocs_after_the_other_methods_equals_pocs_alone(cfa):
     expect = demosaic(other, cfa, "pocs")
     demosaic(raw, cfa, "adaptive-laplacian")
     np.testing.assert_array_equal(demosaic(other, cfa, "pocs"), expect)
+
+
+def test_clear_all_empties_every_memo():
+    raw = np.random.default_rng(1).uniform(0.1, 1.0, (24, 24))
+    demosaic(raw, "bayer", "adaptive-laplacian")
+    demosaic(raw, "bayer", "bilinear")
+    assert bilinear_module._LAST._entry is not None and laplacian_module._LAST_REFERENCE._entry is not None
+    clear_all()
+    assert bilinear_module._LAST._entry is None and laplacian_module._LAST_REFERENCE._entry is None

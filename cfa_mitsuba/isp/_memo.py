@@ -17,11 +17,23 @@ the new one, never a mixture.
 
 from __future__ import annotations
 
-__all__ = ["LastImage"]
+__all__ = ["LastImage", "clear_all"]
 
+import weakref
 from typing import Callable
 
 import numpy as np
+
+#: every memo made, so that a benchmark can time a method on its own (:func:`clear_all`)
+_ALL: "weakref.WeakSet[LastImage]" = weakref.WeakSet()
+
+
+def clear_all() -> None:
+    """Empty every :class:`LastImage`: the next call of each method computes
+    everything itself (benchmarks/bench_demosaic.py times each method this
+    way; repeated calls on one mosaic would otherwise time a copy)."""
+    for memo in list(_ALL):
+        memo.clear()
 
 
 class LastImage:
@@ -29,6 +41,7 @@ class LastImage:
 
     def __init__(self) -> None:
         self._entry: tuple | None = None
+        _ALL.add(self)
 
     def get(self, key, raw: np.ndarray, make: Callable[[], np.ndarray]) -> np.ndarray:
         """``make()``, or the kept result when ``key`` equals the last call's
