@@ -105,3 +105,19 @@ def test_clear_all_empties_every_memo():
     assert bilinear_module._LAST._entry is not None and laplacian_module._LAST_REFERENCE._entry is not None
     clear_all()
     assert bilinear_module._LAST._entry is None and laplacian_module._LAST_REFERENCE._entry is None
+
+
+def test_a_result_too_big_to_hold_twice_is_not_kept(monkeypatch):
+    from cfa_mitsuba.isp import _memo
+
+    monkeypatch.setattr(_memo, "MAX_BYTES", 1000)
+    memo = LastImage()
+    calls = []
+    small, big = np.ones((5, 5)), np.ones((20, 20))  # 200 + 200 bytes; 3200 + 3200 bytes
+    memo.get("k", small, lambda: calls.append(1) or small * 2)
+    memo.get("k", small, lambda: calls.append(1) or small * 2)
+    assert len(calls) == 1
+    out = memo.get("k", big, lambda: calls.append(1) or big * 2)
+    np.testing.assert_array_equal(out, big * 2)
+    memo.get("k", big, lambda: calls.append(1) or big * 2)
+    assert len(calls) == 3 and memo._entry is None

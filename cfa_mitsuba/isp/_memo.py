@@ -10,9 +10,11 @@ mosaic it came from; a call with an equal key and a mosaic equal value for
 value gets it back instead of computing it again (the same bits: the same
 function of the same numbers).
 
-One entry per memo and process: the memory is one mosaic and one result.
-The entry is replaced whole, so threads sharing it see either the old or
-the new one, never a mixture.
+One entry per memo and process: the memory is one mosaic and one result,
+and nothing is kept where the two together pass :data:`MAX_BYTES` (a
+full-size sensor's mosaic is computed afresh rather than held twice).  The
+entry is replaced whole, so threads sharing it see either the old or the new
+one, never a mixture.
 """
 
 from __future__ import annotations
@@ -23,6 +25,11 @@ import weakref
 from typing import Callable
 
 import numpy as np
+
+#: the most a memo keeps (mosaic and result together, bytes): 64 MB, a
+#: 4-channel image of about 1.7 Mpx (the paper's 0.46 Mpx images take 18 MB),
+#: so the two memos add at most 128 MB to a worker
+MAX_BYTES = 64 * 2**20
 
 #: every memo made, so that a benchmark can time a method on its own (:func:`clear_all`)
 _ALL: "weakref.WeakSet[LastImage]" = weakref.WeakSet()
@@ -47,13 +54,17 @@ class LastImage:
         """``make()``, or the kept result when ``key`` equals the last call's
         and ``raw`` equals its mosaic (shape, dtype and every value; NaN
         never equals, so it recomputes).  The result is read-only: copy it
-        before changing it."""
+        before changing it (one too big to keep, over :data:`MAX_BYTES`, is
+        ``make()``'s own array, not kept)."""
         entry = self._entry
         if (entry is not None and entry[0] == key and entry[1].shape == raw.shape and entry[1].dtype == raw.dtype
                 and np.array_equal(entry[1], raw)):
             return entry[2]
         self._entry = None  # a failing make() leaves nothing stale behind
-        result = np.array(make(), copy=True)
+        made = make()
+        if raw.nbytes + np.asarray(made).nbytes > MAX_BYTES:  # too big to hold twice: not kept
+            return made
+        result = np.array(made, copy=True)
         result.flags.writeable = False
         kept = np.array(raw, copy=True)
         kept.flags.writeable = False
