@@ -121,3 +121,12 @@ def test_a_result_too_big_to_hold_twice_is_not_kept(monkeypatch):
     np.testing.assert_array_equal(out, big * 2)
     memo.get("k", big, lambda: calls.append(1) or big * 2)
     assert len(calls) == 3 and memo._entry is None
+
+
+def test_a_result_that_is_the_callers_mosaic_is_copied_before_it_is_kept():
+    memo = LastImage()
+    raw = np.ones((3, 3))
+    kept = memo.get("k", raw, lambda: raw)
+    assert raw.flags.writeable and not kept.flags.writeable and kept is not raw
+    fresh = np.zeros((3, 3))
+    assert memo.get("j", raw, lambda: fresh) is fresh  # a new array is kept as made, no copy

@@ -53,18 +53,20 @@ class LastImage:
     def get(self, key, raw: np.ndarray, make: Callable[[], np.ndarray]) -> np.ndarray:
         """``make()``, or the kept result when ``key`` equals the last call's
         and ``raw`` equals its mosaic (shape, dtype and every value; NaN
-        never equals, so it recomputes).  The result is read-only: copy it
-        before changing it (one too big to keep, over :data:`MAX_BYTES`, is
-        ``make()``'s own array, not kept)."""
+        never equals, so it recomputes).  ``make`` returns a new array, which
+        is kept as it is (no copy) and made read-only: copy it before
+        changing it (one too big to keep, over :data:`MAX_BYTES`, is returned
+        writeable and not kept)."""
         entry = self._entry
         if (entry is not None and entry[0] == key and entry[1].shape == raw.shape and entry[1].dtype == raw.dtype
                 and np.array_equal(entry[1], raw)):
             return entry[2]
         self._entry = None  # a failing make() leaves nothing stale behind
-        made = make()
-        if raw.nbytes + np.asarray(made).nbytes > MAX_BYTES:  # too big to hold twice: not kept
-            return made
-        result = np.array(made, copy=True)
+        result = np.asarray(make())
+        if raw.nbytes + result.nbytes > MAX_BYTES:  # too big to hold twice: not kept
+            return result
+        if np.may_share_memory(result, raw):  # kept as made, unless it is (part of) the caller's mosaic
+            result = result.copy()
         result.flags.writeable = False
         kept = np.array(raw, copy=True)
         kept.flags.writeable = False
