@@ -179,6 +179,29 @@ def test_process_least_squares_flag_is_a_plain_fit(tmp_path):
     assert wp["colour_matrix"] != ls["colour_matrix"]
 
 
+def test_process_precision_flag_reaches_the_demosaic(tmp_path):
+    import json
+    import sys
+
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    from test_isp_process import WHITE, synthetic_raw
+
+    from cfa_mitsuba.cli import main
+    from cfa_mitsuba.io.raw_npz import save_raw_npz
+
+    rng = np.random.default_rng(2)
+    raw_path = tmp_path / "raw.npz"
+    save_raw_npz(raw_path, synthetic_raw((0.3 + 0.6 * rng.random((12, 12, 1))) * WHITE, "bayer"))
+    got = {}
+    for flag in ((), ("--precision", "single")):
+        out = tmp_path / f"out{len(flag)}.npz"
+        assert main(["process", str(raw_path), "--demosaic", "pocs", "--out", str(out), *flag]) == 0
+        with np.load(out, allow_pickle=False) as z:
+            got[len(flag)] = (json.loads(str(z["meta"]))["isp"]["demosaic_precision"], z["xyz"])
+    assert got[0][0] == "double" and got[2][0] == "single"
+    assert 0 < np.abs(got[2][1] - got[0][1]).max() < 1e-5 * np.abs(got[0][1]).max()
+
+
 # -- the chain's shared optical image -----------------------------------------------------------------
 
 def test_shared_optical_image_gives_the_numbers_of_a_fresh_one(monkeypatch):

@@ -194,3 +194,18 @@ def test_cli_bad_input_is_one_line(cli, raw_file, tmp_path):
     junk.write_bytes(b"not a zip")
     assert_one_line_error(cli("process", junk, "--out", tmp_path / "a.png"), "junk.npz")
     assert not (tmp_path / "a.png").exists()
+
+
+def test_demosaic_precision_reaches_the_method_and_the_meta():
+    rng = np.random.default_rng(5)
+    scene = np.broadcast_to(0.4 * WHITE, (16, 16, WL.size)) * (0.5 + rng.random((16, 16, 1)))
+    raw = synthetic_raw(scene, "bayer")
+    double = cm.isp.process(raw, "adaptive-laplacian")
+    single = cm.isp.process(raw, "adaptive-laplacian", demosaic_precision="single")
+    assert double.meta["isp"]["demosaic_precision"] == "double"
+    assert single.meta["isp"]["demosaic_precision"] == "single"
+    assert single.xyz.dtype == np.float64
+    err = np.abs(single.xyz - double.xyz).max() / np.abs(double.xyz).max()
+    assert 0 < err < 1e-6, err  # float32 rounding, not the same bits and not another method
+    with pytest.raises(cm.CfaMitsubaError, match="unknown demosaic precision 'half'"):
+        cm.isp.process(raw, "bilinear", demosaic_precision="half")

@@ -30,6 +30,9 @@ def add_arguments(parser) -> None:
                              "gray-world: equal channel means")
     parser.add_argument("--least-squares", action="store_true",
                         help="plain least-squares colour matrix (default: white-preserving)")
+    parser.add_argument("--precision", default="double", choices=("double", "single"),
+                        help="demosaic in double (default) or single precision (float32: faster, "
+                             "within float32 rounding; a study's default)")
     parser.add_argument("--iterations", type=int, metavar="N", help="pocs: at most N iterations (default 10)")
     parser.add_argument("--tolerance", type=float, metavar="T",
                         help="pocs: stop when an iteration changes less than T relative RMS (default 1e-3)")
@@ -70,7 +73,7 @@ def run(args) -> int:
     check_process_file(args.raw)  # memory, from the mosaic's header, before it is read
     raw = load_raw_npz(args.raw)
     image = process(raw, args.demosaic, white_balance=args.white_balance,
-                    white_preserving=not args.least_squares, **options)
+                    white_preserving=not args.least_squares, demosaic_precision=args.precision, **options)
     if suffix == ".png":
         write_image(out, image.srgb, bit_depth=8)
     elif suffix == ".exr":

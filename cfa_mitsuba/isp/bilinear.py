@@ -80,7 +80,7 @@ def bilinear_image(raw: np.ndarray, mosaic: Mosaic) -> np.ndarray:
         shape = raw.shape
         radius = max(tent_radius(mosaic, c) for c in range(len(mosaic.channels)))
         ext, ph, pw = extend(raw, mosaic, radius)
-        out = np.empty((*shape, len(mosaic.channels)))
+        out = np.empty((*shape, len(mosaic.channels)), dtype=raw.dtype)  # float32 stays float32
         for c in range(len(mosaic.channels)):
             interpolate_channel(ext, ph, pw, shape, mosaic, c, out[..., c])
         return out

@@ -235,7 +235,7 @@ def _choose(estimates: list, costs: list, weighting: str, eps: float):
     if weighting == "soft":
         w = 1.0 / (cost + eps)
     else:
-        w = (cost <= cost.min(axis=0)).astype(np.float64)
+        w = (cost <= cost.min(axis=0)).astype(cost.dtype)
     return np.einsum("d...,d...->...", np.stack(estimates), w) / w.sum(axis=0)
 
 
@@ -346,7 +346,7 @@ def colour_differences(raw, refimg, mosaic: Mosaic, ref: Reference, chroma_gain:
     if adaptive:
         ext_y, _, _ = extend(raw, mosaic, radius)
         ext_r, _, _ = extend(refimg, mosaic, radius)
-    out = np.empty((*shape, n))
+    out = np.empty((*shape, n), dtype=raw.dtype)  # float32 stays float32
     eps = _eps(raw)
     for c in range(n):
         if c == ref.channel:

@@ -22,7 +22,7 @@ from ..values import RawImage, RenderedImage
 from ..colorimetry import realisable
 from .colour_matrix import (channel_noise, colour_fit_reflectances, fit_colour_matrix, gray_world_gains, luminance_weights,
                      white_balance_gains, white_response, xyz_to_srgb)
-from .demosaic import check_mosaic, demosaic as _demosaic, get_demosaic
+from .demosaic import check_mosaic, check_precision, demosaic as _demosaic, get_demosaic
 from .mosaic import geometry
 from .remosaic import channel_gain_divisors, readout_of, remosaic, upsample_blocks
 
@@ -151,7 +151,7 @@ def _check_white_signal(raw: RawImage, epr: np.ndarray, white: np.ndarray) -> No
 
 def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: str = "illuminant",
             white_preserving: bool = True, regularise: bool = True, clip_highlights: bool = True,
-            colour_fit: str = "training", **options) -> RenderedImage:
+            colour_fit: str = "training", demosaic_precision: str = "double", **options) -> RenderedImage:
     """Process a raw capture into XYZ (absolute, cd/m^2) and display sRGB.
 
     Parameters
@@ -181,6 +181,10 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         'training' (default, the 190 training patches) or 'mcc' (the 24
         ColorChecker patches, ISETCam's 'MCC optimized';
         :data:`~cfa_mitsuba.isp.colour_matrix.COLOUR_FITS`).
+    demosaic_precision : 'double' (default) or 'single': the demosaicing
+        method computes in float32 (:func:`~cfa_mitsuba.isp.demosaic`'s
+        ``precision``; a study's default, docs/study.md); the colour
+        correction and the output stay float64.
     **options : passed to the demosaicing method (e.g. ``iterations=``).
         Methods that take ``luminance_weights`` receive the channels'
         luminance weights under this illuminant unless given.
@@ -212,6 +216,7 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         img = cm.isp.process(load_raw_npz("raw.npz"), "pocs")
     """
     _check(raw_image)
+    check_precision(demosaic_precision)
     if white_balance not in WHITE_BALANCE_MODES:
         raise CfaMitsubaError(f"unknown white balance {white_balance!r} (choose {', '.join(WHITE_BALANCE_MODES)})")
     wl = np.asarray(raw_image.wavelengths, dtype=np.float64)
@@ -270,7 +275,7 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     fn = get_demosaic(demosaic)
     if "luminance_weights" in inspect.signature(fn).parameters and "luminance_weights" not in options:
         options["luminance_weights"] = luminance_weights(epr, white, wl)
-    channels = _demosaic(balanced, cfa, demosaic, **options)
+    channels = _demosaic(balanced, cfa, demosaic, precision=demosaic_precision, **options)
     xyz = fit.apply(channels)
     if readout.get("mode") == "bin":  # back on the full pixel grid (isp/remosaic.py)
         xyz = upsample_blocks(xyz, int(readout["block"]), readout["full_shape"])
@@ -284,6 +289,7 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         "demosaic": demosaic,
         "demosaic_options": {k: (np.asarray(v).tolist() if isinstance(v, np.ndarray) else v)
                              for k, v in options.items() if k != "info"},
+        "demosaic_precision": demosaic_precision,
         "white_balance": white_balance,
         "colour_fit": colour_fit,
         "white_balance_gains": (gains / ref_gain).tolist(),

@@ -115,7 +115,7 @@ def _update_reference(refimg, raw, mosaic, c: int) -> None:
     th, tw = mosaic.tile_shape
     spacing = max(1, int(round(1.0 / np.sqrt(mosaic.densities[c]))))
     k = _dilate(lowpass_kernel(1), spacing)
-    m = mosaic.masks(raw.shape)[c].astype(np.float64)
+    m = mosaic.masks(raw.shape)[c].astype(raw.dtype)
     num = _filter(_filter((refimg - raw) * m, k, 0), k, 1)
     den = _filter(_filter(m, k, 0), k, 1)
     for i, j in mosaic.phases(c):
@@ -186,7 +186,7 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
     # both made by 'bilinear' and 'adaptive-laplacian' just before on the same mosaic, in a study (._memo)
     x = np.moveaxis(bilinear_image(raw, mosaic), -1, 0).copy()  # (C, H, W), C order
     others = [c for c in range(n) if c != ref.channel]
-    w = np.asarray(ref.weights)
+    w = np.asarray(ref.weights, dtype=raw.dtype)
     refimg = reference_adaptive(raw, mosaic, ref, alpha)
     if ref.channel is not None:
         if update_reference:
@@ -197,8 +197,8 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
     scale = max(float(np.sqrt(np.mean(raw * raw))), np.finfo(float).tiny)
     done, change = 0, 0.0
     observed = {c: mosaic.index == c for c in others}  # (th, tw): where each channel is sampled
-    d, lowpassed = np.empty(shape), np.empty(shape)  # reused: no allocation per pass
-    k = lowpass_kernel(levels)
+    d, lowpassed = np.empty(shape, raw.dtype), np.empty(shape, raw.dtype)  # reused: no allocation per pass
+    k = lowpass_kernel(levels).astype(raw.dtype)  # a float32 mosaic is filtered in float32
     # here, not at import: Numba takes a third of a second to load
     from ._pocs_kernel import project
     from .column_filter import correlate_along_rows, correlate_columns

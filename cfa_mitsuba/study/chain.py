@@ -30,6 +30,12 @@ from .conditions import Condition
 #: study did before the chain shared it): for benchmarks/bench_study.py only.
 NO_MEMO_ENV = "CFA_MITSUBA_NO_OPTICS_MEMO"
 
+#: The demosaicing precision of every chain unless ``[isp]
+#: demosaic_precision`` says otherwise (issue 25): float32 makes the
+#: methods faster and moves the paper study's values by float32 rounding,
+#: far inside the run-to-run tolerances (measured in docs/study.md).
+STUDY_DEMOSAIC_PRECISION = "single"
+
 
 @dataclass(frozen=True)
 class ChainSettings:
@@ -130,8 +136,11 @@ class ChainSettings:
     def isp_options(self, method: str, cond: Condition | None = None) -> dict:
         """The keywords of :func:`cfa_mitsuba.isp.process` for ``method``: the
         ``[isp]`` options, the method's own (``[demosaics.<name>]``) and the
-        condition's ISP axes."""
-        opts = {**dict(self.isp), **dict(dict(self.demosaic_options).get(method, ()))}
+        condition's ISP axes; the demosaicing runs in
+        :data:`STUDY_DEMOSAIC_PRECISION` unless ``[isp]`` sets
+        ``demosaic_precision``."""
+        opts = {"demosaic_precision": STUDY_DEMOSAIC_PRECISION, **dict(self.isp),
+                **dict(dict(self.demosaic_options).get(method, ()))}
         if cond is not None:
             opts.update(self._targets(cond, "isp"))
         return opts

@@ -271,7 +271,8 @@ def _isp(ck: _Checker, isp_cfg) -> dict:
     from .. import isp
 
     ck.table(isp_cfg, "isp", {"white_balance": None, "white_preserving": None, "pocs_iterations": None,
-                              "colour_fit": None, "regularise": None, "clip_highlights": None})
+                              "colour_fit": None, "regularise": None, "clip_highlights": None,
+                              "demosaic_precision": None})
     out = {}
     if "white_balance" in isp_cfg:
         out["white_balance"] = ck.string(isp_cfg["white_balance"], "isp.white_balance", ("illuminant", "gray-world"))
@@ -280,6 +281,11 @@ def _isp(ck: _Checker, isp_cfg) -> dict:
             out[flag] = ck.boolean(isp_cfg[flag], f"isp.{flag}")
     if "colour_fit" in isp_cfg:
         out["colour_fit"] = ck.string(isp_cfg["colour_fit"], "isp.colour_fit", isp.COLOUR_FITS)
+    if "demosaic_precision" in isp_cfg:
+        from ..isp.demosaic import PRECISIONS
+
+        out["demosaic_precision"] = ck.string(isp_cfg["demosaic_precision"], "isp.demosaic_precision",
+                                              tuple(PRECISIONS))
     return out
 
 
