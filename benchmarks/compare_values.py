@@ -11,7 +11,16 @@ first realisation is compared, as tests/test_study_run.py does) and the
 table adds the largest difference as a fraction of the stored tolerance.
 ``--json PATH`` also writes the numbers (per metric: rows, rows with the
 same value, largest absolute and relative difference), for the docs to
-quote.
+quote.  ``--tolerances FILE`` (tests/data/quick_expected.csv) holds two
+studies of different size to the same rule: per metric, the largest
+relative difference against the smallest relative tolerance FILE stores
+for that metric (tolerance / |value|; the rule is in the file's first
+line), and the largest absolute difference against the smallest absolute
+tolerance, printed and written to the JSON (``min_rel_tolerance``,
+``min_abs_tolerance``, ``within_rel``, ``within_abs``,
+``within_tolerance``: either holds; ``all.within_tolerance`` when every
+metric's does).  The two smallest tolerances may come from different rows,
+so this is a bound, not the per-row test of ``--expected``.
 """
 
 from __future__ import annotations
@@ -31,9 +40,31 @@ def main(argv=None) -> int:
     ap.add_argument("old")
     ap.add_argument("--expected", action="store_true", help="OLD is quick_expected.csv (value, tolerance)")
     ap.add_argument("--json", help="also write the per-metric numbers to this file")
+    ap.add_argument("--tolerances", metavar="FILE",
+                    help="a table of value and tolerance per row (tests/data/quick_expected.csv): compare each "
+                         "metric's largest relative difference with the smallest relative tolerance stored for it")
     args = ap.parse_args(argv)
-    new = pd.read_csv(args.new, comment="#")
-    old = pd.read_csv(args.old, comment="#")
+    tables = []
+    for path in (args.new, args.old):
+        try:
+            tables.append(pd.read_csv(path, comment="#"))
+        except (OSError, ValueError) as exc:  # missing, unreadable or not a CSV: one line, exit 2
+            ap.exit(2, f"compare_values: cannot read {path}: {getattr(exc, 'strerror', None) or exc}\n")
+    new, old = tables
+    rel_tol = {}
+    if args.tolerances:
+        try:
+            tol = pd.read_csv(args.tolerances, comment="#")
+        except (OSError, ValueError) as exc:
+            ap.exit(2, f"compare_values: cannot read {args.tolerances}: {getattr(exc, 'strerror', None) or exc}\n")
+        if not {"metric", "value", "tolerance"} <= set(tol.columns):
+            ap.exit(2, f"compare_values: {args.tolerances} has no 'metric', 'value' and 'tolerance' columns\n")
+        abs_tol = tol.groupby("metric")["tolerance"].min().to_dict()
+        tol = tol[tol["value"] != 0]
+        rel_tol = (tol["tolerance"] / tol["value"].abs()).groupby(tol["metric"]).min().to_dict()
+    missing = [p for p, t in zip((args.new, args.old), tables) if not {"metric", "value"} <= set(t.columns)]
+    if missing:
+        ap.exit(2, f"compare_values: {missing[0]} has no 'metric' and 'value' columns: not a metrics table\n")
     keys = list(KEYS)
     if args.expected:
         new = new[new["realisation"] == 0] if "realisation" in new.columns else new
@@ -53,21 +84,37 @@ def main(argv=None) -> int:
     if args.expected:
         both["frac"] = both["abs"] / both["tolerance"]
         cols += f"{'/ tolerance':>13}"
+    if args.tolerances:
+        cols += f"{'min rel tol':>13}{'min abs tol':>13}"
     print(cols + "   where (largest abs)")
     for metric, g in both.groupby("metric"):
         worst = g.loc[g["abs"].idxmax()]
         line = f"{metric:<18}{len(g):>6}{g['abs'].max():>13.3g}{g['rel'].max():>13.3g}"
         if args.expected:
             line += f"{g['frac'].max():>13.3g}"
+        if args.tolerances:
+            line += f"{rel_tol.get(metric, float('nan')):>13.3g}{abs_tol.get(metric, float('nan')):>13.3g}"
         print(line + f"   {worst['scene']} {worst['cfa']} {worst['demosaic']} L{worst['luminance']:g}")
     if args.json:
-        def numbers(g):
-            return {"rows": int(len(g)), "identical": int((g["value_new"] == g["value_old"]).sum()),
-                    "max_abs": float(g["abs"].max()), "max_rel": float(g["rel"].fillna(0.0).max())}
+        def numbers(g, metric=None):
+            out = {"rows": int(len(g)), "identical": int((g["value_new"] == g["value_old"]).sum()),
+                   "max_abs": float(g["abs"].max()), "max_rel": float(g["rel"].fillna(0.0).max())}
+            if args.tolerances and metric is not None:
+                t, a = rel_tol.get(metric), abs_tol.get(metric)
+                out["min_rel_tolerance"] = None if t is None else float(t)
+                out["min_abs_tolerance"] = None if a is None else float(a)
+                out["within_rel"] = t is not None and out["max_rel"] <= t
+                out["within_abs"] = a is not None and out["max_abs"] <= a
+                out["within_tolerance"] = out["within_rel"] or out["within_abs"]
+            return out
 
+        per_metric = {m: numbers(g, m) for m, g in both.groupby("metric")}
+        whole = numbers(both)
+        if args.tolerances:
+            whole["within_tolerance"] = all(v["within_tolerance"] for v in per_metric.values())
         with open(args.json, "w") as f:
-            json.dump({"new": args.new, "old": args.old, "all": numbers(both),
-                       "per_metric": {m: numbers(g) for m, g in both.groupby("metric")},
+            json.dump({"new": args.new, "old": args.old, "all": whole,
+                       "per_metric": per_metric,
                        "command": "python3 benchmarks/compare_values.py " + " ".join(sys.argv[1:] if argv is None else argv)},
                       f, indent=1)
     print(f"{'all':<18}{len(both):>6}{both['abs'].max():>13.3g}{both['rel'].max():>13.3g}"
@@ -75,6 +122,11 @@ def main(argv=None) -> int:
     if args.expected:
         outside = int((both["abs"] > both["tolerance"]).sum())
         print(f"outside the stored tolerance: {outside}")
+    if args.tolerances:
+        worse = [m for m, g in both.groupby("metric") if not (g["rel"].fillna(0.0).max() <= rel_tol.get(m, -1.0)
+                                                              or g["abs"].max() <= abs_tol.get(m, -1.0))]
+        print("every metric within its smallest stored relative or absolute tolerance" if not worse
+              else f"beyond (or without) a stored tolerance: {', '.join(worse)}")
     return 0
 
 
