@@ -190,14 +190,22 @@ def _readout_applies(cfa, cond) -> bool:
     return readout_applies(get_cfa(cfa).pattern, getattr(cond, "readout", "full"))
 
 
-def _thumbnail(srgb: np.ndarray, path: Path, longest: int = 240) -> None:
+def _thumbnail(rendered, path: Path, longest: int = 240) -> None:
+    """The report's preview of an image: its XYZ averaged over step x step
+    blocks (linear light, as a camera's downscaler averages), then the
+    display sRGB encoding of the small image (``xyz_to_srgb``, no
+    adaptation), written as an 8-bit PNG.  Encoding after the averaging
+    costs 1/step^2 of encoding the whole image first, which took most of
+    the time of a camera output's details (benchmarks/profile_study.py)."""
+    from ..colorimetry import xyz_to_srgb
     from ..io import write_image
 
-    h, w = srgb.shape[:2]
+    xyz = np.asarray(rendered.xyz, dtype=np.float64)
+    h, w = xyz.shape[:2]
     step = max(1, int(np.ceil(max(h, w) / longest)))
     hh, ww = (h // step) * step, (w // step) * step
-    small = srgb[:hh, :ww].reshape(hh // step, step, ww // step, step, 3).mean(axis=(1, 3))
-    write_image(path, small)
+    small = xyz[:hh, :ww].reshape(hh // step, step, ww // step, step, 3).mean(axis=(1, 3))
+    write_image(path, xyz_to_srgb(small, rendered.white_xyz))
 
 
 def _save_details(folder: Path, stem: str, results: dict, rendered, extra: dict) -> None:
@@ -219,7 +227,7 @@ def _save_details(folder: Path, stem: str, results: dict, rendered, extra: dict)
     with atomic_output(folder / f"{stem}.json") as tmp:
         tmp.write_text(json.dumps(payload, allow_nan=False, default=json_default))
     if rendered is not None:
-        _thumbnail(rendered.srgb, folder / f"{stem}.png")
+        _thumbnail(rendered, folder / f"{stem}.png")
 
 
 def _capture_columns(raw) -> dict:
