@@ -54,6 +54,8 @@ OTHER_CFAS = ("cmy1", "cmy2", "cmy3", "rgbw1", "rgbw2", "rgbw3")
 NEW_RGB_CFAS = ("quad-bayer", "nona", "tetra2", "xtrans")
 NEW_OTHER_CFAS = ("ryyb", "rccb", "rccc", "kodak-cfa3", "sony-rgbw")  # mono: nothing to demosaic
 BORDER = 8
+#: the suffix of a speed row timed with ``precision='single'``
+SINGLE = ", single precision"
 
 
 def best_time(fn, repeat):
@@ -161,6 +163,8 @@ def speed_table(repeat):
         "pocs, 10 iterations (tolerance 0)": lambda: cm.isp.demosaic(raw, "bayer", "pocs", tolerance=0.0),
         "colour-demosaicing Menon2007": lambda: cdm.demosaicing_CFA_Bayer_Menon2007(raw, "GRBG"),
     }
+    for m in METHODS:  # the same methods computing in float32 (a study's default, [isp] demosaic_precision)
+        rows[f"{m}{SINGLE}"] = (lambda m=m: cm.isp.demosaic(raw, "bayer", m, precision="single"))
     t = {k: best_time(f, repeat) for k, f in rows.items()}
     info = {}
     cm.isp.demosaic(raw, "bayer", "pocs", info=info)
@@ -173,6 +177,8 @@ def speed_table(repeat):
     pairs = {"bilinear": "colour-demosaicing bilinear", "laplacian": "colour-demosaicing Malvar2004"}
     for k, v in t.items():
         ratio = f"{t[pairs[k]] / v:.1f}x faster than {pairs[k]}" if k in pairs else ""
+        if k.endswith(SINGLE):
+            ratio = f"{t[k[:-len(SINGLE)]] / v:.1f}x faster than double precision"
         if k == "pocs":
             ratio = f"{info['iterations']} iterations to tolerance 1e-3"
         print(f"| {k} | {v:.4f} | {ratio} |")
