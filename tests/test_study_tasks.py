@@ -115,26 +115,30 @@ def test_evaluate_seeds_gives_real_intervals(tmp_path):
 
 
 def test_thumbnail_is_the_display_encoding_of_the_block_mean_in_linear_light(tmp_path):
-    """The report's preview: XYZ averaged over blocks, then encoded (the
-    same function as the image's display sRGB); equal to the full-size
-    encoding wherever a block is uniform."""
+    """The report's preview: XYZ averaged over blocks, then the image's own
+    display encoding (the scene white adapted to sRGB's: a warm white shows
+    white); equal to the full-size display image wherever a block is uniform."""
     from PIL import Image
 
-    from cfa_mitsuba.colorimetry import xyz_to_srgb
+    from cfa_mitsuba.isp import xyz_to_srgb
     from cfa_mitsuba.study.tasks import _thumbnail
     from cfa_mitsuba.values import RenderedImage
 
     rng = np.random.default_rng(4)
-    white = np.array([95.05, 100.0, 108.9])
+    white = np.array([109.85, 100.0, 35.58])  # illuminant A: adaptation matters
     xyz = np.repeat(np.repeat(rng.random((20, 31, 3)) * 80, 3, axis=0), 3, axis=1)  # 60 x 93, uniform 3 x 3 blocks
+    xyz[:3, :3] = white  # one block is the scene white
     noisy = xyz + rng.normal(0, 5, xyz.shape)  # blocks no longer uniform: linear mean != encoded mean
     for img, uniform in ((xyz, True), (noisy, False)):
         path = tmp_path / f"t{uniform}.png"
-        _thumbnail(RenderedImage(xyz=img, srgb=None, white_xyz=white, meta={}), path, longest=31)
+        rendered = RenderedImage(xyz=img, srgb=xyz_to_srgb(img, white), white_xyz=white, meta={})
+        _thumbnail(rendered, path, longest=31)
         with Image.open(path) as im:
             got = np.asarray(im, dtype=np.float64)
         assert got.shape == (20, 31, 3)
         small = img.reshape(20, 3, 31, 3, 3).mean(axis=(1, 3))
         np.testing.assert_allclose(got, np.round(255 * xyz_to_srgb(small, white)), atol=0.5)
-        full = xyz_to_srgb(img, white).reshape(20, 3, 31, 3, 3).mean(axis=(1, 3))
+        full = rendered.srgb.reshape(20, 3, 31, 3, 3).mean(axis=(1, 3))
         assert np.allclose(got, np.round(255 * full), atol=0.5) == uniform
+        if uniform:
+            np.testing.assert_allclose(got[0, 0], 255.0, atol=1.0)  # the scene white shows white

@@ -190,22 +190,30 @@ def _readout_applies(cfa, cond) -> bool:
     return readout_applies(get_cfa(cfa).pattern, getattr(cond, "readout", "full"))
 
 
-def _thumbnail(rendered, path: Path, longest: int = 240) -> None:
-    """The report's preview of an image: its XYZ averaged over step x step
-    blocks (linear light, as a camera's downscaler averages), then the
-    display sRGB encoding of the small image (``xyz_to_srgb``, no
-    adaptation), written as an 8-bit PNG.  Encoding after the averaging
-    costs 1/step^2 of encoding the whole image first, which took most of
-    the time of a camera output's details (benchmarks/profile_study.py)."""
-    from ..colorimetry import xyz_to_srgb
-    from ..io import write_image
-
-    xyz = np.asarray(rendered.xyz, dtype=np.float64)
-    h, w = xyz.shape[:2]
+def _block_mean(image: np.ndarray, longest: int = 240) -> np.ndarray:
+    """(H, W[, C]) averaged over step x step blocks, step the smallest
+    integer that brings the longer side to at most ``longest`` (the partial
+    blocks at the right and bottom dropped): the report's reduced maps and
+    thumbnails."""
+    h, w = image.shape[:2]
     step = max(1, int(np.ceil(max(h, w) / longest)))
     hh, ww = (h // step) * step, (w // step) * step
-    small = xyz[:hh, :ww].reshape(hh // step, step, ww // step, step, 3).mean(axis=(1, 3))
-    write_image(path, xyz_to_srgb(small, rendered.white_xyz))
+    return image[:hh, :ww].reshape(hh // step, step, ww // step, step, *image.shape[2:]).mean(axis=(1, 3))
+
+
+def _thumbnail(rendered, path: Path, longest: int = 240) -> None:
+    """The report's preview of an image: its XYZ averaged over blocks
+    (:func:`_block_mean`: linear light, as a camera's downscaler averages),
+    then the image's own display encoding (``cfa_mitsuba.isp.xyz_to_srgb``,
+    the scene white adapted to sRGB's white, as ``RenderedImage.srgb``),
+    written as an 8-bit PNG.  Encoding after the averaging costs 1/step^2 of
+    encoding the whole image first, which took most of the time of a camera
+    output's details (benchmarks/profile_study.py)."""
+    from ..io import write_image
+    from ..isp import xyz_to_srgb
+
+    write_image(path, xyz_to_srgb(_block_mean(np.asarray(rendered.xyz, dtype=np.float64), longest),
+                                  rendered.white_xyz))
 
 
 def _save_details(folder: Path, stem: str, results: dict, rendered, extra: dict) -> None:
@@ -217,10 +225,7 @@ def _save_details(folder: Path, stem: str, results: dict, rendered, extra: dict)
     for name, r in results.items():
         payload[name] = r.to_dict() if hasattr(r, "to_dict") else {"metric": name, "value": float(r)}
         if name == "scielab" and "map" in getattr(r, "details", {}):
-            dmap = np.asarray(r.details["map"], dtype=np.float64)
-            step = max(1, int(np.ceil(max(dmap.shape) / 240)))
-            hh, ww = (dmap.shape[0] // step) * step, (dmap.shape[1] // step) * step
-            small = dmap[:hh, :ww].reshape(hh // step, step, ww // step, step).mean(axis=(1, 3))
+            small = _block_mean(np.asarray(r.details["map"], dtype=np.float64))
             with atomic_output(folder / f"{stem}.scielab.npy") as tmp:
                 with open(tmp, "wb") as fh:
                     np.save(fh, small.astype(np.float32))
