@@ -34,6 +34,19 @@ import pandas as pd
 KEYS = ["scene", "cfa", "demosaic", "luminance", "metric"]
 
 
+def _read(ap, path: str, columns: set, what: str) -> pd.DataFrame:
+    """The CSV at ``path`` ('#' lines skipped), or one line and exit 2 when
+    it is missing, unreadable, not a CSV or lacks ``columns`` (then not ``what``)."""
+    try:
+        table = pd.read_csv(path, comment="#")
+    except (OSError, ValueError) as exc:
+        ap.exit(2, f"compare_values: cannot read {path}: {getattr(exc, 'strerror', None) or exc}\n")
+    if not columns <= set(table.columns):
+        ap.exit(2, f"compare_values: {path} has no {', '.join(map(repr, sorted(columns)))} columns: "
+                   f"not {what}\n")
+    return table
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("new")
@@ -44,27 +57,13 @@ def main(argv=None) -> int:
                     help="a table of value and tolerance per row (tests/data/quick_expected.csv): compare each "
                          "metric's largest relative difference with the smallest relative tolerance stored for it")
     args = ap.parse_args(argv)
-    tables = []
-    for path in (args.new, args.old):
-        try:
-            tables.append(pd.read_csv(path, comment="#"))
-        except (OSError, ValueError) as exc:  # missing, unreadable or not a CSV: one line, exit 2
-            ap.exit(2, f"compare_values: cannot read {path}: {getattr(exc, 'strerror', None) or exc}\n")
-    new, old = tables
-    rel_tol = {}
+    new, old = (_read(ap, path, {"metric", "value"}, "a metrics table") for path in (args.new, args.old))
+    rel_tol, abs_tol = {}, {}
     if args.tolerances:
-        try:
-            tol = pd.read_csv(args.tolerances, comment="#")
-        except (OSError, ValueError) as exc:
-            ap.exit(2, f"compare_values: cannot read {args.tolerances}: {getattr(exc, 'strerror', None) or exc}\n")
-        if not {"metric", "value", "tolerance"} <= set(tol.columns):
-            ap.exit(2, f"compare_values: {args.tolerances} has no 'metric', 'value' and 'tolerance' columns\n")
+        tol = _read(ap, args.tolerances, {"metric", "value", "tolerance"}, "a tolerance table")
         abs_tol = tol.groupby("metric")["tolerance"].min().to_dict()
         tol = tol[tol["value"] != 0]
         rel_tol = (tol["tolerance"] / tol["value"].abs()).groupby(tol["metric"]).min().to_dict()
-    missing = [p for p, t in zip((args.new, args.old), tables) if not {"metric", "value"} <= set(t.columns)]
-    if missing:
-        ap.exit(2, f"compare_values: {missing[0]} has no 'metric' and 'value' columns: not a metrics table\n")
     keys = list(KEYS)
     if args.expected:
         new = new[new["realisation"] == 0] if "realisation" in new.columns else new
@@ -95,23 +94,23 @@ def main(argv=None) -> int:
         if args.tolerances:
             line += f"{rel_tol.get(metric, float('nan')):>13.3g}{abs_tol.get(metric, float('nan')):>13.3g}"
         print(line + f"   {worst['scene']} {worst['cfa']} {worst['demosaic']} L{worst['luminance']:g}")
-    if args.json:
-        def numbers(g, metric=None):
-            out = {"rows": int(len(g)), "identical": int((g["value_new"] == g["value_old"]).sum()),
-                   "max_abs": float(g["abs"].max()), "max_rel": float(g["rel"].fillna(0.0).max())}
-            if args.tolerances and metric is not None:
-                t, a = rel_tol.get(metric), abs_tol.get(metric)
-                out["min_rel_tolerance"] = None if t is None else float(t)
-                out["min_abs_tolerance"] = None if a is None else float(a)
-                out["within_rel"] = t is not None and out["max_rel"] <= t
-                out["within_abs"] = a is not None and out["max_abs"] <= a
-                out["within_tolerance"] = out["within_rel"] or out["within_abs"]
-            return out
+    def numbers(g, metric=None):
+        out = {"rows": int(len(g)), "identical": int((g["value_new"] == g["value_old"]).sum()),
+               "max_abs": float(g["abs"].max()), "max_rel": float(g["rel"].fillna(0.0).max())}
+        if args.tolerances and metric is not None:
+            t, a = rel_tol.get(metric), abs_tol.get(metric)
+            out["min_rel_tolerance"] = None if t is None else float(t)
+            out["min_abs_tolerance"] = None if a is None else float(a)
+            out["within_rel"] = t is not None and out["max_rel"] <= t
+            out["within_abs"] = a is not None and out["max_abs"] <= a
+            out["within_tolerance"] = out["within_rel"] or out["within_abs"]
+        return out
 
-        per_metric = {m: numbers(g, m) for m, g in both.groupby("metric")}
-        whole = numbers(both)
-        if args.tolerances:
-            whole["within_tolerance"] = all(v["within_tolerance"] for v in per_metric.values())
+    per_metric = {m: numbers(g, m) for m, g in both.groupby("metric")}
+    whole = numbers(both)
+    if args.tolerances:
+        whole["within_tolerance"] = all(v["within_tolerance"] for v in per_metric.values())
+    if args.json:
         with open(args.json, "w") as f:
             json.dump({"new": args.new, "old": args.old, "all": whole,
                        "per_metric": per_metric,
@@ -123,8 +122,7 @@ def main(argv=None) -> int:
         outside = int((both["abs"] > both["tolerance"]).sum())
         print(f"outside the stored tolerance: {outside}")
     if args.tolerances:
-        worse = [m for m, g in both.groupby("metric") if not (g["rel"].fillna(0.0).max() <= rel_tol.get(m, -1.0)
-                                                              or g["abs"].max() <= abs_tol.get(m, -1.0))]
+        worse = [m for m, v in per_metric.items() if not v["within_tolerance"]]
         print("every metric within its smallest stored relative or absolute tolerance" if not worse
               else f"beyond (or without) a stored tolerance: {', '.join(worse)}")
     return 0
