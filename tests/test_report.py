@@ -282,3 +282,83 @@ def test_png_bytes_are_images(built_report):
         else:
             with Image.open(io.BytesIO(data)) as im:
                 assert im.format.lower() in mime and im.width > 100
+
+
+# -- figures drawn in worker processes --------------------------------------------------------------
+
+def _files(folder: Path) -> dict:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+def test_figures_drawn_in_two_processes_are_the_same_bytes(built_report, report_study, tmp_path):
+    """workers=2 spawns processes that each load the results and draw the
+    figure functions as they come free: the figures and the page are the
+    bytes of the one-process build (the page's only other input, the
+    folder's name, is the same here)."""
+    from cfa_mitsuba.report import build_report
+
+    out = tmp_path / "results"  # the same folder name as built_report's: the page's footer names it
+    shutil.copytree(report_study, out)
+    lines = []
+    build_report(out, formats=("png", "svg"), thumbnails=True, workers=2, log=lines.append)
+    assert any("(2 process(es))" in line for line in lines)
+    assert not any("failed" in line for line in lines)
+    mine, theirs = _files(out / "figures"), _files(built_report / "figures")
+    assert mine.keys() == theirs.keys() and len(mine) > 20
+    assert [k for k in mine if mine[k] != theirs[k]] == []
+    assert (out / "report.html").read_bytes() == (built_report / "report.html").read_bytes()
+
+
+def test_a_failed_worker_pool_still_gives_the_whole_report(built_report, report_study, tmp_path, monkeypatch):
+    """Processes that cannot start (or die) cost time, never figures: the
+    parent draws what they did not return."""
+    import concurrent.futures
+
+    from cfa_mitsuba.report import build_report
+
+    class NoProcesses:
+        def __init__(self, *args, **kwargs):
+            raise OSError("no processes for you")
+
+    monkeypatch.setattr(concurrent.futures, "ProcessPoolExecutor", NoProcesses)
+    out = tmp_path / "results"
+    shutil.copytree(report_study, out)
+    lines = []
+    build_report(out, formats=("png", "svg"), thumbnails=True, workers=2, log=lines.append)
+    assert any("report worker processes failed (OSError: no processes for you)" in line for line in lines)
+    assert _files(out / "figures") == _files(built_report / "figures")
+
+
+def test_report_workers_are_checked(report_study, tmp_path, capsys):
+    from cfa_mitsuba.cli import main
+    from cfa_mitsuba.errors import CfaMitsubaError
+    from cfa_mitsuba.report import build_report, report_workers
+
+    for bad in (0, -1, 1.5, "2", True):
+        with pytest.raises(CfaMitsubaError, match="report workers must be a whole number"):
+            build_report(report_study, workers=bad)
+    rc = main(["report", str(report_study), "--workers", "0"])
+    assert_one_line_error(subprocess.CompletedProcess([], rc, "", capsys.readouterr().err), "report workers")
+    assert not (report_study / "report.html").exists()
+    assert report_workers(None) == min(2, os.cpu_count() or 1) and report_workers(10 ** 6) == (os.cpu_count() or 1)
+
+
+def test_svg_ids_do_not_depend_on_numpy_print_mode():
+    """matplotlib hashes the repr of a clip rectangle's bounds into its SVG
+    id; colour-science's import puts numpy in its 1.13 print mode, which
+    writes numpy floats otherwise.  The same figure gives the same SVG in
+    either mode (so a figure drawn in a worker that has not imported
+    colour-science matches one drawn after it)."""
+    import matplotlib
+
+    from cfa_mitsuba.report.figure import RC, figure_bytes, panel_grid
+
+    with matplotlib.rc_context(RC):  # the report's fixed SVG hash salt
+        fig, axes = panel_grid(1, 2, 1.7, 1.3)
+        for ax in axes:
+            ax.plot([0.1, 0.7, 0.3], [1.0, 2.5, 2.0])
+        with np.printoptions(legacy=False):
+            modern = figure_bytes(fig, "svg")
+        with np.printoptions(legacy="1.13"):
+            legacy = figure_bytes(fig, "svg")
+    assert b"clip-path" in modern and modern == legacy

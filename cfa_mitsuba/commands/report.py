@@ -25,17 +25,20 @@ def add_arguments(parser) -> None:
                              "or 'none' (default: png,svg; the page embeds its figures either way)")
     parser.add_argument("--no-thumbnails", dest="thumbnails", action="store_false",
                         help="leave out the sheets of camera outputs (the largest part of the page)")
+    parser.add_argument("--workers", type=int, default=None, metavar="N",
+                        help="processes that draw and encode the figures (default: 2, at most the cores)")
     parser.add_argument("--verbose", action="store_true", help="print the time each figure takes (stderr)")
 
 
 def run(args) -> int:
     import sys
 
-    from ..report import build_report
+    from ..report import build_report, report_workers
 
     text = str(args.formats).strip().lower()
     formats = () if text in ("", "none") else tuple(f.strip() for f in text.split(",") if f.strip())
     log = (lambda msg: print(msg, file=sys.stderr)) if args.verbose else None
-    path = build_report(args.results_dir, formats=formats, thumbnails=args.thumbnails, log=log)
+    path = build_report(args.results_dir, formats=formats, thumbnails=args.thumbnails, log=log,
+                        workers=args.workers if args.workers is not None else report_workers(None))
     print(path)
     return 0

@@ -40,7 +40,7 @@ def run(args) -> int:
     import time
     from pathlib import Path
 
-    from ..report import build_report
+    from ..report import build_report, report_workers
     from ..study.config import load_config
     from ..study.runner import run_study, timing_summary, write_timing
 
@@ -54,8 +54,10 @@ def run(args) -> int:
     report = not args.no_report and config.output.get("report", True)
     if report:
         t = time.perf_counter()
+        # the figures drawn in as many processes as the study's local workers (at most the cores)
         build_report(result.out_dir, formats=config.output.get("figures", ("png", "svg")),
-                     thumbnails=config.output.get("thumbnails", True), timing=result.timing)
+                     thumbnails=config.output.get("thumbnails", True), timing=result.timing,
+                     workers=report_workers(args.workers or config.workers))
         phases = result.timing["phases"]
         phases["report_s"] = time.perf_counter() - t
         phases["total_s"] += phases["report_s"]

@@ -15,7 +15,7 @@ thumbnails), :mod:`.tables` (Tables 1-3), :mod:`.page` (the HTML),
 convergence``).
 """
 
-from .build import FIGURE_FORMATS, build_report  # noqa: F401
+from .build import FIGURE_FORMATS, build_report, report_workers  # noqa: F401
 from .results import Results, load_results  # noqa: F401
 
-__all__ = ["build_report", "load_results", "Results", "FIGURE_FORMATS"]
+__all__ = ["build_report", "report_workers", "load_results", "Results", "FIGURE_FORMATS"]

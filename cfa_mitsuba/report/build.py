@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["build_report", "FIGURE_FORMATS"]
+__all__ = ["build_report", "report_workers", "FIGURE_FORMATS"]
 
 import time
 import warnings
@@ -59,25 +59,118 @@ def _figure_functions(res: Results, thumbnails: bool):
             yield sheet
 
 
-def _draw(res: Results, thumbnails: bool, log) -> tuple[list, list]:
-    figures, absents = [], []
-    for fn in _figure_functions(res, thumbnails):
-        t = time.perf_counter()
-        try:
-            out = fn(res)
-        except Exception as exc:  # a bug must not lose a finished study's report
-            name = getattr(fn, "__name__", "figure")
-            msg = f"{name} failed: {type(exc).__name__}: {exc}"
-            warnings.warn(f"cfa-mitsuba report: {msg}", RuntimeWarning, stacklevel=2)
-            absents.append(Absent(_section_of(name), name, f"could not be drawn ({msg}); this is a bug, "
-                                  "please report it with the results directory"))
-            continue
-        for item in out if isinstance(out, list) else [out]:
-            (figures if isinstance(item, ReportFigure) else absents).append(item)
-        log(f"  {getattr(fn, '__name__', 'figure')}: {time.perf_counter() - t:.2f} s")
+def _draw_one(res: Results, fn, formats) -> tuple[list, list, dict, dict, list]:
+    """Draw one figure function's figures and encode them: (figures, absents,
+    files {key: {fmt: bytes}}, embeds {key: (bytes, mime)}, log lines).  The
+    figures come back released (:meth:`ReportFigure.release`): their bytes
+    are made, so the matplotlib objects are freed, and a worker process can
+    send them back."""
+    name = getattr(fn, "__name__", "figure")
+    t = time.perf_counter()
+    figures, absents, files, embeds = [], [], {}, {}
+    try:
+        out = fn(res)
+    except Exception as exc:  # a bug must not lose a finished study's report
+        msg = f"{name} failed: {type(exc).__name__}: {exc}"
+        warnings.warn(f"cfa-mitsuba report: {msg}", RuntimeWarning, stacklevel=2)
+        absents.append(Absent(_section_of(name), name, f"could not be drawn ({msg}); this is a bug, "
+                              "please report it with the results directory"))
+        return figures, absents, files, embeds, []
+    drawn = time.perf_counter() - t
+    for item in out if isinstance(out, list) else [out]:
+        if isinstance(item, ReportFigure):
+            files[item.key], embeds[item.key] = _encode(item, formats)
+            item.release()
+            figures.append(item)
+        else:
+            absents.append(item)
+    return figures, absents, files, embeds, [f"  {name}: {drawn:.2f} s, encoded in {time.perf_counter() - t - drawn:.2f} s"]
+
+
+#: the results a report worker process loaded (one per process: :func:`_worker_draw` is called once per figure)
+_WORKER_RESULTS: dict = {}
+
+
+def _worker_load(out_dir: str, timing: dict | None) -> None:
+    _WORKER_RESULTS["res"] = _load(out_dir, timing)
+
+
+def _worker_draw(index: int, thumbnails: bool, formats) -> tuple:
+    import matplotlib
+
+    res = _WORKER_RESULTS["res"]
+    fn = list(_figure_functions(res, thumbnails))[index]
+    with matplotlib.rc_context(RC):
+        return _draw_one(res, fn, formats)
+
+
+def _draw(res: Results, thumbnails: bool, formats, workers: int, timing: dict | None, log) -> tuple:
+    """(figures, absents, files, embeds) of every figure function, in their
+    order; drawn and encoded in ``workers`` processes when more than one
+    (each loads the results once and takes the next figure function as it
+    comes free; drawing and encoding are single-threaded matplotlib and
+    Pillow work, and they are most of a large report's time)."""
+    fns = list(_figure_functions(res, thumbnails))
+    parts: dict = {}
+    if workers > 1 and len(fns) > 1:
+        parts = _draw_in_processes(res, len(fns), thumbnails, formats, min(workers, len(fns)), timing, log)
+    for i, fn in enumerate(fns):  # sequentially: everything, or what the processes did not return
+        if i not in parts:
+            parts[i] = _draw_one(res, fn, formats)
+    figures, absents, files, embeds = [], [], {}, {}
+    for i in range(len(fns)):
+        f, a, fl, e, lines = parts[i]
+        figures += f
+        absents += a
+        files.update(fl)
+        embeds.update(e)
+        for line in lines:
+            log(line)
     if not thumbnails:
         absents.append(Absent("outputs", "Camera outputs", "thumbnails are turned off (output.thumbnails = false)"))
-    return figures, absents
+    return figures, absents, files, embeds
+
+
+def _draw_in_processes(res: Results, n: int, thumbnails: bool, formats, workers: int, timing, log) -> dict:
+    """{figure function index: :func:`_draw_one`'s result} from ``workers``
+    spawned processes; whatever they could not return (a process that would
+    not start or died) is left out, and :func:`_draw` draws it here."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    parts: dict = {}
+    try:
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
+                                 initializer=_worker_load, initargs=(str(res.root), timing)) as pool:
+            futures = {i: pool.submit(_worker_draw, i, thumbnails, formats) for i in range(n)}
+            for i, fut in futures.items():
+                parts[i] = fut.result()
+    except Exception as exc:  # noqa: BLE001 - a lost process costs time, never the report
+        log(f"  report worker processes failed ({type(exc).__name__}: {exc}); drawing the rest here")
+    return parts
+
+
+def _load(out_dir, timing: dict | None) -> Results:
+    """The results of ``out_dir``, with ``timing`` in place of timing.json's when given."""
+    res = load_results(out_dir)
+    if timing is not None:
+        res.timing = dict(timing)
+        res.notes = [n for n in res.notes if not n.startswith("timing.json")]
+    return res
+
+
+def report_workers(workers: int | None) -> int:
+    """The processes a report is drawn in: ``workers`` (default 2), at most
+    the cores of this machine, at least 1."""
+    import os
+
+    return max(1, min(int(workers or 2), os.cpu_count() or 1))
+
+
+def _check_workers(workers) -> int:
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise CfaMitsubaError(f"report workers must be a whole number >= 1, got {workers!r}")
+    return workers
 
 
 def _section_of(name: str) -> str:
@@ -200,7 +293,7 @@ def _facts(res: Results) -> dict:
 
 
 def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, timing: dict | None = None,
-                 log=None) -> Path:
+                 log=None, workers: int = 1) -> Path:
     """Build ``out_dir/report.html`` and ``out_dir/figures/*`` from a study's
     results directory (see :mod:`cfa_mitsuba.report`).
 
@@ -216,6 +309,9 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
     timing : the study's timing (as timing.json holds it), for a runner that
         builds the report before it writes timing.json; default: the file.
     log : callable taking one line (default: silent); gets per-figure times.
+    workers : processes that draw and encode the figures (default 1: this
+        one; more: spawned processes, each loading the results once; the
+        files and the page are the same bytes either way).
 
     Returns
     -------
@@ -236,23 +332,14 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
     if bad:
         raise CfaMitsubaError(f"unknown figure format(s) {', '.join(map(repr, bad))} "
                               f"(known: {', '.join(FIGURE_FORMATS)})")
+    workers = _check_workers(workers)
     t0 = time.perf_counter()
-    res = load_results(out_dir)
-    if timing is not None:
-        res.timing = dict(timing)
-        res.notes = [n for n in res.notes if not n.startswith("timing.json")]
+    res = _load(out_dir, timing)
     root = res.root
     fig_dir = root / "figures"
     with matplotlib.rc_context(RC):
-        figures, absents = _draw(res, thumbnails, log)
-        embeds = {}
-        files = {}
-        t = time.perf_counter()
-        for f in figures:
-            files[f.key], embeds[f.key] = _encode(f, formats)
-            if f.figure is not None:
-                f.figure.clear()
-        log(f"  encoding: {time.perf_counter() - t:.2f} s")
+        figures, absents, files, embeds = _draw(res, thumbnails, formats, workers, timing, log)
+        log(f"  figures drawn and encoded in {time.perf_counter() - t0:.2f} s ({workers} process(es))")
     from . import page, tables
     from .low_light import low_light_tables
 

@@ -54,6 +54,28 @@ class ReportFigure:
     raster: bool = False
     group: str | None = None
     image: object = None         # a Pillow image instead of a matplotlib figure (image sheets; PNG only)
+    inches: tuple | None = None  # the matplotlib figure's size (width, height), kept by release()
+    pixels: tuple | None = None  # the image's size (width, height), kept by release()
+
+    def release(self) -> None:
+        """Keep the sizes the page needs and drop the matplotlib figure and
+        the image (once its bytes are encoded: they hold most of a report's
+        memory, and a worker process sends the figure back without them)."""
+        if self.figure is not None:
+            self.inches = tuple(float(v) for v in self.figure.get_size_inches())
+            self.figure.clear()
+            self.figure = None
+        if self.image is not None:
+            self.pixels = (int(self.image.width), int(self.image.height))
+            self.image = None
+
+    def size_inches(self) -> tuple | None:
+        """(width, height) of the matplotlib figure in inches (None for an image)."""
+        return tuple(self.figure.get_size_inches()) if self.figure is not None else self.inches
+
+    def size_pixels(self) -> tuple | None:
+        """(width, height) of the image in pixels (None for a matplotlib figure)."""
+        return (self.image.width, self.image.height) if self.image is not None else self.pixels
 
 
 @dataclass
@@ -128,7 +150,13 @@ def figure_bytes(fig, fmt: str, dpi: float | None = None) -> bytes:
     kwargs = {"format": fmt, "metadata": _metadata(fmt)}
     if dpi is not None:
         kwargs["dpi"] = dpi
-    fig.savefig(buf, **kwargs)
+    import numpy as np
+
+    # matplotlib names an SVG clip rectangle by a hash of its bounds' repr, numpy floats among them;
+    # importing colour-science switches numpy to its 1.13 print mode, which writes them otherwise, so
+    # without this the ids (not the drawing) would depend on what the process had imported before
+    with np.printoptions(legacy=False):
+        fig.savefig(buf, **kwargs)
     return buf.getvalue()
 
 

@@ -126,11 +126,12 @@ def _img(fig, data: bytes, mime: str) -> str:
     b64 = base64.b64encode(data).decode("ascii")
     klass = ' class="raster"' if fig.raster else ""
     size = ""
-    if fig.figure is not None and mime == "image/svg+xml":
-        w_in, h_in = fig.figure.get_size_inches()
+    inches, pixels = fig.size_inches(), fig.size_pixels()
+    if inches is not None and mime == "image/svg+xml":
+        w_in, h_in = inches
         size = f' width="{round(w_in * _SVG_PX_PER_INCH)}" height="{round(h_in * _SVG_PX_PER_INCH)}"'
-    elif fig.image is not None:
-        size = f' width="{fig.image.width}" height="{fig.image.height}"'
+    elif pixels is not None:
+        size = f' width="{pixels[0]}" height="{pixels[1]}"'
     return (f'<img{klass} src="data:{mime};base64,{b64}" alt="{_e(fig.title)}"{size} '
             f'data-figure="{_e(fig.key)}">')
 
