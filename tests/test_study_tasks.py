@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pytest
 
 import cfa_mitsuba as cm
 from cfa_mitsuba import spectra
@@ -142,3 +143,20 @@ def test_thumbnail_is_the_display_encoding_of_the_block_mean_in_linear_light(tmp
         assert np.allclose(got, np.round(255 * full), atol=0.5) == uniform
         if uniform:
             np.testing.assert_allclose(got[0, 0], 255.0, atol=1.0)  # the scene white shows white
+
+
+@pytest.mark.parametrize("shape", [(636, 720, 3), (636, 720), (481, 250), (7, 5, 3), (250, 481, 2)])
+def test_block_mean_is_the_mean_of_each_whole_block(shape):
+    """The report's reduced maps and thumbnails: the mean of each step x step
+    block (step brings the longer side to at most 240 px; partial blocks at
+    the right and bottom dropped), against numpy's mean over the block axes."""
+    from cfa_mitsuba.study.tasks import _block_mean
+
+    a = np.random.default_rng(sum(shape)).random(shape)
+    h, w = shape[:2]
+    step = max(1, -(-max(h, w) // 240))
+    hh, ww = h // step * step, w // step * step
+    want = a[:hh, :ww].reshape(hh // step, step, ww // step, step, *shape[2:]).mean(axis=(1, 3))
+    got = _block_mean(a)
+    assert got.shape == want.shape == (h // step, w // step, *shape[2:])
+    np.testing.assert_allclose(got, want, rtol=1e-14, atol=0)
