@@ -145,6 +145,32 @@ def test_mean_match_scales_to_the_interior_mean():
         cm.mean_match(np.zeros_like(XYZ), XYZ)
 
 
+def test_mean_match_with_the_reference_mean_given_is_identical_and_names_each_image():
+    """A study gives the ideal's interior mean once (reference_interior_mean):
+    the same scale and image, bit for bit; a bad input is named as what it is."""
+    from cfa_mitsuba.metrics import reference_interior_mean
+
+    test = XYZ * np.random.default_rng(3).uniform(0.3, 0.7, XYZ.shape)
+    for border in (0, 5, 10):
+        want, k = cm.mean_match(test, XYZ, border=border, return_scale=True)
+        got, k2 = cm.mean_match(test, XYZ, border=border, return_scale=True,
+                                reference_mean=reference_interior_mean(XYZ, border=border))
+        assert k2 == k and np.array_equal(got, want)
+    bad = test.copy()
+    bad[3, 3, 1] = np.nan
+    for kw in ({}, {"reference_mean": reference_interior_mean(XYZ)}):
+        with pytest.raises(CfaMitsubaError, match="^test image"):
+            cm.mean_match(bad, XYZ, **kw)
+        with pytest.raises(CfaMitsubaError, match="differ in shape"):
+            cm.mean_match(test[:-1], XYZ, **kw)
+    with pytest.raises(CfaMitsubaError, match="^reference image"):
+        cm.mean_match(test, bad)
+    with pytest.raises(CfaMitsubaError, match="^reference image"):
+        reference_interior_mean(bad)
+    with pytest.raises(CfaMitsubaError, match="reference image's interior mean"):
+        cm.mean_match(test, XYZ, reference_mean=0.0)
+
+
 # -- S-CIELAB details ---------------------------------------------------------------------------
 
 def test_scielab_filters_follow_the_readme_construction():

@@ -38,7 +38,7 @@ from .haarpsi import haarpsi
 from .mdsi import mdsi
 from .moire import moire
 from .mtf import find_edge_roi, mtf
-from .preprocess import mean_match
+from .preprocess import mean_match, reference_interior_mean
 from .inputs import MetricInputs
 from .record import NATURAL, MetricRecord
 from .registry import (METRICS, evaluate, evaluate_many, get_metric, list_metrics, metric_names, metric_parameters,
@@ -52,7 +52,7 @@ __all__ = [
     "list_metrics", "metric_names", "scored_metrics", "metrics_for_scene", "record_json", "evaluate",
     "evaluate_many", "result_rows", "study_options",
     "delta_e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi",
-    "mean_match", "find_edge_roi", "scielab_filters", "scene_geometry", "colourspace",
+    "mean_match", "reference_interior_mean", "find_edge_roi", "scielab_filters", "scene_geometry", "colourspace",
 ]
 
 # Every registered metric's function is reachable as cm.metrics.<function>,

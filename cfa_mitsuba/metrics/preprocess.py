@@ -2,15 +2,15 @@
 
 from __future__ import annotations
 
-__all__ = ["mean_match"]
+__all__ = ["mean_match", "reference_interior_mean"]
 
 import numpy as np
 
 from ..errors import require
-from ._common import as_pair
+from ._common import as_image, as_pair
 
 
-def mean_match(test, reference, *, border: int = 10, return_scale: bool = False):
+def mean_match(test, reference, *, border: int = 10, return_scale: bool = False, reference_mean: float | None = None):
     """Scale ``test`` so that its mean over the interior equals ``reference``'s.
 
     ISETCam's recipe before its full-reference metrics (``cameraFullReference``,
@@ -24,6 +24,11 @@ def mean_match(test, reference, *, border: int = 10, return_scale: bool = False)
     test, reference : arrays of the same shape ((H, W) or (H, W, C)).
     border : pixels left out of the means on each side (default 10).
     return_scale : also return the factor.
+    reference_mean : the reference's interior mean with this ``border``, when
+        already known (a study compares one ideal image with every camera
+        output): ``reference`` is then not checked or averaged again (a
+        speed-up only: :func:`reference_interior_mean` gives it, and the
+        result is identical).
 
     Returns
     -------
@@ -37,14 +42,30 @@ def mean_match(test, reference, *, border: int = 10, return_scale: bool = False)
     >>> float(mean_match(ref * 0.5, ref, border=2).mean())
     1.0
     """
-    t, r = as_pair(test, reference, channels=(1, 2, 3, 4), allow_gray=True)
+    if reference_mean is None:
+        r, t = as_pair(reference, test, channels=(1, 2, 3, 4), allow_gray=True)
+    else:
+        t = as_image(test, "test image", channels=(1, 2, 3, 4), allow_gray=True)
+        shape = np.shape(reference)
+        require(shape == t.shape, f"reference and test images differ in shape: {shape} vs {t.shape}")
     b = int(border)
     h, w = t.shape[:2]
     require(b >= 0 and h > 2 * b and w > 2 * b, f"border {b} px leaves nothing of the {h} x {w} image")
-    mt, mr = t[b:h - b, b:w - b].mean(), r[b:h - b, b:w - b].mean()
+    mt = t[b:h - b, b:w - b].mean()
+    mr = r[b:h - b, b:w - b].mean() if reference_mean is None else reference_mean
     require(mt > 0, f"cannot mean-match: the test image's interior mean is {mt:g} (need > 0)")
     # a black reference would scale the test image to exactly 0, a perfect score for any camera
     require(mr > 0, f"cannot mean-match: the reference image's interior mean is {mr:g} (need > 0)")
     scale = float(mr / mt)
     out = t * scale
     return (out, scale) if return_scale else out
+
+
+def reference_interior_mean(reference, *, border: int = 10):
+    """The interior mean :func:`mean_match` computes of ``reference`` (the
+    same check and the same expression), for its ``reference_mean``."""
+    r = as_image(reference, "reference image", channels=(1, 2, 3, 4), allow_gray=True)
+    b = int(border)
+    h, w = r.shape[:2]
+    require(b >= 0 and h > 2 * b and w > 2 * b, f"border {b} px leaves nothing of the {h} x {w} image")
+    return r[b:h - b, b:w - b].mean()

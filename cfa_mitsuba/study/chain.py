@@ -293,7 +293,11 @@ class CameraChain:
 
         cam, scale = processed.xyz, 1.0
         if self.settings.mean_match:
-            cam, scale = m.mean_match(cam, ideal.xyz, return_scale=True)
+            # the ideal's interior mean once per ideal, as its other metric inputs (inputs())
+            shared = ideal.__dict__.setdefault("_metric_shared", {})
+            if "interior_mean" not in shared:
+                shared["interior_mean"] = m.reference_interior_mean(ideal.xyz)
+            cam, scale = m.mean_match(cam, ideal.xyz, return_scale=True, reference_mean=shared["interior_mean"])
         failures: list = []
         results = self._timed("metrics_s", m.evaluate_many, metric_names, self.inputs(ideal, cam, cond), failures,
                               options=self.settings.metric_options_for(cond))
