@@ -278,3 +278,28 @@ def test_decisions_name_exactly_the_cfas_whose_rank_interval_contains_one(quick)
     ideal = pol[(pol["scope"] == "rank") & (pol["policy"] == "ideal")].set_index("cfa")
     np.testing.assert_allclose(ideal.loc[s["cfa"], "total_score"].to_numpy(), s["total_score"].to_numpy(), rtol=1e-9)
     assert (ideal.loc[s["cfa"], "total_rank"].to_numpy() == s["total_rank"].to_numpy()).all()
+
+
+def test_profile_study_after_profiles_the_tables_and_report_on_a_copy(quick, tmp_path, capsys):
+    """benchmarks/profile_study.py --after: the work after the evaluation of a
+    finished study, by stage and by function, on a copy (the results are not
+    touched); a folder that is not a finished run of the config is refused."""
+    import importlib.util
+    import shutil
+
+    spec = importlib.util.spec_from_file_location("profile_study", REPO / "benchmarks" / "profile_study.py")
+    prof = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(prof)
+    out, _, _ = quick
+    before = {p: p.stat().st_mtime_ns for p in (out / "report.html", out / "metrics.csv", out / "scores.csv")}
+    assert prof.main(["--after", str(out), "--top", "5"]) == 0
+    text = capsys.readouterr().out
+    assert re.search(r"tables \(the study resumed: every task reused\)\s+[\d.]+", text)
+    assert re.search(r"report \(one process\)\s+[\d.]+", text) and "build_report" in text
+    assert {p: p.stat().st_mtime_ns for p in before} == before
+    assert prof.main(["--after", str(tmp_path)]) == 2  # no .work/
+    part = tmp_path / "part"
+    shutil.copytree(out / ".work", part / ".work")
+    next(iter((part / ".work").glob("*.json"))).unlink()
+    assert prof.main(["--after", str(part)]) == 2
+    assert "1 task(s) of quick.toml are not finished" in capsys.readouterr().err
