@@ -87,17 +87,22 @@ def _draw_one(res: Results, fn, formats) -> tuple[list, list, dict, dict, list]:
     return figures, absents, files, embeds, [f"  {name}: {drawn:.2f} s, encoded in {time.perf_counter() - t - drawn:.2f} s"]
 
 
-#: the results a report worker process loaded (one per process: :func:`_worker_draw` is called once per figure)
+#: the results a report worker process loaded, with the key they were loaded for
 _WORKER_RESULTS: dict = {}
 
 
-def _worker_load(out_dir: str, timing: dict | None) -> None:
-    _WORKER_RESULTS["res"] = _load(out_dir, timing)
+def _worker_draw(job: tuple) -> tuple:
+    """:func:`_draw_one` of one figure function in a report worker process.
+    ``job``: (index in :func:`_figure_functions`, results directory, timing,
+    thumbnails, formats); the results are loaded once per process."""
+    import json
 
-
-def _worker_draw(index: int, thumbnails: bool, formats) -> tuple:
     import matplotlib
 
+    index, out_dir, timing, thumbnails, formats = job
+    key = (out_dir, json.dumps(timing, sort_keys=True, default=str))
+    if _WORKER_RESULTS.get("key") != key:
+        _WORKER_RESULTS.update(key=key, res=_load(out_dir, timing))
     res = _WORKER_RESULTS["res"]
     fn = list(_figure_functions(res, thumbnails))[index]
     with matplotlib.rc_context(RC):
@@ -133,18 +138,18 @@ def _draw(res: Results, thumbnails: bool, formats, workers: int, timing: dict | 
 
 def _draw_in_processes(res: Results, n: int, thumbnails: bool, formats, workers: int, timing, log) -> dict:
     """{figure function index: :func:`_draw_one`'s result} from ``workers``
-    spawned processes; whatever they could not return (a process that would
-    not start or died) is left out, and :func:`_draw` draws it here."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+    processes (the study's local executor: spawned, their thread budget
+    set, ended with this process); whatever they could not return (a
+    process that would not start or died) is left out, and :func:`_draw`
+    draws it here."""
+    from ..study.executors import LocalExecutor
 
     parts: dict = {}
+    jobs = [(i, str(res.root), timing, thumbnails, formats) for i in range(n)]
     try:
-        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
-                                 initializer=_worker_load, initargs=(str(res.root), timing)) as pool:
-            futures = {i: pool.submit(_worker_draw, i, thumbnails, formats) for i in range(n)}
-            for i, fut in futures.items():
-                parts[i] = fut.result()
+        with LocalExecutor(workers) as pool:
+            for job, got in pool.map_unordered(_worker_draw, jobs):
+                parts[job[0]] = got
     except Exception as exc:  # noqa: BLE001 - a lost process costs time, never the report
         log(f"  report worker processes failed ({type(exc).__name__}: {exc}); drawing the rest here")
     return parts
@@ -161,10 +166,10 @@ def _load(out_dir, timing: dict | None) -> Results:
 
 def report_workers(workers: int | None) -> int:
     """The processes a report is drawn in: ``workers`` (default 2), at most
-    the cores of this machine, at least 1."""
-    import os
+    the cores this process may use, at least 1."""
+    from ..study.executors import _cpu_count
 
-    return max(1, min(int(workers or 2), os.cpu_count() or 1))
+    return max(1, min(int(workers or 2), _cpu_count()))
 
 
 def _check_workers(workers) -> int:
