@@ -83,3 +83,22 @@ def test_realisable_is_the_cone_of_the_spectral_locus():
     assert realisable(np.array([[0.0, 0.0, 0.0], [95.05, 100.0, 108.9]])).all()
     # past the locus between green and red (x + y = 1 is the spectrum locus's far edge), and negative
     assert not realisable(np.array([[0.5, 0.6, 0.0], [-1.0, 5.0, 5.0], [1.0, -0.1, 1.0]])).any()
+
+
+def test_gamut_check_off_leaves_the_share_unmeasured_and_the_image_the_same():
+    """A study does not read the out-of-gamut share, so its chain turns the
+    per-pixel test off: the meta says None, every value is the same; the
+    chain's outputs carry None, and a bad value is refused."""
+    from cfa_mitsuba.errors import CfaMitsubaError
+    from cfa_mitsuba.study.chain import CameraChain
+
+    raw = _overexposed("cmy2")
+    on = cm.isp.process(raw, "bilinear", clip_highlights=False)
+    off = cm.isp.process(raw, "bilinear", clip_highlights=False, gamut_check=False)
+    assert on.meta["isp"]["out_of_gamut_fraction"] > 0.5 and off.meta["isp"]["out_of_gamut_fraction"] is None
+    assert np.array_equal(on.xyz, off.xyz)
+    assert {k: v for k, v in on.meta["isp"].items() if k != "out_of_gamut_fraction"} == \
+        {k: v for k, v in off.meta["isp"].items() if k != "out_of_gamut_fraction"}
+    assert CameraChain().process(raw, "bilinear").meta["isp"]["out_of_gamut_fraction"] is None
+    with pytest.raises(CfaMitsubaError, match="gamut_check must be True or False"):
+        cm.isp.process(raw, "bilinear", gamut_check="no")

@@ -272,7 +272,8 @@ class CameraChain:
     def process(self, raw, method: str, cond: Condition | None = None, **options):
         from ..isp import process
 
-        opts = {**self.settings.isp_options(method, cond), **options}
+        # the out-of-gamut share of each output goes into no table or figure of a study: not measured
+        opts = {"gamut_check": False, **self.settings.isp_options(method, cond), **options}
         return self._timed("process_s", process, raw, method, **opts)
 
     def inputs(self, ideal, cam_xyz, cond: Condition):
