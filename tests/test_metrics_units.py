@@ -169,6 +169,10 @@ def test_mean_match_with_the_reference_mean_given_is_identical_and_names_each_im
         reference_interior_mean(bad)
     with pytest.raises(CfaMitsubaError, match="reference image's interior mean"):
         cm.mean_match(test, XYZ, reference_mean=0.0)
+    gray, gray_ref = test[..., 1:2], XYZ[..., 1:2]  # (H, W, 1): a gray image, as without the mean given
+    want = cm.mean_match(gray, gray_ref, return_scale=True)
+    got = cm.mean_match(gray, gray_ref, return_scale=True, reference_mean=reference_interior_mean(gray_ref))
+    assert got[1] == want[1] and np.array_equal(got[0], want[0]) and got[0].shape == gray.shape[:2]
 
 
 # -- S-CIELAB details ---------------------------------------------------------------------------

@@ -43,16 +43,13 @@ def mean_match(test, reference, *, border: int = 10, return_scale: bool = False,
     1.0
     """
     if reference_mean is None:
-        r, t = as_pair(reference, test, channels=(1, 2, 3, 4), allow_gray=True)
+        r, t = as_pair(reference, test, channels=_CHANNELS, allow_gray=True)
     else:
-        t = as_image(test, "test image", channels=(1, 2, 3, 4), allow_gray=True)
-        shape = np.shape(reference)
+        t = as_image(test, "test image", channels=_CHANNELS, allow_gray=True)
+        shape = _checked_shape(np.shape(reference))
         require(shape == t.shape, f"reference and test images differ in shape: {shape} vs {t.shape}")
-    b = int(border)
-    h, w = t.shape[:2]
-    require(b >= 0 and h > 2 * b and w > 2 * b, f"border {b} px leaves nothing of the {h} x {w} image")
-    mt = t[b:h - b, b:w - b].mean()
-    mr = r[b:h - b, b:w - b].mean() if reference_mean is None else reference_mean
+    mt = _interior_mean(t, border)
+    mr = _interior_mean(r, border) if reference_mean is None else reference_mean
     require(mt > 0, f"cannot mean-match: the test image's interior mean is {mt:g} (need > 0)")
     # a black reference would scale the test image to exactly 0, a perfect score for any camera
     require(mr > 0, f"cannot mean-match: the reference image's interior mean is {mr:g} (need > 0)")
@@ -64,8 +61,21 @@ def mean_match(test, reference, *, border: int = 10, return_scale: bool = False,
 def reference_interior_mean(reference, *, border: int = 10):
     """The interior mean :func:`mean_match` computes of ``reference`` (the
     same check and the same expression), for its ``reference_mean``."""
-    r = as_image(reference, "reference image", channels=(1, 2, 3, 4), allow_gray=True)
+    return _interior_mean(as_image(reference, "reference image", channels=_CHANNELS, allow_gray=True), border)
+
+
+#: the channel counts mean_match accepts (a single channel is a gray image)
+_CHANNELS = (1, 2, 3, 4)
+
+
+def _checked_shape(shape: tuple) -> tuple:
+    """``shape`` as :func:`~._common.as_image` leaves it: (H, W, 1) is gray (H, W)."""
+    return tuple(shape[:2]) if len(shape) == 3 and shape[2] == 1 else tuple(shape)
+
+
+def _interior_mean(image: np.ndarray, border: int):
+    """The mean of a checked image without ``border`` pixels on each side."""
     b = int(border)
-    h, w = r.shape[:2]
+    h, w = image.shape[:2]
     require(b >= 0 and h > 2 * b and w > 2 * b, f"border {b} px leaves nothing of the {h} x {w} image")
-    return r[b:h - b, b:w - b].mean()
+    return image[b:h - b, b:w - b].mean()
