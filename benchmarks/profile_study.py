@@ -80,14 +80,12 @@ def _after(config_path: Path, results: Path, args) -> int:
 
     from cfa_mitsuba.report import build_report
     from cfa_mitsuba.study.config import load_config
-    from cfa_mitsuba.study.runner import run_study
+    from cfa_mitsuba.study.runner import _task_id, plan_study, run_study
 
     if not (results / ".work").is_dir():
         print(f"profile_study: {results} holds no finished study (no .work/ folder)", file=sys.stderr)
         return 2
     config = load_config(config_path)
-    from cfa_mitsuba.study.runner import _task_id, plan_study
-
     missing = [t for t in plan_study(config, str(results / "details"))[1]
                if not (results / ".work" / f"{_task_id(t)}.json").is_file()]
     if missing:  # the study would evaluate them: not what is asked for
@@ -97,7 +95,7 @@ def _after(config_path: Path, results: Path, args) -> int:
     scratch = tempfile.TemporaryDirectory(prefix="profile_after_")
     copy = Path(scratch.name) / results.name
     shutil.copytree(results, copy, ignore=shutil.ignore_patterns("report.html", "figures"))
-    prof, stages = cProfile.Profile(), []
+    prof = cProfile.Profile()
     t0 = time.perf_counter()
     prof.enable()
     result = run_study(config, copy, workers=1, progress=False, log=lambda msg: None)

@@ -343,8 +343,9 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
     root = res.root
     fig_dir = root / "figures"
     with matplotlib.rc_context(RC):
+        t = time.perf_counter()
         figures, absents, files, embeds = _draw(res, thumbnails, formats, workers, timing, log)
-        log(f"  figures drawn and encoded in {time.perf_counter() - t0:.2f} s ({workers} process(es))")
+        log(f"  figures drawn and encoded in {time.perf_counter() - t:.2f} s ({workers} process(es))")
     from . import page, tables
     from .low_light import low_light_tables
 

@@ -191,6 +191,14 @@ _OPTICAL = _Memo(2)
 _IDEAL = _Memo(4)
 
 
+def _shared(ideal) -> dict:
+    """What depends on the ideal image alone, computed once per ideal for
+    every CFA, demosaic and realisation compared with it (its sRGB codes,
+    S-CIELAB's filtered reference, its interior mean for mean-matching),
+    kept with the ideal."""
+    return ideal.__dict__.setdefault("_metric_shared", {})
+
+
 class CameraChain:
     """The chain after the render for one set of :class:`ChainSettings`.
 
@@ -281,11 +289,8 @@ class CameraChain:
         from .. import metrics as m
 
         geo = m.scene_geometry(ideal.meta, ideal.xyz.shape)
-        # what depends on the ideal image alone is computed once per ideal (its sRGB codes, S-CIELAB's
-        # filtered reference), for every CFA, demosaic and realisation compared with it
-        shared = ideal.__dict__.setdefault("_metric_shared", {})
         return m.MetricInputs(ideal.xyz, cam_xyz, np.asarray(ideal.white_xyz, dtype=np.float64), geometry=geo,
-                              pixel_pitch_um=cond.pixel_pitch_um, shared=shared)
+                              pixel_pitch_um=cond.pixel_pitch_um, shared=_shared(ideal))
 
     def measure(self, ideal, processed, metric_names, cond: Condition) -> tuple[dict, list, float]:
         """(results, failures, mean-match scale) of one processed image.
@@ -294,8 +299,7 @@ class CameraChain:
 
         cam, scale = processed.xyz, 1.0
         if self.settings.mean_match:
-            # the ideal's interior mean once per ideal, as its other metric inputs (inputs())
-            shared = ideal.__dict__.setdefault("_metric_shared", {})
+            shared = _shared(ideal)
             if "interior_mean" not in shared:
                 shared["interior_mean"] = m.reference_interior_mean(ideal.xyz)
             cam, scale = m.mean_match(cam, ideal.xyz, return_scale=True, reference_mean=shared["interior_mean"])
