@@ -142,13 +142,11 @@ def poisson_quantile(mean: np.ndarray, u: np.ndarray) -> np.ndarray:
     beta, and other common, related tail probabilities, I", J. Amer. Statist.
     Assoc. 63 (1968) 1416-1456.
     """
-    from scipy import special
-
     from ._poisson_kernel import start_and_settle
 
     lam = np.ascontiguousarray(mean, dtype=np.float64).ravel()
     uu = np.ascontiguousarray(u, dtype=np.float64).ravel()
-    k, decided = start_and_settle(lam, uu, special.ndtri(uu))
+    k, decided = start_and_settle(lam, uu)
     rest = np.flatnonzero(~decided)
     if rest.size == k.size:
         _settle_by_cdf(lam, uu, k)
