@@ -160,3 +160,45 @@ def test_block_mean_is_the_mean_of_each_whole_block(shape):
     got = _block_mean(a)
     assert got.shape == want.shape == (h // step, w // step, *shape[2:])
     np.testing.assert_allclose(got, want, rtol=1e-14, atol=0)
+
+
+def test_summary_options_skip_only_what_no_row_reads(tmp_path, monkeypatch):
+    """S-CIELAB's median and 95th percentile (a partial sort of the whole
+    map) are computed for the camera outputs whose details the task keeps
+    (the first realisation) and left out of the others (the record's
+    ``summary_options``); every row is the same as with the order statistics
+    computed for all, and the kept details still hold them.  A config that
+    sets the option itself wins."""
+    import json
+
+    from cfa_mitsuba import metrics
+    from cfa_mitsuba.metrics import _result
+    from cfa_mitsuba.study import tasks
+    from cfa_mitsuba.study.chain import ChainSettings
+    from cfa_mitsuba.study.conditions import Condition
+
+    exr = tmp_path / "frame.exr"
+    _frame_exr(exr, ["scielab", "ssim"])
+    sorts = []
+    real = _result.median_and_p95
+    monkeypatch.setattr(_result, "median_and_p95", lambda v: sorts.append(v.size) or real(v))
+
+    def run(details, chain=ChainSettings()):
+        sorts.clear()
+        task = {"source": {"kind": "exr", "path": str(exr)}, "scene": "frame", "condition": Condition(30.0),
+                "cfa": "bayer", "demosaics": ["bilinear", "pocs"], "metrics": ["scielab", "ssim"],
+                "chain": chain, "details_dir": str(details), "realisations": 3}
+        return tasks.evaluate_task(task)["rows"], len(sorts)
+
+    rows, n_sorts = run(tmp_path / "d1")
+    kept = json.loads((tmp_path / "d1" / "frame" / "bayer" / "pocs" / "L30.json").read_text())
+    assert kept["scielab"]["median"] is not None and kept["scielab"]["p95"] is not None
+
+    monkeypatch.setattr(metrics, "summary_options", lambda: {})
+    rows_all, n_all = run(tmp_path / "d2")
+    assert n_all == n_sorts + 4 and rows_all == rows  # the 2 x 2 outputs of realisations 1 and 2 sorted no map
+    assert {r["metric"] for r in rows} == {"scielab", "scielab-interior", "ssim"} and len(rows) == 3 * 2 * 3
+    monkeypatch.undo()
+    monkeypatch.setattr(_result, "median_and_p95", lambda v: sorts.append(v.size) or real(v))
+    forced = ChainSettings(metric_options=(("scielab", (("order_statistics", True),)),))
+    assert run(tmp_path / "d3", forced) == (rows, n_all)

@@ -43,14 +43,14 @@ from .inputs import MetricInputs
 from .record import NATURAL, MetricRecord
 from .registry import (METRICS, evaluate, evaluate_many, get_metric, list_metrics, metric_names, metric_parameters,
                        metrics_for_scene, record_json, register_metric, result_rows, scored_metrics, study_options,
-                       unregister_metric)
+                       summary_options, unregister_metric)
 from .scielab import scielab, scielab_filters
 from .ssim import ssim
 
 __all__ = [
     "MetricResult", "MetricRecord", "MetricInputs", "register_metric", "unregister_metric", "metric_parameters", "METRICS", "NATURAL", "get_metric",
     "list_metrics", "metric_names", "scored_metrics", "metrics_for_scene", "record_json", "evaluate",
-    "evaluate_many", "result_rows", "study_options",
+    "evaluate_many", "result_rows", "study_options", "summary_options",
     "delta_e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi",
     "mean_match", "reference_interior_mean", "find_edge_roi", "scielab_filters", "scene_geometry", "colourspace",
 ]

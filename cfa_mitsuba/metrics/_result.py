@@ -95,14 +95,16 @@ def median_and_p95(values: np.ndarray) -> tuple[float, float]:
     return float(median), float(p95)
 
 
-def summarise_array(arr) -> dict:
-    """Shape and order statistics of an array (NaNs ignored)."""
+def summarise_array(arr, *, order_statistics: bool = True) -> dict:
+    """Shape and order statistics of an array (NaNs ignored); with
+    ``order_statistics`` False, ``median`` and ``p95`` are None (no partial
+    sort)."""
     a = np.asarray(arr, dtype=np.float64)
     flat = a.ravel()
     finite = flat if np.isfinite(flat.sum()) else flat[np.isfinite(flat)]  # a finite sum: every value finite
     if finite.size == 0:
         return {"shape": list(a.shape), "n": 0}
-    median, p95 = median_and_p95(finite)
+    median, p95 = median_and_p95(finite) if order_statistics else (None, None)
     return {
         "shape": list(a.shape),
         "mean": float(finite.mean()),

@@ -68,6 +68,13 @@ class MetricRecord:
         ``function`` unless its ``[metrics.<name>]`` table sets them (S-CIELAB's
         ``fft_precision = 'single'``: the same numbers to 1e-5 dE00 in about half
         the filtering time); a direct call gets the function's own defaults.
+    summary_options : ``((keyword, value), ...)``: options that leave out of
+        the details what only the details files read, passed by a study for
+        every camera output whose details it does not keep (the realisations
+        after the first), unless its ``[metrics.<name>]`` table sets them
+        (S-CIELAB's ``order_statistics = False``: the map's median and 95th
+        percentile, a partial sort of the whole map).  They never change a
+        row of metrics.csv.
     """
 
     name: str
@@ -91,6 +98,7 @@ class MetricRecord:
     ideal_details: bool = False
     reference_cache: tuple[str, Callable[..., Any]] | None = None
     study_options: tuple[tuple[str, Any], ...] = ()
+    summary_options: tuple[tuple[str, Any], ...] = ()
 
     def __post_init__(self):
         if self.inputs not in INPUT_KINDS:

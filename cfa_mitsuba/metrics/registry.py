@@ -14,7 +14,7 @@ geometry holds (``patches``, ``roi``, ``row``, ``steps``,
 
 from __future__ import annotations
 
-__all__ = ["METRICS", "study_options", "register_metric", "unregister_metric", "get_metric", "metric_names", "scored_metrics", "metrics_for_scene",
+__all__ = ["METRICS", "study_options", "summary_options", "register_metric", "unregister_metric", "get_metric", "metric_names", "scored_metrics", "metrics_for_scene",
            "list_metrics", "record_json", "evaluate", "evaluate_many", "result_rows", "metric_parameters",
            "GEOMETRY_KEYWORDS"]
 
@@ -124,7 +124,7 @@ def record_json(r: MetricRecord) -> dict:
                                                            "scaling": r.range_scaling},
         "label": r.label, "description": r.description, "paper": r.paper,
         "derived_from": r.parent, "censored_key": r.censored_key, "function": fn,
-        "study_options": dict(r.study_options),
+        "study_options": dict(r.study_options), "summary_options": dict(r.summary_options),
     }
 
 
@@ -137,6 +137,12 @@ def study_options() -> dict[str, dict]:
     """{metric: {keyword: value}}: the records' ``study_options``, which a
     study passes unless its config sets them."""
     return {r.name: dict(r.study_options) for r in METRICS.values() if r.study_options}
+
+
+def summary_options() -> dict[str, dict]:
+    """{metric: {keyword: value}}: the records' ``summary_options``, which a
+    study passes for the camera outputs whose details it does not keep."""
+    return {r.name: dict(r.summary_options) for r in METRICS.values() if r.summary_options}
 
 
 def metric_parameters(name: str) -> dict[str, inspect.Parameter]:

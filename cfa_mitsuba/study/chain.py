@@ -292,9 +292,13 @@ class CameraChain:
         return m.MetricInputs(ideal.xyz, cam_xyz, np.asarray(ideal.white_xyz, dtype=np.float64), geometry=geo,
                               pixel_pitch_um=cond.pixel_pitch_um, shared=_shared(ideal))
 
-    def measure(self, ideal, processed, metric_names, cond: Condition) -> tuple[dict, list, float]:
+    def measure(self, ideal, processed, metric_names, cond: Condition, *, details: bool = True
+                ) -> tuple[dict, list, float]:
         """(results, failures, mean-match scale) of one processed image.
-        Raises CfaMitsubaError when the output cannot be mean-matched."""
+        ``details`` False: the details are not kept, so the metric records'
+        ``summary_options`` apply (under the config's own options): the
+        results' rows are the same.  Raises CfaMitsubaError when the output
+        cannot be mean-matched."""
         from .. import metrics as m
 
         cam, scale = processed.xyz, 1.0
@@ -304,12 +308,18 @@ class CameraChain:
                 shared["interior_mean"] = m.reference_interior_mean(ideal.xyz)
             cam, scale = m.mean_match(cam, ideal.xyz, return_scale=True, reference_mean=shared["interior_mean"])
         failures: list = []
+        options = self.settings.metric_options_for(cond)  # a new dict each call
+        if not details:
+            for name, summary in m.summary_options().items():
+                options[name] = {**summary, **options.get(name, {})}
         results = self._timed("metrics_s", m.evaluate_many, metric_names, self.inputs(ideal, cam, cond), failures,
-                              options=self.settings.metric_options_for(cond))
+                              options=options)
         return results, failures, float(scale)
 
-    def evaluate(self, scene_image, cfa, demosaics, metric_names, cond: Condition, seed: int, scene_key=None):
-        """Yield (raw, ideal, Evaluation | CfaMitsubaError) per demosaic: the whole chain for one CFA."""
+    def evaluate(self, scene_image, cfa, demosaics, metric_names, cond: Condition, seed: int, scene_key=None, *,
+                 details: bool = True):
+        """Yield (raw, ideal, Evaluation | CfaMitsubaError) per demosaic: the
+        whole chain for one CFA (``details``: as for :meth:`measure`)."""
         from ..errors import CfaMitsubaError
 
         oi = self.optical(scene_image, cond, scene_key)
@@ -318,7 +328,7 @@ class CameraChain:
         for method in demosaics:
             try:
                 out = self.process(raw, method, cond)
-                results, failures, scale = self.measure(ideal, out, metric_names, cond)
+                results, failures, scale = self.measure(ideal, out, metric_names, cond, details=details)
             except CfaMitsubaError as exc:
                 yield raw, ideal, method, exc
                 continue

@@ -303,7 +303,9 @@ def evaluate_task(task) -> dict:
     seeds = (realisation_seeds(cond.seed, t.scene, cond.luminance, t.realisations, t.realisation_offset)
              if applies else [])
     for i, seed in enumerate(seeds):
-        for raw, ideal, method, ev in chain.evaluate(image, t.cfa, t.demosaics, t.metrics, cond, seed, scene_key):
+        keep = details_dir is not None and i == 0 and t.realisation_offset == 0  # the first realisation's curves
+        for raw, ideal, method, ev in chain.evaluate(image, t.cfa, t.demosaics, t.metrics, cond, seed, scene_key,
+                                                     details=keep):
             base = {"scene": t.scene, "cfa": cfa_label, "demosaic": method, **condition_columns(cond, ideal.meta),
                     "spectra": spectra_used, "base": bool(t.base), "realisation": t.realisation_offset + i,
                     "render_seed": int(t.render_seed)}
@@ -315,7 +317,7 @@ def evaluate_task(task) -> dict:
                 continue
             rows.extend({**base, **r, **_capture_columns(raw)} for r in _result_rows(ev.results))
             failures.extend({**base, **f} for f in ev.failures)
-            if details_dir is not None and i == 0 and t.realisation_offset == 0:  # the first realisation's curves
+            if keep:
                 _save_details(details_dir / t.scene / safe_label(cfa_label) / method, tag, ev.results,
                               ev.processed, _details_extra(ev, raw, seed))
     return {"rows": rows, "timing": chain.timing, "failures": failures,
