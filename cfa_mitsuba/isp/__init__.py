@@ -18,7 +18,8 @@ from .colour_matrix import (  # noqa: F401
     white_balance_gains,
     xyz_to_srgb,
 )
-from .pipeline import WHITE_BALANCE_MODES, process  # noqa: F401
+from .pipeline import (PREPARE_KEYWORDS, WHITE_BALANCE_MODES, PreparedRaw, prepare, process,  # noqa: F401
+                       process_prepared)
 from .synthetic import channels_from_rgb, mosaic_image  # noqa: F401
 
 collect_demosaics(__name__)  # each method module declares DEMOSAICS

@@ -10,8 +10,9 @@ passes through unchanged to XYZ and sRGB.
 
 from __future__ import annotations
 
-__all__ = ["process", "WHITE_BALANCE_MODES", "MIN_WHITE_ELECTRONS"]
+__all__ = ["process", "prepare", "process_prepared", "PreparedRaw", "PREPARE_KEYWORDS", "WHITE_BALANCE_MODES", "MIN_WHITE_ELECTRONS"]
 
+import functools
 import inspect
 from dataclasses import dataclass
 
@@ -225,35 +226,99 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     """
     _check(raw_image)
     check_precision(demosaic_precision)
-    if not isinstance(gamut_check, (bool, np.bool_)):
-        raise CfaMitsubaError(f"gamut_check must be True or False, got {gamut_check!r}")
+    _check_gamut_flag(gamut_check)
+    _check_white_balance(white_balance)
+    if raw_image.is_ideal:
+        return _pass_ideal(raw_image)
+    prepared = prepare(raw_image, white_balance=white_balance, white_preserving=white_preserving,
+                       regularise=regularise, clip_highlights=clip_highlights, colour_fit=colour_fit)
+    return process_prepared(prepared, demosaic, demosaic_precision=demosaic_precision, gamut_check=gamut_check,
+                            **options)
+
+
+def _check_white_balance(white_balance) -> None:
     if white_balance not in WHITE_BALANCE_MODES:
         raise CfaMitsubaError(f"unknown white balance {white_balance!r} (choose {', '.join(WHITE_BALANCE_MODES)})")
+
+
+def _check_gamut_flag(gamut_check) -> None:
+    if not isinstance(gamut_check, (bool, np.bool_)):
+        raise CfaMitsubaError(f"gamut_check must be True or False, got {gamut_check!r}")
+
+
+def _pass_ideal(raw_image: RawImage) -> RenderedImage:
+    """The ideal sensor's XYZ, passed through (checked)."""
+    wl = np.asarray(raw_image.wavelengths, dtype=np.float64)
+    white = np.asarray(raw_image.white_radiance, dtype=np.float64)
+    meta = dict(raw_image.meta or {})
+    meta.setdefault("capture", raw_image.settings)
+    xyz = np.asarray(raw_image.raw, dtype=np.float64)
+    if xyz.shape[2] != 3:
+        raise CfaMitsubaError(f"the ideal sensor's image must be (H, W, 3) XYZ, got {xyz.shape}")
+    if not np.all(np.isfinite(xyz)):
+        raise CfaMitsubaError("the ideal sensor's XYZ image contains NaN or infinite values")
+    from .. import spectra
+
+    white_xyz = spectra.xyz_from_radiance(white, wl)
+    meta["isp"] = {"cfa": "ideal", "demosaic": None, "note": "ideal XYZ sensor: passed through"}
+    return RenderedImage(xyz=xyz.copy(), srgb=xyz_to_srgb(xyz, white_xyz), white_xyz=white_xyz, meta=meta)
+
+
+@dataclass(frozen=True, eq=False)
+class PreparedRaw:
+    """A camera capture made ready for demosaicing by :func:`prepare`: what
+    :func:`process` computes before the demosaic, the same for every
+    demosaicing method.  ``balanced`` (the white-balanced, highlight-clipped
+    mosaic, electrons times gain) is read-only; ``settings`` holds the
+    keywords it was prepared with."""
+
+    raw_image: RawImage
+    cfa: _TileCFA
+    balanced: np.ndarray
+    gains: np.ndarray
+    fit: object
+    fit_noise: np.ndarray | None
+    clip_level: float | None
+    clipped: float
+    readout: dict
+    saturated_fraction: float | None
+    settings: dict
+
+    @functools.cached_property
+    def luminance_weights(self) -> np.ndarray:
+        """The channels' luminance weights under the scene white (for the
+        methods that take ``luminance_weights``), computed on first use."""
+        r = self.raw_image
+        w = luminance_weights(np.asarray(r.electrons_per_radiance, dtype=np.float64),
+                                 np.asarray(r.white_radiance, dtype=np.float64),
+                                 np.asarray(r.wavelengths, dtype=np.float64))
+        w.flags.writeable = False
+        return w
+
+
+def prepare(raw_image: RawImage, *, white_balance: str = "illuminant", white_preserving: bool = True,
+            regularise: bool = True, clip_highlights: bool = True, colour_fit: str = "training") -> PreparedRaw:
+    """The part of :func:`process` that does not depend on the demosaicing
+    method, done once: the checks, DN -> electrons, the white balance, the
+    highlight clip, the read-out's re-mosaic and the colour fit (keywords as
+    for :func:`process`).  ``process(prepare(raw, **kw), method)`` is
+    ``process(raw, method, **kw)`` bit for bit; a study prepares each
+    capture once for its four methods (about 5 ms of a 636 x 720 capture's
+    processing, spent once instead of four times).  The capture must not be
+    changed while its preparation is in use.  Not for the ideal sensor's
+    image (it needs no processing)."""
+    _check(raw_image)
+    if raw_image.is_ideal:
+        raise CfaMitsubaError("prepare: the ideal sensor's image is XYZ already; process() passes it through")
+    _check_white_balance(white_balance)
     wl = np.asarray(raw_image.wavelengths, dtype=np.float64)
     epr = np.asarray(raw_image.electrons_per_radiance, dtype=np.float64)
     white = np.asarray(raw_image.white_radiance, dtype=np.float64)
-    if not raw_image.is_ideal:
-        _check_white_signal(raw_image, epr, white)
-    fit = fit_noise = None
-    if not raw_image.is_ideal:
-        refl = colour_fit_reflectances(colour_fit, wl)
-        fit_noise = _fit_noise(raw_image, epr, white) if regularise else None
-        fit = fit_colour_matrix(epr, white, wl, white_preserving=white_preserving, channel_noise=fit_noise,
-                                reflectances=refl)
-    meta = dict(raw_image.meta or {})
-    meta.setdefault("capture", raw_image.settings)
-
-    if raw_image.is_ideal:
-        xyz = np.asarray(raw_image.raw, dtype=np.float64)
-        if xyz.shape[2] != 3:
-            raise CfaMitsubaError(f"the ideal sensor's image must be (H, W, 3) XYZ, got {xyz.shape}")
-        if not np.all(np.isfinite(xyz)):
-            raise CfaMitsubaError("the ideal sensor's XYZ image contains NaN or infinite values")
-        from .. import spectra
-
-        white_xyz = spectra.xyz_from_radiance(white, wl)
-        meta["isp"] = {"cfa": "ideal", "demosaic": None, "note": "ideal XYZ sensor: passed through"}
-        return RenderedImage(xyz=xyz.copy(), srgb=xyz_to_srgb(xyz, white_xyz), white_xyz=white_xyz, meta=meta)
+    _check_white_signal(raw_image, epr, white)
+    refl = colour_fit_reflectances(colour_fit, wl)
+    fit_noise = _fit_noise(raw_image, epr, white) if regularise else None
+    fit = fit_colour_matrix(epr, white, wl, white_preserving=white_preserving, channel_noise=fit_noise,
+                            reflectances=refl)
 
     cfa = _TileCFA(_cfa_name(raw_image), np.asarray(raw_image.pattern, dtype=str), tuple(raw_image.channels))
     mosaic = geometry(cfa)
@@ -282,11 +347,35 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     readout = readout_of(raw_image)
     if readout.get("mode") == "remosaic":
         balanced, cfa = remosaic(balanced, cfa)
+    balanced.flags.writeable = False
+    settings = {"white_balance": white_balance, "white_preserving": white_preserving, "regularise": regularise,
+                "clip_highlights": clip_highlights, "colour_fit": colour_fit}
+    return PreparedRaw(raw_image, cfa, balanced, gains, fit, fit_noise, clip_level, clipped, readout,
+                       _saturated_fraction(raw_image), settings)
+
+
+#: the keywords of :func:`process` that :func:`prepare` takes (the rest go to the demosaic)
+PREPARE_KEYWORDS = tuple(p for p in inspect.signature(prepare).parameters if p != "raw_image")
+
+
+def process_prepared(prepared: PreparedRaw, demosaic: str = "bilinear", *, demosaic_precision: str = "double",
+                     gamut_check: bool = True, **options) -> RenderedImage:
+    """:func:`process` from the demosaic on, for a capture made ready by
+    :func:`prepare` (the same keywords and result as :func:`process`; the
+    white balance, highlight clip and colour fit are the preparation's)."""
+    if not isinstance(prepared, PreparedRaw):
+        raise CfaMitsubaError(f"process_prepared needs a PreparedRaw (from prepare()), got {type(prepared).__name__}")
+    check_precision(demosaic_precision)
+    _check_gamut_flag(gamut_check)
+    raw_image, cfa, fit, gains = prepared.raw_image, prepared.cfa, prepared.fit, prepared.gains
+    meta = dict(raw_image.meta or {})
+    meta.setdefault("capture", raw_image.settings)
     fn = get_demosaic(demosaic)
     if "luminance_weights" in inspect.signature(fn).parameters and "luminance_weights" not in options:
-        options["luminance_weights"] = luminance_weights(epr, white, wl)
-    channels = _demosaic(balanced, cfa, demosaic, precision=demosaic_precision, **options)
+        options["luminance_weights"] = prepared.luminance_weights
+    channels = _demosaic(prepared.balanced, cfa, demosaic, precision=demosaic_precision, **options)
     xyz = fit.apply(channels)
+    readout = prepared.readout
     if readout.get("mode") == "bin":  # back on the full pixel grid (isp/remosaic.py)
         xyz = upsample_blocks(xyz, int(readout["block"]), readout["full_shape"])
     out_of_gamut = float(np.mean(~realisable(xyz))) if gamut_check else None
@@ -300,16 +389,16 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         "demosaic_options": {k: (np.asarray(v).tolist() if isinstance(v, np.ndarray) else v)
                              for k, v in options.items() if k != "info"},
         "demosaic_precision": demosaic_precision,
-        "white_balance": white_balance,
-        "colour_fit": colour_fit,
+        "white_balance": prepared.settings["white_balance"],
+        "colour_fit": prepared.settings["colour_fit"],
         "white_balance_gains": (gains / ref_gain).tolist(),
         "white_balance_gains_per_electron": gains.tolist(),
         "white_xyz": fit.white_xyz.tolist(),
-        "saturated_fraction": _saturated_fraction(raw_image),
+        "saturated_fraction": prepared.saturated_fraction,
         "readout": readout.get("mode", "full"),
-        "highlight_clip_balanced": clip_level,
-        "highlight_clipped_fraction": clipped,
-        "colour_fit_noise": None if fit_noise is None else fit_noise.tolist(),
+        "highlight_clip_balanced": prepared.clip_level,
+        "highlight_clipped_fraction": prepared.clipped,
+        "colour_fit_noise": None if prepared.fit_noise is None else prepared.fit_noise.tolist(),
         "out_of_gamut_fraction": out_of_gamut,
         **fit.as_meta(),
     }

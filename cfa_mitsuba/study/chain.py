@@ -278,11 +278,29 @@ class CameraChain:
         return kw
 
     def process(self, raw, method: str, cond: Condition | None = None, **options):
-        from ..isp import process
+        """:func:`cfa_mitsuba.isp.process` of ``raw`` (a RawImage, or a
+        :class:`~cfa_mitsuba.isp.PreparedRaw` from :meth:`prepare`) by
+        ``method`` with the study's ISP options."""
+        from ..isp import PREPARE_KEYWORDS, PreparedRaw, process, process_prepared
 
         # the out-of-gamut share of each output goes into no table or figure of a study: not measured
         opts = {"gamut_check": False, **self.settings.isp_options(method, cond), **options}
+        if isinstance(raw, PreparedRaw):
+            kept = {k: opts.pop(k) for k in PREPARE_KEYWORDS if k in opts}
+            if any(raw.settings[k] != v for k, v in kept.items()):  # this method's [isp] differs: prepare afresh
+                return self._timed("process_s", process, raw.raw_image, method, **kept, **opts)
+            return self._timed("process_s", process_prepared, raw, method, **opts)
         return self._timed("process_s", process, raw, method, **opts)
+
+    def prepare(self, raw, method: str, cond: Condition | None = None):
+        """The part of processing ``raw`` that every demosaicing method
+        shares (:func:`cfa_mitsuba.isp.prepare`), with the ISP options of
+        ``method`` under ``cond``: :meth:`process` takes it in place of
+        ``raw``, for each method, with the same result."""
+        from ..isp import PREPARE_KEYWORDS, prepare
+
+        opts = self.settings.isp_options(method, cond)
+        return self._timed("process_s", prepare, raw, **{k: opts[k] for k in PREPARE_KEYWORDS if k in opts})
 
     def inputs(self, ideal, cam_xyz, cond: Condition):
         """The :class:`~cfa_mitsuba.metrics.MetricInputs` of a camera output."""
@@ -325,9 +343,12 @@ class CameraChain:
         oi = self.optical(scene_image, cond, scene_key)
         ideal = self.ideal(oi, cond, scene_key)
         raw = self.capture(oi, cfa, cond, seed)
+        prepared = None
         for method in demosaics:
             try:
-                out = self.process(raw, method, cond)
+                if prepared is None:
+                    prepared = self.prepare(raw, method, cond)  # once for every method (isp.prepare)
+                out = self.process(prepared, method, cond)
                 results, failures, scale = self.measure(ideal, out, metric_names, cond, details=details)
             except CfaMitsubaError as exc:
                 yield raw, ideal, method, exc
