@@ -82,6 +82,45 @@ def test_small_conv2_same_equals_convolve2d(shape):
     np.testing.assert_allclose(conv2_same(x, k), expected, rtol=0, atol=1e-11)
 
 
+def _haar(scale: int) -> np.ndarray:
+    n = 2 ** scale
+    k = np.full((n, n), 2.0 ** -scale)
+    k[: n // 2] *= -1.0
+    return k
+
+
+@pytest.mark.parametrize("kernel", [np.full((2, 2), 0.25), np.array([[1.0, 0.0, -1.0]] * 3) / 3.0,
+                                    np.array([[1.0, 0.0, -1.0]] * 3).T / 3.0, np.full((3, 3), 1 / 9),
+                                    _haar(1), _haar(2), _haar(3).T, np.outer([1.0, -2.0, 0.5], [2.0, 4.0])],
+                         ids=["mean2", "prewitt-x", "prewitt-y", "mean3", "haar2", "haar4", "haar8-t", "3x2"])
+@pytest.mark.parametrize("shape", [(31, 37), (1, 9), (9, 1), (2, 3)])
+def test_separable_conv2_same_equals_convolve2d(kernel, shape):
+    """HaarPSI's and MDSI's kernels are outer products, filtered in two
+    compiled 1-D passes; against scipy's 2-D convolution (MATLAB's 'same'
+    centre at floor(m / 2)), odd and even sizes, images smaller than the
+    kernel included."""
+    from scipy import signal
+
+    from cfa_mitsuba.metrics._common import conv2_same
+    from cfa_mitsuba.metrics._conv2_kernel import separable_factors
+
+    assert separable_factors(kernel) is not None
+    x = np.random.default_rng(6).random(shape) * 255.0
+    full = signal.convolve2d(x, kernel, mode="full")
+    r0, c0 = kernel.shape[0] // 2, kernel.shape[1] // 2
+    expected = full[r0:r0 + shape[0], c0:c0 + shape[1]]
+    np.testing.assert_allclose(conv2_same(x, kernel), expected, rtol=0, atol=1e-12)
+
+
+def test_a_kernel_that_is_no_outer_product_is_not_split():
+    from cfa_mitsuba.metrics._conv2_kernel import separable_factors
+
+    assert separable_factors(np.array([[1.0, 2.0], [3.0, 5.0]])) is None
+    assert separable_factors(np.zeros((3, 3))) is None
+    u, v = separable_factors(np.array([[0.5, -0.5], [1.0, -1.0]]))
+    assert np.array_equal(np.outer(u, v), [[0.5, -0.5], [1.0, -1.0]])
+
+
 def test_processed_srgb_is_encoded_on_first_read():
     import cfa_mitsuba as cm
     from cfa_mitsuba.isp.colour_matrix import xyz_to_srgb as display

@@ -96,6 +96,13 @@ def conv2_same(x: np.ndarray, kernel: np.ndarray) -> np.ndarray:
     """
     from scipy import ndimage, signal  # lazy: scipy.signal costs 0.6 s to import
 
+    from ._conv2_kernel import conv2_same_separable, separable_factors
+
+    factors = separable_factors(kernel) if np.ndim(x) == 2 else None
+    if factors is not None:
+        # every kernel of HaarPSI and MDSI is an outer product u v': two compiled 1-D passes,
+        # 3-14x faster than the paths below on a camera image, ~1e-15 relative apart (._conv2_kernel)
+        return conv2_same_separable(x, *factors)
     if kernel.size < 16:
         # Small kernels (HaarPSI's 2 x 2 mean, MDSI's 3 x 3 Prewitt): ndimage's direct convolution with
         # zeros outside, centred at floor(m/2) as MATLAB's 'same' for odd and even sizes alike; ~3x
