@@ -56,9 +56,10 @@ SRGB_WHITE_XYZ = 100.0 * SRGB_TO_XYZ.sum(axis=1)
 #: MATLAB ``rgb2gray`` weights, unrounded (reference README s. 3).
 RGB2GRAY_WEIGHTS = np.array([0.298936021293775, 0.587043074451121, 0.114020904255103])
 
-# The transposes the per-pixel products multiply by, stored contiguous: numpy hands a transposed view
-# to a slower matrix-product path (5.9 against 2.4 ms on a 636 x 720 x 3 image), with the same sums
-# (tests/test_fast_paths.py checks the results equal).
+# The transposes the per-pixel products of an image multiply by, stored contiguous: numpy hands a
+# transposed view to a slower matrix-product path (5.9 against 2.4 ms on a 636 x 720 x 3 image), with
+# the same sums for an image (tests/test_fast_paths.py checks them equal); a single colour or a list of
+# colours keeps the transposed view (a vector product there rounds differently in the last bit).
 _SRGB_TO_XYZ_T = np.ascontiguousarray(SRGB_TO_XYZ.T)
 _XYZ_TO_SRGB_T = np.ascontiguousarray(XYZ_TO_SRGB.T)
 
@@ -114,12 +115,14 @@ def linear_to_srgb(linear) -> np.ndarray:
 
 def linear_to_xyz(rgb, *, scale: float = 100.0) -> np.ndarray:
     """Linear sRGB (white = 1) to XYZ with the 4-digit matrix; white Y = ``scale``."""
-    return scale * np.asarray(rgb, dtype=np.float64) @ _SRGB_TO_XYZ_T
+    rgb = np.asarray(rgb, dtype=np.float64)
+    return scale * rgb @ (_SRGB_TO_XYZ_T if rgb.ndim >= 3 else SRGB_TO_XYZ.T)
 
 
 def xyz_to_linear(xyz, *, scale: float = 100.0) -> np.ndarray:
     """XYZ (white Y = ``scale``) to linear sRGB (white = 1), not clipped."""
-    return (np.asarray(xyz, dtype=np.float64) / scale) @ _XYZ_TO_SRGB_T
+    xyz = np.asarray(xyz, dtype=np.float64)
+    return (xyz / scale) @ (_XYZ_TO_SRGB_T if xyz.ndim >= 3 else XYZ_TO_SRGB.T)
 
 
 def srgb8_to_xyz(codes, *, scale: float = 100.0) -> np.ndarray:

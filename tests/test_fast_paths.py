@@ -141,11 +141,12 @@ def test_metered_peak_product_is_the_same_numbers():
     np.testing.assert_allclose((w.T @ pix.reshape(-1, 31).T).T, pix.reshape(-1, 31) @ w, rtol=1e-14, atol=0)
 
 
-@pytest.mark.parametrize("shape", [(636, 720, 3), (37, 41, 3), (5, 3), (3,)])
+@pytest.mark.parametrize("shape", [(636, 720, 3), (37, 41, 3), (1, 7, 3), (2, 5, 7, 3), (5, 3), (3,)])
 def test_srgb_matrix_products_equal_the_transposed_view(shape):
-    """xyz_to_linear and linear_to_xyz multiply by contiguous copies of the
-    matrices' transposes (a faster product path): the same values as the
-    product with the transposed view, bit for bit."""
+    """xyz_to_linear and linear_to_xyz multiply an image by contiguous
+    copies of the matrices' transposes (a faster product path): the same
+    values as the product with the transposed view, bit for bit (a colour
+    or a list of colours keeps the transposed view)."""
     from cfa_mitsuba import colorimetry as col
 
     x = np.random.default_rng(7).random(shape) * 120.0
