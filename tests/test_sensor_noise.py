@@ -292,3 +292,27 @@ def test_poisson_counts_do_not_depend_on_the_start(monkeypatch):
     kernel._start_and_settle.py_func(lam[:n], u[:n], counts, decided)
     assert decided.mean() > 0.5
     assert np.array_equal(counts[decided], want[:n][decided])
+
+
+def test_poisson_counts_below_a_mean_of_ten_are_counted_up_exactly():
+    """Below a mean of 10 the kernel counts up from 0 with the mass's
+    recurrence: scipy's quantile for every draw, for draws exactly on a CDF
+    (handed to the exact path) and far in both tails; nearly every such
+    pixel is decided there."""
+    from scipy import special, stats
+
+    from cfa_mitsuba.sensor import _poisson_kernel as kernel
+    from cfa_mitsuba.sensor.noise import poisson_quantile
+
+    rng = np.random.default_rng(12)
+    lam = np.concatenate([rng.uniform(0, 10, 60_000), [1e-300, 9.999999, 1e-6]])
+    u = rng.random(lam.size)
+    assert np.array_equal(poisson_quantile(lam, u), stats.poisson.ppf(u, lam))
+    k = stats.poisson.ppf(rng.random(lam.size), lam)
+    on = special.pdtr(k, lam)
+    assert np.array_equal(poisson_quantile(lam, on), k)
+    for tail in (1e-14, 1 - 1e-13):
+        v = np.full(lam.size, tail)
+        assert np.array_equal(poisson_quantile(lam, v), stats.poisson.ppf(v, lam))
+    _, decided = kernel.start_and_settle(lam, u)
+    assert decided.mean() > 0.99

@@ -4,9 +4,13 @@ CDF (``pdtr``, an incomplete gamma function, about 150-200 ns a pixel) but
 no Poisson quantile that is fast on a whole image.
 
 First pass (:func:`start_and_settle`): from the Cornish-Fisher start (its
-normal quantile by :func:`_start_z`, in the same pass), each step is decided by Peizer and Pratt's normal approximation of the CDF where
-``u`` is farther from it than :func:`pp_guard`, a bound several times the
-approximation's largest error; such a decision is the exact CDF's.
+normal quantile by :func:`_start_z`, in the same pass), each step is
+decided by Peizer and Pratt's normal approximation of the CDF where ``u``
+is farther from it than :func:`pp_guard`, a bound several times the
+approximation's largest error; such a decision is the exact CDF's.  Below
+those means (:data:`PP_MEANS`), each count is found by counting up from 0, the CDF summed from
+the mass's recurrence (below), decided where ``u`` is not within
+:data:`NEAR` of a CDF on the way.
 
 Second pass (:func:`settle`), for the pixels left: after one exact CDF, the
 neighbouring CDFs come from the probability mass by its recurrence.  With
@@ -176,6 +180,29 @@ def start_z(u: np.ndarray) -> np.ndarray:
     return out
 
 
+@nb.njit(inline="always")
+def _count_up(lam, u, i, k, decided):
+    """A mean below :data:`PP_MEANS`: count up from 0 with the mass's
+    recurrence (F(0) = p(0) = exp(-lam), p(k + 1) = p(k) lam / (k + 1)),
+    about lam + 1 steps, to the first count whose CDF reaches u.  Decided
+    unless u lies within :data:`NEAR` (relative) of a CDF on the way or
+    :data:`MAX_STEPS` are not enough: those keep their start for the exact
+    path."""
+    p = math.exp(-lam)
+    f = p
+    kk = 0.0
+    for _ in range(MAX_STEPS):
+        if abs(f - u) <= NEAR * f:
+            return
+        if f >= u:
+            k[i] = kk
+            decided[i] = True
+            return
+        kk += 1.0
+        p = p * lam / kk
+        f = f + p
+
+
 @nb.njit(cache=True, nogil=True, error_model="numpy")
 def _start_and_settle(lam, u, k, decided):  # pragma: no cover - compiled
     lo, hi = PP_MEANS
@@ -190,7 +217,10 @@ def _start_and_settle(lam, u, k, decided):  # pragma: no cover - compiled
         kk = math.floor(ll + math.sqrt(ll) * z + (z * z - 1.0) / 6.0 + 0.5)  # Cornish-Fisher
         kk = max(kk, 0.0)
         k[i] = kk
-        if ll < lo or ll > hi:
+        if ll < lo:
+            _count_up(ll, uu, i, k, decided)
+            continue
+        if ll > hi:
             continue
         guard = pp_guard(ll)
         for _ in range(MAX_STEPS):
