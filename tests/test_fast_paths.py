@@ -154,3 +154,43 @@ def test_srgb_matrix_products_equal_the_transposed_view(shape):
     assert np.array_equal(col.linear_to_xyz(x, scale=97.0), 97.0 * x @ col.SRGB_TO_XYZ.T)
     strided = np.random.default_rng(8).random((40, 60, 3))[:, ::2]
     assert np.array_equal(col.xyz_to_linear(strided), (strided / 100.0) @ col.XYZ_TO_SRGB.T)
+
+
+@pytest.mark.parametrize("weighting", ["soft", "hard"])
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_directional_colour_differences_compiled_equal_numpy(dtype, weighting):
+    """'adaptive-laplacian''s edge-directed colour differences, compiled per
+    gap phase, are bit for bit the numpy steps (_directional_estimate), for
+    every registered CFA, both precisions and both weightings."""
+    import cfa_mitsuba as cm
+    from cfa_mitsuba.isp import laplacian as lap
+    from cfa_mitsuba.isp._directional_kernel import directional_phase
+    from cfa_mitsuba.isp.mosaic import directional_samples, extend, geometry, tent_radius
+
+    rng = np.random.default_rng(9)
+    checked = 0
+    for name in cm.sensor.list_cfas():
+        cfa = cm.sensor.get_cfa(name)
+        mosaic = geometry(cfa)
+        th, tw = mosaic.tile_shape
+        raw = (rng.random((3 * th + 17, 3 * tw + 19)) * 900.0 + rng.random() * 50).astype(dtype)
+        ref = lap.reference_for(cfa, mosaic)
+        refimg = lap.reference_adaptive(raw, mosaic, ref, lap.MHC_ALPHA).astype(dtype)
+        limit = max(th, tw)
+        radius = max(max(tent_radius(mosaic, c) for c in range(len(mosaic.channels))), limit)
+        ext_y, ph, pw = extend(raw, mosaic, radius)
+        ext_r, _, _ = extend(refimg, mosaic, radius)
+        eps = lap._eps(raw)
+        for c in range(len(mosaic.channels)):
+            for i, j in mosaic.gaps(c):
+                dirs = directional_samples(mosaic, c, i, j, limit)
+                if len(dirs) < 2:
+                    continue
+                want = lap._directional_estimate(ext_y, ext_r, refimg, ph, pw, raw.shape, (th, tw), i, j, dirs,
+                                                 0.7, eps, weighting)
+                got = np.empty(want.shape, dtype=dtype)
+                directional_phase(ext_y, ext_r, refimg[i::th, j::tw], ph + i, pw + j, (th, tw), dirs, 0.7, eps,
+                                  weighting == "soft", got)
+                assert np.array_equal(got, want.astype(dtype)), (name, c, i, j)
+                checked += 1
+    assert checked > 20

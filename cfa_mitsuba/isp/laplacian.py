@@ -360,23 +360,38 @@ def colour_differences(raw, refimg, mosaic: Mosaic, ref: Reference, chroma_gain:
             plane[i::th, j::tw] = raw[i::th, j::tw]
         if not adaptive:
             continue
+        compiled = ext_y.dtype == ext_r.dtype == refimg.dtype == plane.dtype and ext_y.dtype in (np.float32,
+                                                                                                 np.float64)
         for i, j in mosaic.gaps(c):
             dirs = directional_samples(mosaic, c, i, j, limit)
             if len(dirs) < 2:
                 continue
+            if compiled:  # _directional_estimate's steps in one pass (._directional_kernel), the same bits
+                from ._directional_kernel import directional_phase
 
-            def at(e, t, d):
-                return phase_view(e, ph, pw, shape, tile, i, j, t * d[0], t * d[1])
-
-            r0 = refimg[i::th, j::tw]
-            est, cost = [], []
-            for d, tp, tm in dirs:
-                c1, c2 = at(ext_y, tp, d), at(ext_y, tm, d)
-                detail = r0 - _lin(at(ext_r, tp, d), at(ext_r, tm, d), tp, tm)
-                est.append(_lin(c1, c2, tp, tm) + g * detail)
-                cost.append(np.abs(c1 - c2) + 2.0 * np.abs(detail))
-            plane[i::th, j::tw] = _choose(est, cost, weighting, eps)
+                directional_phase(ext_y, ext_r, refimg[i::th, j::tw], ph + i, pw + j, tile, dirs, g, eps,
+                                  weighting == "soft", plane[i::th, j::tw])
+            else:
+                plane[i::th, j::tw] = _directional_estimate(ext_y, ext_r, refimg, ph, pw, shape, tile, i, j, dirs, g,
+                                                            eps, weighting)
     return out
+
+
+def _directional_estimate(ext_y, ext_r, refimg, ph, pw, shape, tile, i, j, dirs, g, eps, weighting):
+    """Gap phase (i, j)'s edge-directed colour-difference estimate (numpy):
+    along each direction the channel's linear interpolation plus g times
+    the reference's detail, weighted by the cost of each direction."""
+    def at(e, t, d):
+        return phase_view(e, ph, pw, shape, tile, i, j, t * d[0], t * d[1])
+
+    r0 = refimg[i::tile[0], j::tile[1]]
+    est, cost = [], []
+    for d, tp, tm in dirs:
+        c1, c2 = at(ext_y, tp, d), at(ext_y, tm, d)
+        detail = r0 - _lin(at(ext_r, tp, d), at(ext_r, tm, d), tp, tm)
+        est.append(_lin(c1, c2, tp, tm) + g * detail)
+        cost.append(np.abs(c1 - c2) + 2.0 * np.abs(detail))
+    return _choose(est, cost, weighting, eps)
 
 
 # --- the methods ------------------------------------------------------------------
