@@ -197,11 +197,10 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
     scale = max(float(np.sqrt(np.mean(raw * raw))), np.finfo(float).tiny)
     done, change = 0, 0.0
     observed = {c: mosaic.index == c for c in others}  # (th, tw): where each channel is sampled
-    d, lowpassed = np.empty(shape, raw.dtype), np.empty(shape, raw.dtype)  # reused: no allocation per pass
+    d = np.empty(shape, raw.dtype)  # reused: no allocation per pass
     k = lowpass_kernel(levels).astype(raw.dtype)  # a float32 mosaic is filtered in float32
     # here, not at import: Numba takes a third of a second to load
-    from ._pocs_kernel import project
-    from .column_filter import correlate_along_rows, correlate_columns
+    from ._pocs_kernel import lowpass_project, project
 
     for _ in range(iterations):
         change = 0.0
@@ -210,13 +209,12 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
             # T > 0 clips the subbands), then the observations, in one pass into x_c
             np.subtract(x[c], refimg, out=d)
             if threshold == 0.0:
-                # ndimage.correlate1d(axis=0, then 1, mode="mirror") bit for bit, 4-5x and 2x faster
-                correlate_columns(d, k, lowpassed)
-                correlate_along_rows(lowpassed, k, d)
-                detail = d
+                # the low-pass (ndimage.correlate1d(axis=0, then 1, mode="mirror")'s sums) and the
+                # projection row by row, P(d) never written out (._pocs_kernel.lowpass_project)
+                total = lowpass_project(x[c], refimg, d, raw, observed[c], k)
             else:
-                detail = _subbands(d, 0, levels, threshold)
-            change = max(change, float(np.sqrt(project(x[c], refimg, detail, raw, observed[c]) / d.size)) / scale)
+                total = project(x[c], refimg, _subbands(d, 0, levels, threshold), raw, observed[c])
+            change = max(change, float(np.sqrt(total / d.size)) / scale)
         done += 1
         if ref.channel is None:
             refimg = np.tensordot(w, x, axes=1)
