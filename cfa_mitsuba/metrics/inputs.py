@@ -55,7 +55,8 @@ class MetricInputs:
         """8-bit sRGB code values of ``which`` ('reference' or 'test'), quantised."""
         if self._srgb8[which] is None and self._xyz(which) is not None:
             self._srgb8[which] = mcolour.xyz_to_srgb8(self._xyz(which), self.white_xyz)
-            if which == "reference":
+            if which == "reference":  # kept for every camera output: read-only (checked once, _common)
+                self._srgb8[which].flags.writeable = False
                 self.shared["srgb8_reference"] = self._srgb8[which]
         return self._srgb8[which]
 
@@ -64,5 +65,6 @@ class MetricInputs:
         if self._linear[which] is None and self._xyz(which) is not None:
             self._linear[which] = mcolour.xyz_to_linear(self._xyz(which), scale=float(self.white_xyz[1]))
             if which == "reference":
+                self._linear[which].flags.writeable = False
                 self.shared["linear_reference"] = self._linear[which]
         return self._linear[which]

@@ -245,7 +245,10 @@ class CameraChain:
 
         def make():
             raw = capture_ideal(oi, luminance_cd_m2=cond.luminance, sensor=sensor, exposure_s=cond.exposure)
-            return process(raw)
+            out = process(raw)
+            # compared with every camera output of its task: read-only, so the metrics check it once
+            out.xyz.flags.writeable = False
+            return out
 
         if scene_key is None or os.environ.get(NO_MEMO_ENV) == "1":
             return self._timed("optics_s", make)

@@ -1,0 +1,80 @@
+"""The metrics' input check (metrics._common.check_values) runs once for an
+array nothing can write to: a read-only array that owns its memory (a
+study's ideal image and its sRGB codes, compared with every camera output
+of a task).  Every other array is checked at every call, so a NaN that
+appears in it later is still refused (issue 25)."""
+
+from __future__ import annotations
+
+import gc
+
+import numpy as np
+import pytest
+
+from cfa_mitsuba.errors import CfaMitsubaError
+from cfa_mitsuba.metrics import _common
+
+
+def _read_only(a):
+    a.flags.writeable = False
+    return a
+
+
+def test_a_read_only_owner_is_checked_once_and_forgotten_when_it_dies():
+    ro = _read_only(np.full((8, 9, 3), 20.0))
+    assert _common.check_values(ro, "reference image") is ro
+    assert _common._PASSED[id(ro)]() is ro
+    assert _common.check_values(ro, "reference image") is ro
+    key = id(ro)
+    del ro
+    gc.collect()
+    assert key not in _common._PASSED
+
+
+def test_an_array_something_can_write_to_is_checked_every_time():
+    rw = np.full((8, 9, 3), 20.0)
+    _common.check_values(rw, "test image")
+    assert id(rw) not in _common._PASSED
+    rw[2, 3, 1] = np.nan
+    with pytest.raises(CfaMitsubaError, match="test image"):
+        _common.check_values(rw, "test image")
+    # a read-only view of a writeable array: its owner can still change it
+    base = np.full((8, 9, 3), 20.0)
+    view = _read_only(base[:, :])
+    _common.check_values(view, "reference image")
+    assert id(view) not in _common._PASSED
+    base[0, 0, 0] = np.inf
+    with pytest.raises(CfaMitsubaError, match="reference image"):
+        _common.check_values(view, "reference image")
+
+
+def test_a_failing_read_only_array_is_never_remembered():
+    bad = _read_only(np.array([[[1.0, np.nan, 2.0]]]))
+    for _ in range(2):
+        with pytest.raises(CfaMitsubaError, match="NaN"):
+            _common.check_values(bad, "test image")
+    assert id(bad) not in _common._PASSED
+
+
+def test_the_study_chain_hands_the_metrics_a_read_only_ideal():
+    """The ideal image a chain keeps for its task's camera outputs, and the
+    sRGB codes kept with it, are read-only owners (so checked once)."""
+    from cfa_mitsuba import spectra
+    from cfa_mitsuba.study.chain import CameraChain
+    from cfa_mitsuba.study.conditions import Condition
+    from cfa_mitsuba.values import SpectralImage
+
+    wl = spectra.DEFAULT_WAVELENGTHS
+    d65 = spectra.illuminant("D65", wl)
+    white = d65 * (100.0 / spectra.luminance_cd_m2(d65, wl))
+    scene = np.broadcast_to(0.3 * white, (24, 24, wl.size)).copy()
+    image = SpectralImage(scene, wl.copy(), {"scene": "grey", "fov_deg": 2.0, "white_radiance": white.tolist()})
+    chain = CameraChain()
+    outs = list(chain.evaluate(image, "bayer", ["bilinear"], ["ssim"], Condition(20.0), seed=1, scene_key="grey"))
+    _, ideal, _, ev = outs[0]
+    assert _common._unchangeable(ideal.xyz) and id(ideal.xyz) in _common._PASSED
+    codes = ideal.__dict__["_metric_shared"]["srgb8_reference"]
+    assert _common._unchangeable(codes)
+    assert np.isfinite(float(ev.results["ssim"]))
+    with pytest.raises(ValueError):
+        ideal.xyz[0, 0, 0] = 1.0
