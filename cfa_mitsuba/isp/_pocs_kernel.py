@@ -46,9 +46,14 @@ def project(x: np.ndarray, ref: np.ndarray, detail: np.ndarray, raw: np.ndarray,
     detail``, except where the tile mask ``observed`` (th, tw bool) says the
     channel is sampled, where it takes ``raw``; returns the sum of the
     squared changes."""
+    return float(_project(x, ref, detail, raw, _row_mask(observed, x.shape[1])))
+
+
+def _row_mask(observed, width: int) -> np.ndarray:
+    """The tile mask ``observed`` (th, tw) repeated across ``width`` columns: (th, width) bool."""
     observed = np.asarray(observed, dtype=np.bool_)
-    reps = -(-x.shape[1] // observed.shape[1])
-    return float(_project(x, ref, detail, raw, np.ascontiguousarray(np.tile(observed, (1, reps))[:, :x.shape[1]])))
+    reps = -(-width // observed.shape[1])
+    return np.ascontiguousarray(np.tile(observed, (1, reps))[:, :width])
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")
@@ -103,10 +108,8 @@ def lowpass_project(x: np.ndarray, ref: np.ndarray, d: np.ndarray, raw: np.ndarr
     the same sums) and :func:`project` of ``ref + P(d)``, without writing
     ``P(d)`` out.  ``x`` is changed in place, ``d`` is read only; returns
     the sum of the squared changes."""
-    observed = np.asarray(observed, dtype=np.bool_)
-    reps = -(-x.shape[1] // observed.shape[1])
     r = k.shape[0] // 2
     colbuf = np.empty(x.shape[1] + 2 * r, dtype=d.dtype)
     rowbuf = np.empty(x.shape[1], dtype=d.dtype)
-    mask = np.ascontiguousarray(np.tile(observed, (1, reps))[:, :x.shape[1]])
-    return float(_lowpass_project(x, ref, d, raw, mask, np.ascontiguousarray(k, dtype=d.dtype), colbuf, rowbuf))
+    return float(_lowpass_project(x, ref, d, raw, _row_mask(observed, x.shape[1]),
+                                  np.ascontiguousarray(k, dtype=d.dtype), colbuf, rowbuf))

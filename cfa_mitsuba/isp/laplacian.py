@@ -362,13 +362,13 @@ def colour_differences(raw, refimg, mosaic: Mosaic, ref: Reference, chroma_gain:
             continue
         compiled = ext_y.dtype == ext_r.dtype == refimg.dtype == plane.dtype and ext_y.dtype in (np.float32,
                                                                                                  np.float64)
+        if compiled:  # here, not at import: Numba takes a third of a second to load
+            from ._directional_kernel import directional_phase
         for i, j in mosaic.gaps(c):
             dirs = directional_samples(mosaic, c, i, j, limit)
             if len(dirs) < 2:
                 continue
             if compiled:  # _directional_estimate's steps in one pass (._directional_kernel), the same bits
-                from ._directional_kernel import directional_phase
-
                 directional_phase(ext_y, ext_r, refimg[i::th, j::tw], ph + i, pw + j, tile, dirs, g, eps,
                                   weighting == "soft", plane[i::th, j::tw])
             else:

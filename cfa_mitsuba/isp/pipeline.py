@@ -290,8 +290,8 @@ class PreparedRaw:
         methods that take ``luminance_weights``), computed on first use."""
         r = self.raw_image
         w = luminance_weights(np.asarray(r.electrons_per_radiance, dtype=np.float64),
-                                 np.asarray(r.white_radiance, dtype=np.float64),
-                                 np.asarray(r.wavelengths, dtype=np.float64))
+                              np.asarray(r.white_radiance, dtype=np.float64),
+                              np.asarray(r.wavelengths, dtype=np.float64))
         w.flags.writeable = False
         return w
 

@@ -184,23 +184,25 @@ def start_z(u: np.ndarray) -> np.ndarray:
 def _count_up(lam, u, i, k, decided):
     """A mean below :data:`PP_MEANS`: count up from 0 with the mass's
     recurrence (F(0) = p(0) = exp(-lam), p(k + 1) = p(k) lam / (k + 1)),
-    about lam + 1 steps, to the first count whose CDF reaches u.  Decided
-    unless u lies within :data:`NEAR` (relative) of a CDF on the way or
-    :data:`MAX_STEPS` are not enough: those keep their start for the exact
-    path."""
+    about lam + 1 steps, to the first count whose CDF reaches u; returns
+    whether it decided (sets ``k[i]`` and ``decided[i]``).  Not decided
+    where u lies within :data:`NEAR` (relative) of a CDF on the way or
+    :data:`MAX_STEPS` are not enough: those get the Cornish-Fisher start
+    for the exact path."""
     p = math.exp(-lam)
     f = p
     kk = 0.0
     for _ in range(MAX_STEPS):
         if abs(f - u) <= NEAR * f:
-            return
+            return False
         if f >= u:
             k[i] = kk
             decided[i] = True
-            return
+            return True
         kk += 1.0
         p = p * lam / kk
         f = f + p
+    return False
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")
@@ -213,14 +215,13 @@ def _start_and_settle(lam, u, k, decided):  # pragma: no cover - compiled
             k[i] = 0.0
             decided[i] = True
             continue
+        if ll < lo and _count_up(ll, uu, i, k, decided):
+            continue  # decided: no start needed
         z = _start_z(uu)
         kk = math.floor(ll + math.sqrt(ll) * z + (z * z - 1.0) / 6.0 + 0.5)  # Cornish-Fisher
         kk = max(kk, 0.0)
         k[i] = kk
-        if ll < lo:
-            _count_up(ll, uu, i, k, decided)
-            continue
-        if ll > hi:
+        if ll < lo or ll > hi:  # left for the exact path, from the start
             continue
         guard = pp_guard(ll)
         for _ in range(MAX_STEPS):
