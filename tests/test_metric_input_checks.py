@@ -78,3 +78,41 @@ def test_the_study_chain_hands_the_metrics_a_read_only_ideal():
     assert np.isfinite(float(ev.results["ssim"]))
     with pytest.raises(ValueError):
         ideal.xyz[0, 0, 0] = 1.0
+
+
+def test_the_camera_side_arrays_a_study_makes_are_read_only_owners(monkeypatch):
+    """The chain's mean-matched camera image and the sRGB codes / linear RGB
+    that MetricInputs derives from a test image are new arrays that only
+    the metrics read: read-only owners, so every metric after the first
+    skips their check.  A caller's own test array is left writeable."""
+    from cfa_mitsuba import metrics as m
+    from cfa_mitsuba import spectra
+    from cfa_mitsuba.study.chain import CameraChain
+    from cfa_mitsuba.study.conditions import Condition
+    from cfa_mitsuba.values import SpectralImage
+
+    seen = []
+    real = m.evaluate_many
+
+    def spy(names, inputs, *args, **kwargs):
+        seen.append(inputs)
+        return real(names, inputs, *args, **kwargs)
+
+    monkeypatch.setattr(m, "evaluate_many", spy)
+    wl = spectra.DEFAULT_WAVELENGTHS
+    d65 = spectra.illuminant("D65", wl)
+    white = d65 * (100.0 / spectra.luminance_cd_m2(d65, wl))
+    scene = np.broadcast_to(0.3 * white, (24, 24, wl.size)).copy()
+    image = SpectralImage(scene, wl.copy(), {"scene": "grey", "fov_deg": 2.0, "white_radiance": white.tolist()})
+    outs = list(CameraChain().evaluate(image, "bayer", ["bilinear"], ["ssim"], Condition(20.0), seed=1,
+                                       scene_key="grey-camera-side"))
+    assert np.isfinite(float(outs[0][3].results["ssim"]))
+    (inp,) = seen
+    assert _common._unchangeable(inp.test_xyz)
+    assert _common._unchangeable(inp.srgb8("test")) and id(inp.srgb8("test")) in _common._PASSED
+    assert outs[0][3].processed.xyz.flags.writeable  # the processed output itself is untouched
+
+    mine = np.full((8, 9, 3), 20.0)
+    own = m.MetricInputs(mine, mine.copy(), [95.047, 100.0, 108.883])
+    assert _common._unchangeable(own.linear("test")) and _common._unchangeable(own.srgb8("test"))
+    assert own.test_xyz.flags.writeable and own.reference_xyz.flags.writeable

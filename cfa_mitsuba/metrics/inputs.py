@@ -55,8 +55,10 @@ class MetricInputs:
         """8-bit sRGB code values of ``which`` ('reference' or 'test'), quantised."""
         if self._srgb8[which] is None and self._xyz(which) is not None:
             self._srgb8[which] = mcolour.xyz_to_srgb8(self._xyz(which), self.white_xyz)
-            if which == "reference":  # kept for every camera output: read-only (checked once, _common)
-                self._srgb8[which].flags.writeable = False
+            # made here, read by every metric of this pair and written by none: read-only, so
+            # the metrics check it once (_common.check_values); the reference's is kept for every camera output
+            self._srgb8[which].flags.writeable = False
+            if which == "reference":
                 self.shared["srgb8_reference"] = self._srgb8[which]
         return self._srgb8[which]
 
@@ -64,7 +66,7 @@ class MetricInputs:
         """Linear sRGB of ``which`` with the scene white at 1 (None if absent)."""
         if self._linear[which] is None and self._xyz(which) is not None:
             self._linear[which] = mcolour.xyz_to_linear(self._xyz(which), scale=float(self.white_xyz[1]))
+            self._linear[which].flags.writeable = False  # as srgb8's
             if which == "reference":
-                self._linear[which].flags.writeable = False
                 self.shared["linear_reference"] = self._linear[which]
         return self._linear[which]
