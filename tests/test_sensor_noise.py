@@ -270,6 +270,27 @@ def test_poisson_start_quantile_is_ndtris_to_its_stated_error():
     assert start_z(np.array([0.5]))[0] == 0.0
 
 
+def test_poisson_decision_deviates_bound_the_quantiles():
+    """The Peizer-Pratt steps are decided in normal deviates: _z_below(v)
+    never exceeds the normal quantile of v and _z_above(w) is never below
+    that of w (scipy's ndtri, the independent reference), so a deviate
+    test is never looser than comparing u with the approximate CDF; the
+    ends give -inf and +inf."""
+    from scipy import special
+
+    from cfa_mitsuba.sensor import _poisson_kernel as kernel
+
+    rng = np.random.default_rng(9)
+    v = np.concatenate([rng.random(20_000), np.logspace(-300, -1, 2000), 1 - np.logspace(-16, -1, 2000), [0.5]])
+    want = special.ndtri(v)
+    below = np.array([kernel._z_below(x) for x in v])
+    above = np.array([kernel._z_above(x) for x in v])
+    assert np.all(below <= want) and np.all(above >= want)
+    assert np.all(above - below <= 5e-9 * np.abs(want) + 1e-12)  # and tight: they still decide
+    assert kernel._z_below(0.0) == -np.inf and kernel._z_below(-1e-9) == -np.inf
+    assert kernel._z_above(1.0) == np.inf and kernel._z_above(1.0 + 1e-9) == np.inf
+
+
 def test_poisson_counts_do_not_depend_on_the_start(monkeypatch):
     """Every count is decided by a CDF, so a start a whole standard
     deviation off (the start's quantile shifted by 1, run through the

@@ -125,11 +125,17 @@ def _pp_g(t):
 
 
 @nb.njit(inline="always")
+def _pp_z(k, lam):
+    """Peizer and Pratt's normal deviate of P(X <= k) for Poisson(lam):
+    (k - lam + 2/3 + 0.02 / (k + 1)) sqrt((1 + g((k + 1/2) / lam)) / lam)."""
+    return (k - lam + 2.0 / 3.0 + 0.02 / (k + 1.0)) * math.sqrt((1.0 + _pp_g((k + 0.5) / lam)) / lam)
+
+
+@nb.njit(inline="always")
 def _pp_cdf(k, lam):
     """P(X <= k) of Poisson(lam), Peizer and Pratt's normal approximation:
-    Phi((k - lam + 2/3 + 0.02 / (k + 1)) sqrt((1 + g((k + 1/2) / lam)) / lam))."""
-    z = (k - lam + 2.0 / 3.0 + 0.02 / (k + 1.0)) * math.sqrt((1.0 + _pp_g((k + 0.5) / lam)) / lam)
-    return 0.5 * math.erfc(-z * _SQRT_HALF)
+    Phi(:func:`_pp_z`)."""
+    return 0.5 * math.erfc(-_pp_z(k, lam) * _SQRT_HALF)
 
 
 #: Acklam's rational approximation of the normal quantile (relative error
@@ -164,6 +170,32 @@ def _start_z(u):
     r = q * q
     return (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q / \
         (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1.0)
+
+
+#: relative error allowed for :func:`_start_z` where it bounds a decision
+#: (:func:`_z_below`, :func:`_z_above`): Acklam's stated 1.15e-9, with room
+Z_SLACK = 2e-9
+
+
+@nb.njit(inline="always")
+def _z_below(v):
+    """A normal deviate at most Phi^-1(v) (v < 1): -inf for v <= 0 (no
+    deviate has a CDF below 0), else :func:`_start_z` less :data:`Z_SLACK`
+    of itself."""
+    if v <= 0.0:
+        return -math.inf
+    z = _start_z(v)
+    return z - Z_SLACK * abs(z) - 1e-300
+
+
+@nb.njit(inline="always")
+def _z_above(w):
+    """A normal deviate at least Phi^-1(w) (w > 0): +inf for w >= 1, else
+    :func:`_start_z` plus :data:`Z_SLACK` of itself."""
+    if w >= 1.0:
+        return math.inf
+    z = _start_z(w)
+    return z + Z_SLACK * abs(z) + 1e-300
 
 
 @nb.njit(cache=True, nogil=True)
@@ -223,23 +255,29 @@ def _start_and_settle(lam, u, k, decided):  # pragma: no cover - compiled
         k[i] = kk
         if ll < lo or ll > hi:  # left for the exact path, from the start
             continue
+        # Decided in deviates, not probabilities: Phi(z) < u - guard where z <
+        # z_lo, Phi(z) >= u + guard where z >= z_hi (bounds of the two
+        # quantiles, _z_below/_z_above), so no erfc per step; the same tests
+        # as comparing u with _pp_cdf, a hair stricter by the bounds' slack.
         guard = pp_guard(ll)
+        z_lo = _z_below(uu - guard)
+        z_hi = _z_above(uu + guard)
         for _ in range(MAX_STEPS):
-            f = _pp_cdf(kk, ll)
-            if uu > f + guard:  # F(k) < u for certain: up
+            z = _pp_z(kk, ll)
+            if z < z_lo:  # F(k) < u for certain: up
                 kk += 1.0
                 continue
-            if uu > f - guard:  # too near to call
+            if z < z_hi:  # too near to call
                 break
             if kk == 0.0:  # F(0) >= u for certain
                 k[i] = kk
                 decided[i] = True
                 break
-            f = _pp_cdf(kk - 1.0, ll)
-            if uu <= f - guard:  # F(k - 1) >= u for certain: down
+            z = _pp_z(kk - 1.0, ll)
+            if z >= z_hi:  # F(k - 1) >= u for certain: down
                 kk -= 1.0
                 continue
-            if uu > f + guard:  # F(k - 1) < u <= F(k) for certain: k
+            if z < z_lo:  # F(k - 1) < u <= F(k) for certain: k
                 k[i] = kk
                 decided[i] = True
             break
