@@ -194,3 +194,30 @@ def test_directional_colour_differences_compiled_equal_numpy(dtype, weighting):
                 assert np.array_equal(got, want.astype(dtype)), (name, c, i, j)
                 checked += 1
     assert checked > 20
+
+
+def test_mirror_extension_by_blocks_equals_the_whole_gather():
+    """isp.mosaic.extend copies the image in as a block and gathers only the
+    border bands: the same array as indexing the whole extension with the
+    mirror's row and column indices, for every registered CFA, images down
+    to one tile (demosaic's smallest), extra axes and both precisions."""
+    import math
+
+    from cfa_mitsuba.isp import mosaic
+    from cfa_mitsuba.isp.demosaic import resolve_cfa
+    from cfa_mitsuba.sensor import list_cfas
+
+    rng = np.random.default_rng(4)
+    for name in list_cfas():
+        geo = mosaic.geometry(resolve_cfa(name))
+        th, tw = geo.tile_shape
+        for shape in [(37, 41), (th, tw), (th, 2 * tw + 1), (th + 3, tw, 2), (12 + th, 10 + tw, 4)]:
+            for dtype in (np.float32, np.float64):
+                image = rng.random(shape).astype(dtype)
+                for radius in (0, 1, 3, 7):
+                    got, ph, pw = mosaic.extend(image, geo, radius)
+                    assert (ph, pw) == (th * math.ceil(radius / th), tw * math.ceil(radius / tw))
+                    rows = mosaic._mirror_index(shape[0], th, ph)
+                    cols = mosaic._mirror_index(shape[1], tw, pw)
+                    want = image[rows[:, None], cols[None, :]]
+                    assert got.dtype == want.dtype and np.array_equal(got, want), (name, shape, radius)
