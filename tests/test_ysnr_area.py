@@ -87,3 +87,30 @@ def test_bad_correlation_lag_is_refused_in_one_line(bad):
     with pytest.raises(CfaMitsubaError, match="correlation_px") as info:
         cm.metrics.ysnr(ref, test, WHITE, correlation_px=bad)
     assert "\n" not in str(info.value)
+
+
+def test_nps_at_zero_equals_the_sum_over_every_lag_to_the_bit():
+    """_nps_at_zero computes the dot product of each lag pair once (the
+    lag and its opposite pair the same windows): the sum equals the
+    direct one over all (2L + 1)^2 lags, in the same order, bit for bit."""
+    from cfa_mitsuba.metrics.snr import _nps_at_zero
+
+    def direct(noise, lag):
+        h, w = noise.shape
+        total = 0.0
+        for dy in range(-lag, lag + 1):
+            for dx in range(-lag, lag + 1):
+                a = noise[max(dy, 0):h + min(dy, 0), max(dx, 0):w + min(dx, 0)]
+                b = noise[max(-dy, 0):h + min(-dy, 0), max(-dx, 0):w + min(-dx, 0)]
+                total += float(np.vdot(a, b)) / a.size
+        return total
+
+    rng = np.random.default_rng(17)
+    for shape in [(494, 80), (37, 61), (9, 9), (200, 33)]:
+        for lag in (0, 1, 2, 4):
+            if min(shape) < 4 * lag + 1:
+                assert _nps_at_zero(np.zeros(shape), lag) is None
+                continue
+            noise = rng.standard_normal(shape) * rng.uniform(0.01, 10)
+            noise -= noise.mean()
+            assert _nps_at_zero(noise, lag) == direct(noise, lag), (shape, lag)

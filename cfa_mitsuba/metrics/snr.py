@@ -87,12 +87,19 @@ def _nps_at_zero(noise: np.ndarray, lag: int) -> float | None:
     h, w = noise.shape
     if h < 4 * lag + 1 or w < 4 * lag + 1:
         return None
+    # The lag (-dy, -dx) pairs the same two windows the other way round, and
+    # their dot product is the same number (the same products, summed in the
+    # same order): each is computed once and the sum kept in lag order.
+    seen: dict = {}
     total = 0.0
     for dy in range(-lag, lag + 1):
         for dx in range(-lag, lag + 1):
-            a = noise[max(dy, 0):h + min(dy, 0), max(dx, 0):w + min(dx, 0)]
-            b = noise[max(-dy, 0):h + min(-dy, 0), max(-dx, 0):w + min(-dx, 0)]
-            total += float(np.vdot(a, b)) / a.size
+            v = seen.get((-dy, -dx))
+            if v is None:
+                a = noise[max(dy, 0):h + min(dy, 0), max(dx, 0):w + min(dx, 0)]
+                b = noise[max(-dy, 0):h + min(-dy, 0), max(-dx, 0):w + min(-dx, 0)]
+                v = seen[dy, dx] = float(np.vdot(a, b)) / a.size
+            total += v
     return total if total > 0 else None
 
 
