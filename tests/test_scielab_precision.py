@@ -61,3 +61,29 @@ def test_a_study_uses_single_unless_its_config_says_double():
     assert ChainSettings().options_of_metrics()["scielab"] == {"fft_precision": "single"}
     mine = ChainSettings(metric_options={"scielab": {"fft_precision": "double", "matrix": "xyz10"}})
     assert mine.options_of_metrics()["scielab"] == {"fft_precision": "double", "matrix": "xyz10"}
+
+
+@pytest.mark.parametrize("shape, half, fshape", [((120, 150), 12, (150, 180)), ((7, 5), 9, (27, 25)),
+                                                 ((7, 5), 40, (90, 96)), ((30, 41), 0, (32, 45))])
+def test_single_precision_input_is_numpys_opponent_difference_padded(shape, half, fshape):
+    """The compiled input of the single-precision filtering (the opponent
+    transform of test - reference, cast to float32, extended
+    symmetrically, zero beyond) against numpy's steps: within one float32
+    rounding (the kernel sums each matrix row left to right), and exactly
+    zero in the transform's padding, also where the extension is longer
+    than the image."""
+    from cfa_mitsuba.metrics._scielab_kernel import opponent_difference_padded
+    from cfa_mitsuba.metrics.scielab import OPPONENT_MATRICES
+
+    rng = np.random.default_rng(half)
+    ref = 100 * rng.random((*shape, 3))
+    test = 100 * rng.random((*shape, 3))
+    m = OPPONENT_MATRICES["xyz2"]
+    planes = np.moveaxis((test - ref) @ m.T, -1, 0).astype(np.float32)
+    want = np.zeros((3, *fshape), dtype=np.float32)
+    eh, ew = shape[0] + 2 * half, shape[1] + 2 * half
+    want[:, :eh, :ew] = np.pad(planes, ((0, 0), (half, half), (half, half)), mode="symmetric")
+    got = opponent_difference_padded(test, ref, m, half, fshape)
+    assert got.dtype == np.float32 and got.shape == (3, *fshape)
+    assert np.all(got[:, eh:] == 0) and np.all(got[:, :, ew:] == 0)
+    assert np.allclose(got, want, rtol=2 * np.finfo(np.float32).eps, atol=1e-5)
