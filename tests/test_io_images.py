@@ -54,3 +54,30 @@ def test_bad_inputs(tmp_path):
     with pytest.raises(CfaMitsubaError, match="NaN"):
         io.write_image(tmp_path / "n.exr", np.full((3, 3), np.nan))
     assert not (tmp_path / "n.exr").exists()
+
+
+@pytest.mark.parametrize("bit_depth", [8, 16])
+@pytest.mark.parametrize("channels", [None, 1, 2, 3, 4])
+def test_png_codes_read_back_exactly(tmp_path, bit_depth, channels):
+    """8-bit PNGs are written by Pillow, 16-bit ones by pypng: either way the
+    reader (pypng) gets back exactly the rounded codes, colour planes of
+    grey, grey + alpha, RGB and RGBA (the alpha dropped on reading)."""
+    rng = np.random.default_rng(channels or 0)
+    img = rng.uniform(-0.1, 1.1, (13, 17) if channels is None else (13, 17, channels))
+    img[0, 0] = 0.5 / 255  # a tie: rounds half to even
+    p = io.write_image(tmp_path / "c.png", img, bit_depth=bit_depth)
+    back = io.read_image(p)
+    top = (1 << bit_depth) - 1
+    codes = np.rint(np.clip(img, 0, 1) * top)
+    if channels in (2, 4):
+        codes = codes[..., :-1]
+    if channels == 2 or channels == 1:
+        codes = codes[..., 0]
+    assert back.bit_depth == bit_depth
+    np.testing.assert_array_equal(back.data.reshape(codes.shape), codes)
+
+
+def test_png_of_five_channels_is_refused(tmp_path):
+    with pytest.raises(CfaMitsubaError, match="1 to 4 channels"):
+        io.write_image(tmp_path / "five.png", np.zeros((4, 4, 5)))
+    assert not list(tmp_path.iterdir())
