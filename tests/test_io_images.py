@@ -59,9 +59,9 @@ def test_bad_inputs(tmp_path):
 @pytest.mark.parametrize("bit_depth", [8, 16])
 @pytest.mark.parametrize("channels", [None, 1, 2, 3, 4])
 def test_png_codes_read_back_exactly(tmp_path, bit_depth, channels):
-    """8-bit PNGs are written by Pillow, 16-bit ones by pypng: either way the
-    reader (pypng) gets back exactly the rounded codes, colour planes of
-    grey, grey + alpha, RGB and RGBA (the alpha dropped on reading)."""
+    """The reader gets back exactly the rounded codes at both depths, for
+    grey, grey + alpha, RGB and RGBA (the alpha dropped on reading); the
+    writer hands pypng array rows, and grey + alpha is written as such."""
     rng = np.random.default_rng(channels or 0)
     img = rng.uniform(-0.1, 1.1, (13, 17) if channels is None else (13, 17, channels))
     img[0, 0] = 0.5 / 255  # a tie: rounds half to even

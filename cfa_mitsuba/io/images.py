@@ -177,23 +177,20 @@ def read_image(path, *, key: str | None = None) -> ImageFile:
 
 
 def _png_bytes_writer(tmp: Path, codes: np.ndarray, bit_depth: int) -> None:
-    """Write ``codes`` (H, W[, 1-4]) as a PNG: 8-bit by Pillow (compiled: a
-    240-px thumbnail in about 1 ms, where pypng's Python rows took 9), 16-bit
-    by pypng (Pillow has no 16-bit RGB mode); the codes read back the same."""
-    if bit_depth == 8:
-        from PIL import Image
-
-        flat = codes[..., 0] if codes.ndim == 3 and codes.shape[2] == 1 else codes
-        Image.fromarray(np.ascontiguousarray(flat)).save(tmp, format="PNG")  # uint8: L, LA, RGB or RGBA
-        return
+    """Write ``codes`` (H, W[, 1-4] uint8 or uint16) as a PNG with pypng:
+    its rows handed over as array rows (not Python lists) and zlib at level
+    1, which halves a study's thumbnail (7 -> 3-4 ms for 240 x 212 RGB; the
+    file within 1 % of level 6's size, as pypng does not filter rows).
+    Pillow, tried, took longer (14 ms at its defaults: it filters each row)."""
     import png
 
     h, w = codes.shape[:2]
     planes = 1 if codes.ndim == 2 else codes.shape[2]
     greyscale = planes in (1, 2)  # grey, or grey + alpha
-    writer = png.Writer(width=w, height=h, bitdepth=bit_depth, greyscale=greyscale, alpha=planes in (2, 4))
+    writer = png.Writer(width=w, height=h, bitdepth=bit_depth, greyscale=greyscale, alpha=planes in (2, 4),
+                        compression=1)
     with open(tmp, "wb") as fh:
-        writer.write(fh, codes.reshape(h, w * planes).tolist())
+        writer.write(fh, np.ascontiguousarray(codes).reshape(h, w * planes))
 
 
 def write_image(path, data, *, channels=None, meta: dict | None = None, bit_depth: int = 8, arrays=None) -> Path:
