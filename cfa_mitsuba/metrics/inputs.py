@@ -32,6 +32,9 @@ class MetricInputs:
         ideal image), where what depends on the reference alone (its sRGB
         codes, S-CIELAB's filtered reference) is computed once for every
         camera output compared with it.
+
+    The sRGB codes and linear RGB derived here are read-only (the metrics
+    read them and check each once); the arrays given are used as they are.
     """
 
     def __init__(self, reference_xyz=None, test_xyz=None, white_xyz=None, *, geometry: dict | None = None,

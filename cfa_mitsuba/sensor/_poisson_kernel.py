@@ -185,7 +185,7 @@ def _z_below(v):
     if v <= 0.0:
         return -math.inf
     z = _start_z(v)
-    return z - Z_SLACK * abs(z) - 1e-300
+    return z - Z_SLACK * abs(z)
 
 
 @nb.njit(inline="always")
@@ -195,7 +195,7 @@ def _z_above(w):
     if w >= 1.0:
         return math.inf
     z = _start_z(w)
-    return z + Z_SLACK * abs(z) + 1e-300
+    return z + Z_SLACK * abs(z)
 
 
 @nb.njit(cache=True, nogil=True)

@@ -328,7 +328,7 @@ class CameraChain:
             if "interior_mean" not in shared:
                 shared["interior_mean"] = m.reference_interior_mean(ideal.xyz)
             cam, scale = m.mean_match(cam, ideal.xyz, return_scale=True, reference_mean=shared["interior_mean"])
-            cam.flags.writeable = False  # a new array that only the metrics read: each checks it once in all
+            cam.flags.writeable = False  # a new array only the metrics read: checked by the first, not again
         failures: list = []
         options = self.settings.metric_options_for(cond)  # a new dict each call
         if not details:
