@@ -153,6 +153,13 @@ def xyz_to_srgb(xyz, white_xyz, *, adaptation: str | None = None) -> np.ndarray:
     [1.0, 1.0, 1.0]
     """
     w = as_white(white_xyz)
+    return linear_to_srgb(np.clip(_display_linear(xyz, w, adaptation), 0.0, 1.0))
+
+
+def _display_linear(xyz, w: np.ndarray, adaptation: str | None) -> np.ndarray:
+    """Linear sRGB (white Y = 1, not clipped) of absolute XYZ for the white
+    ``w`` (checked), its chromaticity adapted to sRGB's D65 first when
+    ``adaptation`` names a transform (:func:`xyz_to_srgb`)."""
     xyz = np.asarray(xyz, dtype=np.float64)
     if adaptation is not None:
         colour = _colour()
@@ -161,14 +168,13 @@ def xyz_to_srgb(xyz, white_xyz, *, adaptation: str | None = None) -> np.ndarray:
         # per-pixel batched 3 x 3 products (the same values to rounding; tests/test_fast_paths.py)
         cat = colour.adaptation.matrix_chromatic_adaptation_VonKries(w / w[1], d65, transform=adaptation)
         xyz = w[1] * ((xyz / w[1]) @ cat.T)
-    lin = np.clip(xyz_to_linear(xyz, scale=w[1]), 0.0, 1.0)
-    return linear_to_srgb(lin)
+    return xyz_to_linear(xyz, scale=w[1])
 
 
-def xyz_to_srgb8(xyz, white_xyz, *, quantize: bool = True) -> np.ndarray:
+def xyz_to_srgb8(xyz, white_xyz, *, quantize: bool = True, adaptation: str | None = None) -> np.ndarray:
     """Absolute XYZ to 8-bit sRGB code values (float64, 0..255):
-    ``255 x`` :func:`xyz_to_srgb` (no adaptation), rounded when ``quantize``
-    (an 8-bit image, as ISETCam's SSIM sees it).
+    ``255 x`` :func:`xyz_to_srgb` (with its ``adaptation``, default none),
+    rounded when ``quantize`` (an 8-bit image, as ISETCam's SSIM sees it).
 
     Examples
     --------
@@ -176,12 +182,11 @@ def xyz_to_srgb8(xyz, white_xyz, *, quantize: bool = True) -> np.ndarray:
     [[128.0, 126.0, 124.0]]
     """
     if not quantize:
-        return 255.0 * xyz_to_srgb(xyz, white_xyz)
+        return 255.0 * xyz_to_srgb(xyz, white_xyz, adaptation=adaptation)
     # exactly np.round(255 x xyz_to_srgb(...)), by a table of the code boundaries (tests/test_colour_kernels.py)
     from .colour_kernels import srgb8_codes
 
-    w = as_white(white_xyz)
-    return srgb8_codes(xyz_to_linear(np.asarray(xyz, dtype=np.float64), scale=w[1]), linear_to_srgb)
+    return srgb8_codes(_display_linear(xyz, as_white(white_xyz), adaptation), linear_to_srgb)
 
 
 def xyz_to_lab(xyz, white_xyz, *, constants: str = "cie") -> np.ndarray:

@@ -156,6 +156,12 @@ def test_srgb8_codes_equal_the_formula_rounded():
     xyz = rng.uniform(0, 120, (50, 60, 3))
     white = np.array([95.05, 100.0, 108.9])
     np.testing.assert_array_equal(cm.xyz_to_srgb8(xyz, white), np.round(cm.xyz_to_srgb8(xyz, white, quantize=False)))
+    # with the white adapted (the study's thumbnails): the codes of the adapted encoding, and not the
+    # unadapted codes under a warm white
+    warm = np.array([109.85, 100.0, 35.58])
+    adapted = cm.xyz_to_srgb8(xyz, warm, adaptation="Bradford")
+    np.testing.assert_array_equal(adapted, np.round(255 * cm.xyz_to_srgb(xyz, warm, adaptation="Bradford")))
+    assert not np.array_equal(adapted, cm.xyz_to_srgb8(xyz, warm))
 
 
 def test_realisable_shapes_nan_and_bad_axis():
