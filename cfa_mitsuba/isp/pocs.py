@@ -197,7 +197,7 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
     scale = max(float(np.sqrt(np.mean(raw * raw))), np.finfo(float).tiny)
     done, change = 0, 0.0
     observed = {c: mosaic.index == c for c in others}  # (th, tw): where each channel is sampled
-    d = np.empty(shape, raw.dtype)  # reused: no allocation per pass
+    d = np.empty(shape, raw.dtype) if threshold else None  # reused: no allocation per pass
     k = lowpass_kernel(levels).astype(raw.dtype)  # a float32 mosaic is filtered in float32
     # here, not at import: Numba takes a third of a second to load
     from ._pocs_kernel import lowpass_project, project
@@ -207,14 +207,15 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
         for c in others:
             # the detail projection ref + P(x_c - ref) (module doc: for T = 0, P is the low-pass path;
             # T > 0 clips the subbands), then the observations, in one pass into x_c
-            np.subtract(x[c], refimg, out=d)
             if threshold == 0.0:
-                # the low-pass (ndimage.correlate1d(axis=0, then 1, mode="mirror")'s sums) and the
-                # projection row by row, P(d) never written out (._pocs_kernel.lowpass_project)
-                total = lowpass_project(x[c], refimg, d, raw, observed[c], k)
+                # the difference, the low-pass (ndimage.correlate1d(axis=0, then 1, mode="mirror")'s
+                # sums) and the projection row by row, d and P(d) never written out
+                # (._pocs_kernel.lowpass_project)
+                total = lowpass_project(x[c], refimg, raw, observed[c], k)
             else:
+                np.subtract(x[c], refimg, out=d)
                 total = project(x[c], refimg, _subbands(d, 0, levels, threshold), raw, observed[c])
-            change = max(change, float(np.sqrt(total / d.size)) / scale)
+            change = max(change, float(np.sqrt(total / raw.size)) / scale)
         done += 1
         if ref.channel is None:
             refimg = np.tensordot(w, x, axes=1)
