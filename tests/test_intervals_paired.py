@@ -246,3 +246,32 @@ def test_decision_aspects_use_paired_ranks():
                           for k, v in enumerate(vals)])
     d = decisions_table(None, every).set_index("aspect")
     assert d.loc["sharpness", "cfas"] == "bayer" and d.loc["sharpness", "verdict"] == "winner"
+
+
+def test_policy_summary_takes_a_policy_s_scores_only_when_its_ranges_are_theirs():
+    """write_tables hands policy_summary the study's own per-realisation
+    scores: the tables are the same as when it scores them itself, and a
+    table made under other ranges (a config's override) is not taken."""
+    from cfa_mitsuba.study.ranking import policy_ranges, policy_summary, score_realisations
+    from cfa_mitsuba.study.scoring import ScoreRange
+
+    renders = [0, 0, 1, 1]
+    rows = _every({"bayer": [0.80, 0.81, 0.60, 0.61], "rgbw1": [0.78, 0.79, 0.58, 0.59],
+                   "cmy1": [0.70, 0.74, 0.55, 0.50]}, renders)
+    means = rows.groupby(["scene", "cfa", "demosaic", "luminance", "metric", "unit"], sort=False)["value"].mean()
+    means = means.reset_index()
+    paper, ideal = {"ssim": ScoreRange(0.0, 1.0, ("",))}, {"ssim": 1.0}
+    plain = policy_summary(means, paper, ideal, realisations=rows)
+    ranges, constant = policy_ranges("ideal", means, paper, ideal)
+    own = score_realisations(rows, ranges, constant=constant)
+    reused = policy_summary(means, paper, ideal, realisations=rows, scored=(ranges, constant, own))
+    for a, b in zip(plain, reused):
+        pd.testing.assert_frame_equal(a, b)
+    # a table scored under other ranges: its totals would show if it were taken
+    other = score_realisations(rows, {"ssim": ScoreRange(0.5, 0.9, ("",))}, constant=constant)
+    wrong = policy_summary(means, paper, ideal, realisations=rows,
+                           scored=({"ssim": ScoreRange(0.5, 0.9, ("",))}, constant, other))
+    pd.testing.assert_frame_equal(wrong[1], plain[1])
+    # the mutant that takes any table it is given fails that check
+    forced = policy_summary(means, paper, ideal, realisations=rows, scored=(ranges, constant, other))
+    assert not forced[1].equals(plain[1])

@@ -191,14 +191,18 @@ def score_realisations(rows, ranges: dict, *, clip: bool = True, constant=()):
     return pd.DataFrame(out)
 
 
-def policy_summary(means, paper: dict, ideal: dict, clip: bool = True, realisations=None):
+def policy_summary(means, paper: dict, ideal: dict, clip: bool = True, realisations=None, scored=None):
     """For every policy: per metric how many scores are clipped and whether
     the metric is constant, and each CFA's overall rank (per luminance).
 
     With ``realisations`` (the scored rows per noise realisation) the totals
     are scored per realisation and averaged, as scores.csv's are, so the
     study's own policy gives scores.csv's totals and ranks exactly; without
-    them, the mean values are scored.
+    them, the mean values are scored.  ``scored``: optionally (ranges,
+    constant, :func:`score_realisations` of ``realisations`` under them), a
+    table already made; a policy whose ranges and constant metrics are
+    those takes it instead of scoring the realisations again (the study's
+    own policy, when its config overrides no range: a speed-up only).
 
     Returns (clipping table, rank table) as DataFrames: ``policy, metric,
     scores, clipped, constant`` and ``policy, cfa, luminance, total_score,
@@ -218,9 +222,12 @@ def policy_summary(means, paper: dict, ideal: dict, clip: bool = True, realisati
         if kept.empty:
             continue
         if realisations is not None and len(realisations):
-            cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
-            cols += ["render_seed"] if "render_seed" in realisations.columns else []
-            s = score_realisations(realisations[cols], ranges, clip=clip, constant=constant)
+            if scored is not None and scored[0] == ranges and list(scored[1]) == list(constant):
+                s = scored[2]
+            else:
+                cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
+                cols += ["render_seed"] if "render_seed" in realisations.columns else []
+                s = score_realisations(realisations[cols], ranges, clip=clip, constant=constant)
         else:
             s = score(kept, ranges, clip=clip)
         for _, r in s.drop_duplicates(["cfa", "luminance"]).iterrows():

@@ -198,8 +198,10 @@ def write_tables(out_dir: Path, realisations, ideal, *, paper_ranges: dict, over
         from .censored import values_for_scoring
 
         scored_real = values_for_scoring(scored_real, ranges)  # a bound scores by the stated rule (censored.py)
-        scores = _measured(score_realisations(scored_real[cols], ranges, clip=clip, constant=constant), scored_mean)
-        clipping, ranks = policy_summary(scored_mean, paper_ranges, ideal_vals, clip, realisations=scored_real)
+        per_realisation = score_realisations(scored_real[cols], ranges, clip=clip, constant=constant)
+        scores = _measured(per_realisation, scored_mean)
+        clipping, ranks = policy_summary(scored_mean, paper_ranges, ideal_vals, clip, realisations=scored_real,
+                                         scored=(ranges, constant, per_realisation))
         clipping["scope"] = "clipping"
         ranks["scope"] = "rank"
         save("policies.csv", pd.concat([clipping, ranks], ignore_index=True))
