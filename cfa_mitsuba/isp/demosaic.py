@@ -221,14 +221,24 @@ def demosaic(raw, cfa, method: str = "bilinear", *, precision: str = "double", *
         inspect.signature(fn).bind(arr, cfa, **options)
     except TypeError as exc:
         raise CfaMitsubaError(f"demosaicing method {method!r}: {exc}") from None
-    out = np.asarray(fn(arr if dtype is np.float64 else arr.astype(dtype), cfa, **options), dtype=np.float64)
+    est = np.asarray(fn(arr if dtype is np.float64 else arr.astype(dtype), cfa, **options))
     shape = (*arr.shape, len(cfa.channels))
-    if out.shape != shape:
-        raise CfaMitsubaError(f"demosaicing method {method!r} returned shape {out.shape}, expected {shape}")
+    if est.shape != shape:
+        raise CfaMitsubaError(f"demosaicing method {method!r} returned shape {est.shape}, expected {shape}")
     mosaic = geometry(cfa)
-    th, tw = mosaic.tile_shape
-    for (i, j), c in np.ndenumerate(mosaic.index):  # observed samples are data, never estimates
-        out[i::th, j::tw, c] = arr[i::th, j::tw]
-    if not np.all(np.isfinite(out)):
+    # observed samples are data, never estimates: the widening to float64, the samples and the
+    # finiteness check in one compiled pass (._finish_kernel, the same values), numpy otherwise
+    from ._finish_kernel import finish
+
+    done = finish(est, arr, mosaic.index)
+    if done is None:
+        out = np.asarray(est, dtype=np.float64)
+        th, tw = mosaic.tile_shape
+        for (i, j), c in np.ndenumerate(mosaic.index):
+            out[i::th, j::tw, c] = arr[i::th, j::tw]
+        finite = bool(np.all(np.isfinite(out)))
+    else:
+        out, finite = done
+    if not finite:
         raise CfaMitsubaError(f"demosaicing method {method!r} produced NaN or infinite values")
     return out
