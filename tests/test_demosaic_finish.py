@@ -23,12 +23,18 @@ def _numpy(est, raw, index):
 @pytest.mark.parametrize("name", ["bayer", "rgbw1", "cmy2", "rgb4", "rgbw3"])
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 @pytest.mark.parametrize("shape", [(64, 90), (7, 5), (33, 50)])
-def test_finish_equals_the_numpy_steps(name, dtype, shape):
+@pytest.mark.parametrize("planar", [False, True])
+def test_finish_equals_the_numpy_steps(name, dtype, shape, planar):
+    """(H, W, C) estimates; the (H, W, C) view of (C, H, W) planes (POCS's) is left to numpy."""
     index = geometry(get_cfa(name)).index
     n = int(index.max()) + 1
     rng = np.random.default_rng(shape[0] + n)
     raw = rng.random(shape)
     est = (rng.normal(size=(*shape, n)) * 1e3).astype(dtype)
+    if planar:
+        est = np.moveaxis(np.ascontiguousarray(np.moveaxis(est, -1, 0)), 0, -1)
+        assert not est.flags.c_contiguous and finish(est, raw, index) is None
+        return
     got, ok = finish(est, raw, index)
     want, want_ok = _numpy(est, raw, index)
     assert got.dtype == np.float64 and ok and want_ok
@@ -39,7 +45,7 @@ def test_finish_equals_the_numpy_steps(name, dtype, shape):
     seen = (0, 0, int(index[0, 0]))
     for site, value, want_finite in ((kept, np.nan, False), (kept, np.inf, False), (kept, -np.inf, False),
                                      (seen, np.nan, True), (seen, np.inf, True)):
-        bad = est.copy()
+        bad = np.moveaxis(np.moveaxis(est, -1, 0).copy(), 0, -1) if planar else est.copy()
         bad[site] = value
         got, ok = finish(bad, raw, index)
         want, want_ok = _numpy(bad, raw, index)
