@@ -196,6 +196,41 @@ def test_directional_colour_differences_compiled_equal_numpy(dtype, weighting):
     assert checked > 20
 
 
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_colour_difference_gaps_and_sites_compiled_equal_numpy(dtype):
+    """colour_differences' last steps for a channel (g x the reference added
+    back at the gaps, the mosaic's samples at the sites), compiled, are bit
+    for bit numpy's strided steps, for every registered CFA, both
+    precisions and a gain that float32 cannot hold exactly; arrays of mixed
+    precision are left to numpy."""
+    import cfa_mitsuba as cm
+    from cfa_mitsuba.isp._colour_difference_kernel import gaps_and_sites
+    from cfa_mitsuba.isp.mosaic import geometry
+
+    rng = np.random.default_rng(10)
+    g = 0.7123456789
+    for name in cm.sensor.list_cfas():
+        mosaic = geometry(cm.sensor.get_cfa(name))
+        th, tw = mosaic.tile_shape
+        n = len(mosaic.channels)
+        shape = (3 * th + 5, 3 * tw + 7)
+        raw, refimg = ((rng.random(shape) * 900.0).astype(dtype) for _ in range(2))
+        start = (rng.normal(size=(*shape, n)) * 50).astype(dtype)
+        for c in range(n):
+            want = start.copy()
+            plane = want[..., c]
+            for i, j in mosaic.gaps(c):
+                plane[i::th, j::tw] += g * refimg[i::th, j::tw]
+            for i, j in mosaic.phases(c):
+                plane[i::th, j::tw] = raw[i::th, j::tw]
+            got = start.copy()
+            assert gaps_and_sites(got, c, refimg, raw, mosaic.index, g)
+            assert np.array_equal(got, want), (name, c)
+    mixed = np.zeros((4, 4, 3), dtype=dtype)
+    assert not gaps_and_sites(mixed, 0, np.zeros((4, 4), dtype=np.float16), np.zeros((4, 4), dtype=dtype),
+                              geometry(cm.sensor.get_cfa("bayer")).index, g)
+
+
 def test_mirror_extension_by_blocks_equals_the_whole_gather():
     """isp.mosaic.extend copies the image in as a block and gathers only the
     border bands: the same array as indexing the whole extension with the

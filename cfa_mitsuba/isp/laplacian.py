@@ -347,6 +347,7 @@ def colour_differences(raw, refimg, mosaic: Mosaic, ref: Reference, chroma_gain:
         ext_y, _, _ = extend(raw, mosaic, radius)
         ext_r, _, _ = extend(refimg, mosaic, radius)
     out = np.empty((*shape, n), dtype=raw.dtype)  # float32 stays float32
+    from ._colour_difference_kernel import gaps_and_sites  # here, not at import: Numba loads slowly
     eps = _eps(raw)
     for c in range(n):
         if c == ref.channel:
@@ -354,10 +355,12 @@ def colour_differences(raw, refimg, mosaic: Mosaic, ref: Reference, chroma_gain:
             continue
         plane = out[..., c]
         interpolate_channel(ext_d, ph, pw, shape, mosaic, c, plane)  # NC_c[y - g ref] at gaps
-        for i, j in mosaic.gaps(c):
-            plane[i::th, j::tw] += g * refimg[i::th, j::tw]
-        for i, j in mosaic.phases(c):
-            plane[i::th, j::tw] = raw[i::th, j::tw]
+        # g ref added back at the gaps, the samples at the sites: one compiled pass (the same values)
+        if not gaps_and_sites(out, c, refimg, raw, mosaic.index, g):
+            for i, j in mosaic.gaps(c):
+                plane[i::th, j::tw] += g * refimg[i::th, j::tw]
+            for i, j in mosaic.phases(c):
+                plane[i::th, j::tw] = raw[i::th, j::tw]
         if not adaptive:
             continue
         compiled = ext_y.dtype == ext_r.dtype == refimg.dtype == plane.dtype and ext_y.dtype in (np.float32,
