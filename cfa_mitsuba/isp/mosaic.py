@@ -34,8 +34,7 @@ __all__ = [
     "diamond_stencil",
     "evaluate_stencil",
     "apply_stencils",
-    "directional_samples",
-]
+    "directional_samples", "tile_row_mask"]
 
 import functools
 import math
@@ -115,6 +114,16 @@ def geometry(cfa) -> Mosaic:
     if pattern.ndim != 2 or pattern.size == 0:
         raise CfaMitsubaError(f"CFA pattern must be a non-empty 2-D tile, got shape {pattern.shape}")
     return _geometry(tuple(map(tuple, pattern.tolist())), tuple(cfa.channels))
+
+
+
+def tile_row_mask(mask, width: int) -> np.ndarray:
+    """A tile's (th, tw) mask repeated across ``width`` columns: (th, width)
+    bool, C-contiguous, so that a compiled loop over a row reads row ``r %
+    th`` of it without a modulo per pixel."""
+    mask = np.asarray(mask, dtype=np.bool_)
+    reps = -(-width // mask.shape[1])
+    return np.ascontiguousarray(np.tile(mask, (1, reps))[:, :width])
 
 
 # --- borders ------------------------------------------------------------------
