@@ -35,8 +35,9 @@ CFA and demosaic of a scene, against recomputing it per capture,
 
     python benchmarks/bench_study.py [--config configs/quick.toml] [--workers 2] [--repeat 1]
 
-Compare ratios within one run: the machine is shared; the load average is
-printed with the table.
+Compare ratios within one run: the machine is shared; the load averages
+as the runs began and after them are printed with the table and recorded
+(``load_average_before``, ``load_average``).
 """
 
 from __future__ import annotations
@@ -143,6 +144,7 @@ def phases_main(args) -> int:
     cfas = args.subset.split(",") if args.subset else None
     runs: dict[str, dict[str, dict]] = {}
     all_evaluate: dict[str, dict[str, list]] = {}  # every run's evaluate phase, in the order run
+    before = os.getloadavg()  # what else ran on the machine as the runs began
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         trees = {"this": REPO}
@@ -182,10 +184,11 @@ def phases_main(args) -> int:
             if args.against:
                 subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(trees[args.against])],
                                capture_output=True)
-    load = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    after = os.getloadavg()
     what = f"{config}" + (f" reduced to {', '.join(cfas)}" if cfas else "") + (
         f", {args.against}'s copy in both trees" if args.same_config and args.against else "")
-    print(f"{what}, {args.workers} worker(s); load average (1, 5, 15 min) after the runs: {load}")
+    print(f"{what}, {args.workers} worker(s); load average (1, 5, 15 min) before the runs: "
+          + " ".join(f"{x:.2f}" for x in before) + ", after them: " + " ".join(f"{x:.2f}" for x in after))
     names = list(runs)
     header = f"{'':<24}" + "".join(f"{n[:14] + ' ' + m:>20}" for n in names for m in runs[n])
     if len(names) == 2:
@@ -200,7 +203,7 @@ def phases_main(args) -> int:
                 a, b = runs[names[0]][m][key], runs[names[1]][m][key]
                 line += f"{(b / a if a > 0 else float('nan')):>14.2f}"
         print(line)
-    record = {"config": what, "load_average": os.getloadavg(), "runs": runs}
+    record = {"config": what, "load_average_before": before, "load_average": after, "runs": runs}
     if len(names) == 2:
         m = next(iter(runs[names[0]]))  # the ratio REV / this tree of the first mode run
         record["against"] = names[1]
