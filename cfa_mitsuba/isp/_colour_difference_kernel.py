@@ -41,8 +41,8 @@ def gaps_and_sites(out: np.ndarray, c: int, refimg: np.ndarray, raw: np.ndarray,
     if (dtype not in (np.float32, np.float64) or refimg.dtype != dtype or raw.dtype != dtype
             or not out.flags.c_contiguous or out.ndim != 3):
         return False
-    from .mosaic import tile_row_mask
+    from .mosaic import tile_across
 
-    sites = tile_row_mask(np.asarray(index) == c, raw.shape[1])
+    sites = tile_across(np.asarray(index) == c, raw.shape[1])
     _gaps_and_sites(out, int(c), np.ascontiguousarray(refimg), np.ascontiguousarray(raw), sites, dtype.type(g))
     return True

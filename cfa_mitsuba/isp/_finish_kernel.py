@@ -55,8 +55,8 @@ def finish(estimate: np.ndarray, raw: np.ndarray, index: np.ndarray) -> tuple[np
         return None
     h, w, n = estimate.shape
     out = np.empty(estimate.shape, dtype=np.float64)
-    index = np.asarray(index, dtype=np.int64)
-    across = np.ascontiguousarray(np.tile(index, (1, -(-w // index.shape[1])))[:, :w])  # (th, W)
-    ok = _finish(estimate.reshape(h, w * n), np.ascontiguousarray(raw, dtype=np.float64), across, n,
-                 out.reshape(h, w * n))
+    from .mosaic import tile_across
+
+    ok = _finish(estimate.reshape(h, w * n), np.ascontiguousarray(raw, dtype=np.float64),
+                 tile_across(np.asarray(index, dtype=np.int64), w), n, out.reshape(h, w * n))
     return out, bool(ok) or bool(np.all(np.isfinite(out)))

@@ -29,7 +29,7 @@ import numba as nb
 import numpy as np
 
 from .column_filter import _extend
-from .mosaic import tile_row_mask
+from .mosaic import tile_across
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")
@@ -54,9 +54,7 @@ def project(x: np.ndarray, ref: np.ndarray, detail: np.ndarray, raw: np.ndarray,
     detail``, except where the tile mask ``observed`` (th, tw bool) says the
     channel is sampled, where it takes ``raw``; returns the sum of the
     squared changes."""
-    return float(_project(x, ref, detail, raw, tile_row_mask(observed, x.shape[1])))
-
-
+    return float(_project(x, ref, detail, raw, tile_across(np.asarray(observed, dtype=np.bool_), x.shape[1])))
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")
@@ -155,5 +153,5 @@ def lowpass_project(x: np.ndarray, ref: np.ndarray, raw: np.ndarray, observed: n
     colbuf = np.empty(x.shape[1] + 2 * r, dtype=dtype)
     rowbuf = np.empty(x.shape[1], dtype=dtype)
     squares = np.empty(x.shape[1], dtype=np.float64)
-    return float(_lowpass_project(x, ref, raw, tile_row_mask(observed, x.shape[1]),
+    return float(_lowpass_project(x, ref, raw, tile_across(np.asarray(observed, dtype=np.bool_), x.shape[1]),
                                   np.ascontiguousarray(k, dtype=dtype), ring, colbuf, rowbuf, squares))

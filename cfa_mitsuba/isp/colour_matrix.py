@@ -402,6 +402,11 @@ def cfa_luminance_weights(cfa) -> np.ndarray:
     return np.array(_cfa_weights((getattr(cfa, "name", ""), tuple(cfa.channels)), qe.tobytes(), qe.shape))
 
 
+#: The chromatic adaptation of the project's display encoding (:func:`xyz_to_srgb`,
+#: and the study's thumbnails): the scene white to sRGB's D65
+DISPLAY_ADAPTATION = "Bradford"
+
+
 def xyz_to_srgb(xyz, white_xyz) -> np.ndarray:
     """Display sRGB, 0..1, of absolute XYZ: the project's one encoding
     (:func:`cfa_mitsuba.colorimetry.xyz_to_srgb`) with Bradford adaptation
@@ -409,7 +414,7 @@ def xyz_to_srgb(xyz, white_xyz) -> np.ndarray:
     white = np.asarray(white_xyz, dtype=np.float64)
     if white.shape != (3,) or not np.all(np.isfinite(white)) or white[1] <= 0:
         raise CfaMitsubaError(f"white XYZ must be 3 finite values with Y > 0, got {white.tolist()}")
-    return colorimetry.xyz_to_srgb(xyz, white, adaptation="Bradford")
+    return colorimetry.xyz_to_srgb(xyz, white, adaptation=DISPLAY_ADAPTATION)
 
 
 #: CIEDE2000 of two absolute XYZ arrays (kept here for the isp's users).

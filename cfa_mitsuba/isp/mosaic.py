@@ -34,7 +34,9 @@ __all__ = [
     "diamond_stencil",
     "evaluate_stencil",
     "apply_stencils",
-    "directional_samples", "tile_row_mask"]
+    "directional_samples",
+    "tile_across",
+]
 
 import functools
 import math
@@ -116,14 +118,14 @@ def geometry(cfa) -> Mosaic:
     return _geometry(tuple(map(tuple, pattern.tolist())), tuple(cfa.channels))
 
 
-
-def tile_row_mask(mask, width: int) -> np.ndarray:
-    """A tile's (th, tw) mask repeated across ``width`` columns: (th, width)
-    bool, C-contiguous, so that a compiled loop over a row reads row ``r %
-    th`` of it without a modulo per pixel."""
-    mask = np.asarray(mask, dtype=np.bool_)
-    reps = -(-width // mask.shape[1])
-    return np.ascontiguousarray(np.tile(mask, (1, reps))[:, :width])
+def tile_across(tile, width: int) -> np.ndarray:
+    """A tile's (th, tw) array (a mask, the channel index) repeated across
+    ``width`` columns: (th, width), its dtype kept, C-contiguous, so that a
+    compiled loop over a row reads row ``r % th`` of it without a modulo
+    per pixel."""
+    tile = np.asarray(tile)
+    reps = -(-width // tile.shape[1])
+    return np.ascontiguousarray(np.tile(tile, (1, reps))[:, :width])
 
 
 # --- borders ------------------------------------------------------------------
