@@ -9,11 +9,12 @@ MATLAB's coefficients, C = 30, alpha = 4.2 for 0..255 data.
 
 from __future__ import annotations
 
-__all__ = ["RECORDS", "haarpsi"]
+__all__ = ["RECORDS", "haarpsi", "haarpsi_reference_maps"]
 
 import numpy as np
 
-from ._common import as_pair, code_range, conv2_same
+from ..errors import require
+from ._common import as_image, as_pair, code_range, conv2_same
 from .record import NATURAL, MetricRecord
 
 C, ALPHA = 30.0, 4.2
@@ -47,7 +48,37 @@ def _logit(p):
     return np.log(p / (1.0 - p)) / ALPHA
 
 
-def haarpsi(reference, test, *, data_range: float = 255.0, subsample: bool = True) -> float:
+def _maps(img: np.ndarray, subsample: bool, data_range: float) -> tuple:
+    """What HaarPSI takes from one image (0..255 codes): its shape and the
+    options (``subsample``, ``data_range``), then per
+    orientation (rows, columns) the absolute Haar responses of scales 1-3 of
+    its Y channel, then (colour images) the absolute 2 x 2 means of its I
+    and Q channels (after the 2 x 2 subsampling when ``subsample``)."""
+    colour_image = img.ndim == 3
+    y = img @ _Y if colour_image else img
+    if subsample:
+        y = _subsample(y)
+    haar = tuple([np.abs(_haar(y, s, transpose)) for s in (1, 2, 3)] for transpose in (False, True))
+    chroma = ()
+    if colour_image:
+        iq = (img @ _I, img @ _Q)
+        if subsample:
+            iq = tuple(_subsample(v) for v in iq)
+        chroma = tuple(np.abs(conv2_same(v, _MEAN2)) for v in iq)
+    return ((img.shape, bool(subsample), float(data_range)), haar, chroma)
+
+
+def haarpsi_reference_maps(reference, *, data_range: float = 255.0, subsample: bool = True) -> tuple:
+    """What :func:`haarpsi` computes from the reference alone (its Haar
+    responses and smoothed chroma): pass it as ``reference_maps`` when one
+    reference is compared with many test images (same options): the result
+    is identical."""
+    ref = as_image(reference, "reference image", allow_gray=True, min_size=2)
+    ref, _ = code_range(ref, ref, data_range, "haarpsi")
+    return _maps(ref, subsample, data_range)
+
+
+def haarpsi(reference, test, *, data_range: float = 255.0, subsample: bool = True, reference_maps=None) -> float:
     """HaarPSI of two images; 1 = identical, higher is better (symmetric).
 
     Parameters
@@ -57,6 +88,9 @@ def haarpsi(reference, test, *, data_range: float = 255.0, subsample: bool = Tru
     data_range : the code range; values are rescaled to 0..255, the range
         C = 30 assumes.
     subsample : the authors' default 2 x 2 mean and 2x subsampling first.
+    reference_maps : optional, :func:`haarpsi_reference_maps` of this
+        reference with the same options (a speed-up only: the result is
+        identical).
 
     Returns
     -------
@@ -82,26 +116,19 @@ def haarpsi(reference, test, *, data_range: float = 255.0, subsample: bool = Tru
     """
     ref, test = as_pair(reference, test, allow_gray=True, min_size=2)
     ref, test = code_range(ref, test, data_range, "haarpsi")
-    colour_image = ref.ndim == 3
-    if colour_image:
-        y1, y2 = ref @ _Y, test @ _Y
-        i1, i2, q1, q2 = ref @ _I, test @ _I, ref @ _Q, test @ _Q
-    else:
-        y1, y2 = ref, test
-    if subsample:
-        y1, y2 = _subsample(y1), _subsample(y2)
-        if colour_image:
-            i1, i2, q1, q2 = (_subsample(v) for v in (i1, i2, q1, q2))
+    if reference_maps is None:
+        reference_maps = _maps(ref, subsample, data_range)
+    require(reference_maps[0] == (ref.shape, bool(subsample), float(data_range)),
+            "reference_maps do not belong to images of this shape and these options")
+    _, haar1, chroma1 = reference_maps
+    _, haar2, chroma2 = _maps(test, subsample, data_range)
 
     sims, weights = [], []
-    for transpose in (False, True):
-        c1 = [np.abs(_haar(y1, s, transpose)) for s in (1, 2, 3)]
-        c2 = [np.abs(_haar(y2, s, transpose)) for s in (1, 2, 3)]
+    for c1, c2 in zip(haar1, haar2):
         weights.append(np.maximum(c1[2], c2[2]))
         sims.append((_similarity(c1[0], c2[0]) + _similarity(c1[1], c2[1])) / 2.0)
-    if colour_image:
-        ci = [np.abs(conv2_same(v, _MEAN2)) for v in (i1, i2, q1, q2)]
-        sims.append((_similarity(ci[0], ci[1]) + _similarity(ci[2], ci[3])) / 2.0)
+    if chroma1:
+        sims.append((_similarity(chroma1[0], chroma2[0]) + _similarity(chroma1[1], chroma2[1])) / 2.0)
         weights.append((weights[0] + weights[1]) / 2.0)
     s, w = np.stack(sims), np.stack(weights)
     if np.all(s == 1.0):  # identical structure everywhere: exactly 1, not 1 - 4e-16
@@ -118,5 +145,6 @@ RECORDS = (
     MetricRecord(name="haarpsi", function=haarpsi, scenes=(NATURAL,), inputs="srgb8", unit="",
                  higher_is_better=True, scored=True, label="HaarPSI", order=8, decimals=3,
                  description="Haar wavelet perceptual similarity (Reisenhofer 2018), 1 = identical",
-                 paper="HaarPSI (s. 2.2.8, Fig 15)", score_range=(0.0, 1.0)),
+                 paper="HaarPSI (s. 2.2.8, Fig 15)", score_range=(0.0, 1.0),
+                 reference_cache=("reference_maps", haarpsi_reference_maps)),
 )

@@ -61,7 +61,8 @@ class MetricRecord:
         white, **options)`` (``function(reference, **options)`` for metrics of
         two display images) computes what depends on the reference image alone
         (S-CIELAB's filtered reference, ``('reference_lab',
-        scielab_reference)``; SSIM's window means); the adapter calls it once per ideal image
+        scielab_reference)``; SSIM's window means; MDSI's and HaarPSI's
+        reference maps); the adapter calls it once per ideal image
         and option set (the options it takes) and passes the result to the
         metric as ``keyword``.
     study_options : ``((keyword, value), ...)``: options a study passes to
