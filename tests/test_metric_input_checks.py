@@ -116,3 +116,24 @@ def test_the_camera_side_arrays_a_study_makes_are_read_only_owners(monkeypatch):
     own = m.MetricInputs(mine, mine.copy(), [95.047, 100.0, 108.883])
     assert _common._unchangeable(own.linear("test")) and _common._unchangeable(own.srgb8("test"))
     assert own.test_xyz.flags.writeable and own.reference_xyz.flags.writeable
+
+
+@pytest.mark.parametrize("layout", ["contiguous", "strided", "float32"])
+def test_the_one_pass_bounds_test_answers_as_min_and_max(layout):
+    """metrics._bounds_kernel.within against numpy's two reductions, on
+    arrays with NaN, +-inf, values just inside and just beyond the limit,
+    and (for strided and float32 arrays) numpy's own path."""
+    from cfa_mitsuba.metrics._bounds_kernel import within
+
+    limit = _common.MAX_ABS_INPUT
+    rng = np.random.default_rng(4)
+    edge = [limit, -limit, np.nextafter(limit, np.inf), np.nextafter(-limit, -np.inf), np.nan, np.inf, -np.inf]
+    for k in range(60):
+        a = rng.normal(0.0, 10.0, (13, 17, 3))
+        if k % 2:
+            a.flat[rng.integers(a.size)] = edge[k % len(edge)]
+        if layout == "strided":
+            a = a[:, ::2]
+        elif layout == "float32":
+            a = a.astype(np.float32)
+        assert within(a, limit) == bool(-limit <= float(a.min()) and float(a.max()) <= limit), (k, layout)

@@ -7,6 +7,7 @@ import weakref
 import numpy as np
 
 from ..errors import CfaMitsubaError, require, require_finite
+from ._bounds_kernel import within
 
 #: The largest magnitude a metric accepts in any input (XYZ in cd/m^2, linear
 #: RGB, 8-bit codes): far above any scene (the sun's disc is about 1.6e9
@@ -44,8 +45,8 @@ def check_values(arr, what: str) -> np.ndarray:
     known = _PASSED.get(id(a))
     if known is not None and known() is a and _unchangeable(a):
         return a
-    if a.size and -MAX_ABS_INPUT <= float(a.min()) and float(a.max()) <= MAX_ABS_INPUT:
-        # two reductions, no temporary: NaN fails the comparisons and falls through to the messages
+    if a.size and within(a, MAX_ABS_INPUT):
+        # one compiled pass, no temporary: NaN fails the comparisons and falls through to the messages
         if _unchangeable(a):
             key = id(a)
             _PASSED[key] = weakref.ref(a, lambda _, key=key: _PASSED.pop(key, None))
