@@ -337,3 +337,38 @@ def test_poisson_counts_below_a_mean_of_ten_are_counted_up_exactly():
         assert np.array_equal(poisson_quantile(lam, v), stats.poisson.ppf(v, lam))
     _, decided = kernel.start_and_settle(lam, u)
     assert decided.mean() > 0.99
+
+
+def test_the_vectorised_first_attempt_decides_as_the_scalar_pass(monkeypatch):
+    """Where the Cornish-Fisher start is certainly the count, the first
+    attempt (numpy's logarithms, branch-free passes) decides it: the same
+    counts as the scalar pass wherever both decide, nearly every pixel of a
+    well-exposed image decided there, and scipy's quantiles in the end, also
+    for draws at the edges of Acklam's central region and means at the ends
+    of PP_MEANS; an image mostly below those means skips it."""
+    from scipy import stats
+
+    from cfa_mitsuba.sensor import _poisson_kernel as kernel
+    from cfa_mitsuba.sensor.noise import poisson_quantile
+
+    rng = np.random.default_rng(21)
+    lo, hi = kernel.PP_MEANS
+    lam = np.concatenate([np.exp(rng.uniform(np.log(lo), np.log(hi), 40_000)), [lo, hi, lo, hi]])
+    u = np.concatenate([rng.random(40_000), [0.02425, 1 - 0.02425, 0.5, 0.02]])
+    tails = rng.integers(0, lam.size, 2_000)
+    u[tails] = rng.choice([0.02425, 0.9757, 0.0243, 0.97575], tails.size) + rng.normal(0, 1e-6, tails.size)
+    scalar_k, scalar_decided = np.empty(lam.size), np.zeros(lam.size, dtype=bool)
+    kernel._start_and_settle(lam, u, scalar_k, scalar_decided)
+    first_k, first_decided = np.empty(lam.size), np.zeros(lam.size, dtype=bool)
+    kernel._first_attempt(lam, u, first_k, first_decided)
+    assert first_decided.mean() > 0.9
+    both = first_decided & scalar_decided
+    assert both.sum() > 0.9 * lam.size
+    assert np.array_equal(first_k[first_decided], stats.poisson.ppf(u[first_decided], lam[first_decided]))
+    assert np.array_equal(poisson_quantile(lam, u), stats.poisson.ppf(u, lam))
+    calls = []
+    monkeypatch.setattr(kernel, "_first_attempt", lambda *a: calls.append(1))
+    kernel.start_and_settle(rng.uniform(0, 5, 1000), rng.random(1000))
+    assert not calls
+    kernel.start_and_settle(rng.uniform(50, 500, 1000), rng.random(1000))
+    assert calls

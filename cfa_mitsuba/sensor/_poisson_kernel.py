@@ -3,6 +3,14 @@ compiled passes (Numba), written by hand for speed only: scipy has the exact
 CDF (``pdtr``, an incomplete gamma function, about 150-200 ns a pixel) but
 no Poisson quantile that is fast on a whole image.
 
+First attempt (:func:`_first_attempt`), where at least half the means lie
+in :data:`PP_MEANS`: the same start and the same two decisions at the start
+(the count, or the count below) for every pixel at once, in passes without
+a branch or a logarithm around numpy's SIMD logarithms, so that the loops
+vectorise; where the start is certainly the count (nearly every such pixel)
+it is kept, the rest go through the first pass.  It halves this stage on a
+well-exposed image.
+
 First pass (:func:`start_and_settle`): from the Cornish-Fisher start (its
 normal quantile by :func:`_start_z`, in the same pass), each step is
 decided by Peizer and Pratt's normal approximation of the CDF where ``u``
@@ -283,6 +291,98 @@ def _start_and_settle(lam, u, k, decided):  # pragma: no cover - compiled
             break
 
 
+@nb.njit(inline="always")
+def _central_z(u):
+    """:func:`_start_z` in Acklam's central region (_Q_TAIL <= u <= 1 - _Q_TAIL): no logarithm."""
+    a, b = _Q_A, _Q_B
+    q = u - 0.5
+    r = q * q
+    return (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q / \
+        (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1.0)
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def _central_starts(lam, u, k, z_lo, z_hi, t_up, t_down, ok):  # pragma: no cover - compiled
+    """The first attempt's first half, for every pixel at once: where the
+    mean lies in :data:`PP_MEANS` and u and u +- the guard lie in Acklam's
+    central region (``ok``), the Cornish-Fisher start ``k``, the bounds
+    ``z_lo``, ``z_hi`` (:func:`_z_below`, :func:`_z_above`) and the
+    arguments (k +- 1/2) / lam of Peizer and Pratt's g at k and k - 1.  No
+    branch and no logarithm, so the loop vectorises; the values are the
+    scalar pass's (the same operations)."""
+    lo, hi = PP_MEANS
+    for i in range(k.shape[0]):
+        ll = lam[i]
+        uu = u[i]
+        guard = pp_guard(ll)
+        v = uu - guard
+        w = uu + guard
+        ok[i] = (ll >= lo) & (ll <= hi) & (v >= _Q_TAIL) & (w <= 1.0 - _Q_TAIL)
+        z = _central_z(uu)
+        zv = _central_z(v)
+        zw = _central_z(w)
+        z_lo[i] = zv - Z_SLACK * abs(zv)
+        z_hi[i] = zw + Z_SLACK * abs(zw)
+        kk = max(math.floor(ll + math.sqrt(ll) * z + (z * z - 1.0) / 6.0 + 0.5), 0.0)
+        k[i] = kk
+        t_up[i] = (kk + 0.5) / ll
+        t_down[i] = (kk - 0.5) / ll
+
+
+@nb.njit(inline="always")
+def _pp_z_of_log(k, lam, t, log_t):
+    """:func:`_pp_z` given t = (k + 1/2) / lam and its logarithm: the series
+    of :func:`_pp_g` chosen by a select, so the loop around it vectorises."""
+    d = t - 1.0
+    series = d * (-1.0 / 3.0 + d * (1.0 / 6.0 - d / 10.0))
+    g = series if abs(d) < 1e-3 else (1.0 - t * t + 2.0 * t * log_t) / (d * d)
+    return (k - lam + 2.0 / 3.0 + 0.02 / (k + 1.0)) * math.sqrt((1.0 + g) / lam)
+
+
+@nb.njit(cache=True, nogil=True, error_model="numpy")
+def _start_is_the_count(lam, k, z_lo, z_hi, t_up, log_up, t_down, log_down, ok, decided):  # pragma: no cover
+    """The first attempt's second half: ``decided`` where ``ok`` and the
+    start is certainly the count (F(k - 1) < u <= F(k) by the bounds, k >
+    0), the scalar pass's last test; the logarithms come from numpy's SIMD
+    ufunc, a few units in the last place from libm's, far inside the bounds'
+    slack, so a pixel this decides is decided alike by the scalar pass."""
+    for i in range(k.shape[0]):
+        kk = k[i]
+        ll = lam[i]
+        up = _pp_z_of_log(kk, ll, t_up[i], log_up[i])
+        down = _pp_z_of_log(kk - 1.0, ll, t_down[i], log_down[i])
+        decided[i] = ok[i] & (kk > 0.0) & (up >= z_hi[i]) & (down < z_lo[i])
+
+
+#: pixels a block of the first attempt: its eight arrays stay in the core's cache
+_BLOCK = 8192
+#: the share of pixels with means in :data:`PP_MEANS` from which the first
+#: attempt runs: it costs about 18 ns a pixel on every pixel and spares the
+#: scalar pass the pixels it decides (measured on 636 x 720 images: means of
+#: 200-3000, 28 -> 12 ms; 0-20, half of them in range, 32 -> 34 ms; 0-5,
+#: none, 19 -> 30 ms, so below this share it is left out)
+FIRST_ATTEMPT_SHARE = 0.5
+
+
+def _first_attempt(lam: np.ndarray, u: np.ndarray, k: np.ndarray, decided: np.ndarray) -> None:
+    """Fill ``k`` and ``decided`` where the Cornish-Fisher start is
+    certainly the count (most pixels at means of 10 to 1e6), block by
+    block: the two passes above around numpy's logarithms."""
+    n = min(_BLOCK, k.shape[0])
+    z_lo, z_hi, t_up, t_down, log_up, log_down = np.empty((6, n))
+    ok = np.empty(n, dtype=np.bool_)
+    with np.errstate(invalid="ignore", divide="ignore"):  # logs of pixels not ok (t <= 0): not used
+        for start in range(0, k.shape[0], n):
+            stop = min(start + n, k.shape[0])
+            m = stop - start
+            sl = slice(start, stop)
+            _central_starts(lam[sl], u[sl], k[sl], z_lo[:m], z_hi[:m], t_up[:m], t_down[:m], ok[:m])
+            np.log(t_up[:m], out=log_up[:m])
+            np.log(t_down[:m], out=log_down[:m])
+            _start_is_the_count(lam[sl], k[sl], z_lo[:m], z_hi[:m], t_up[:m], log_up[:m], t_down[:m],
+                                log_down[:m], ok[:m], decided[sl])
+
+
 def start_and_settle(lam: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(counts, decided) for means ``lam`` and uniforms ``u`` (1-D float64):
     each count starts at the Cornish-Fisher quantile lam + sqrt(lam) z +
@@ -294,5 +394,14 @@ def start_and_settle(lam: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.nda
     ``decided``; the others keep their start."""
     k = np.empty(lam.shape, dtype=np.float64)
     decided = np.zeros(lam.shape, dtype=np.bool_)
-    _start_and_settle(lam, u, k, decided)
+    lo, hi = PP_MEANS
+    if np.count_nonzero((lam >= lo) & (lam <= hi)) >= FIRST_ATTEMPT_SHARE * lam.size:
+        _first_attempt(lam, u, k, decided)
+    rest = np.flatnonzero(~decided)
+    if rest.size == k.size:
+        _start_and_settle(lam, u, k, decided)
+    elif rest.size:
+        kr, dr = k[rest], decided[rest]
+        _start_and_settle(lam[rest], u[rest], kr, dr)
+        k[rest], decided[rest] = kr, dr
     return k, decided
