@@ -18,10 +18,8 @@ from test_metrics_reference import COLOUR_PAIRS, colour_pair, entries
 
 @pytest.fixture(scope="module")
 def pair():
-    rng = np.random.default_rng(5)
-    ref = np.round(rng.random((70, 91, 3)) * 255.0)
-    test = np.clip(ref + np.round(rng.normal(0.0, 11.0, ref.shape)), 0, 255)
-    return ref, test
+    codes = np.random.default_rng(5).integers(0, 256, (2, 70, 91, 3)).astype(np.float64)
+    return codes[0], np.clip(codes[0] + (codes[1] - 128.0) / 6.0, 0.0, 255.0).round()
 
 
 @pytest.mark.parametrize("pid", COLOUR_PAIRS)
