@@ -122,21 +122,25 @@ def pp_guard(lam):
 
 
 @nb.njit(inline="always")
-def _pp_g(t):
-    """Peizer and Pratt's g(t) = (1 - t^2 + 2 t ln t) / (1 - t)^2, by its
+def _pp_z_of_log(k, lam, t, log_t):
+    """:func:`_pp_z` given t = (k + 1/2) / lam and its logarithm ``log_t``.
+    Peizer and Pratt's g(t) = (1 - t^2 + 2 t ln t) / (1 - t)^2 by its
     series -d/3 + d^2/6 - d^3/10 (d = t - 1) near t = 1, where the quotient
-    loses digits."""
+    loses digits; the series is chosen by a select, not a branch, so a loop
+    around this vectorises (:func:`_start_is_the_count`)."""
     d = t - 1.0
-    if abs(d) < 1e-3:
-        return d * (-1.0 / 3.0 + d * (1.0 / 6.0 - d / 10.0))
-    return (1.0 - t * t + 2.0 * t * math.log(t)) / (d * d)
+    series = d * (-1.0 / 3.0 + d * (1.0 / 6.0 - d / 10.0))
+    g = series if abs(d) < 1e-3 else (1.0 - t * t + 2.0 * t * log_t) / (d * d)
+    return (k - lam + 2.0 / 3.0 + 0.02 / (k + 1.0)) * math.sqrt((1.0 + g) / lam)
 
 
 @nb.njit(inline="always")
 def _pp_z(k, lam):
     """Peizer and Pratt's normal deviate of P(X <= k) for Poisson(lam):
-    (k - lam + 2/3 + 0.02 / (k + 1)) sqrt((1 + g((k + 1/2) / lam)) / lam)."""
-    return (k - lam + 2.0 / 3.0 + 0.02 / (k + 1.0)) * math.sqrt((1.0 + _pp_g((k + 0.5) / lam)) / lam)
+    (k - lam + 2/3 + 0.02 / (k + 1)) sqrt((1 + g((k + 1/2) / lam)) / lam)
+    (:func:`_pp_z_of_log`)."""
+    t = (k + 0.5) / lam
+    return _pp_z_of_log(k, lam, t, math.log(t))
 
 
 @nb.njit(inline="always")
@@ -168,12 +172,19 @@ def _start_z(u):
     decided by a CDF, so the counts do not depend on it (a start one count
     off costs one step), and it takes a few ns in this pass where
     ``ndtri`` took a whole-image pass of 26 ns a pixel."""
-    a, b, c, d = _Q_A, _Q_B, _Q_C, _Q_D
+    c, d = _Q_C, _Q_D
     if u < _Q_TAIL or u > 1.0 - _Q_TAIL:
         q = math.sqrt(-2.0 * math.log(min(u, 1.0 - u)))
         x = (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5]) / \
             ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0)
         return x if u < 0.5 else -x
+    return _central_z(u)
+
+
+@nb.njit(inline="always")
+def _central_z(u):
+    """:func:`_start_z` in Acklam's central region (_Q_TAIL <= u <= 1 - _Q_TAIL): no logarithm."""
+    a, b = _Q_A, _Q_B
     q = u - 0.5
     r = q * q
     return (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q / \
@@ -291,16 +302,6 @@ def _start_and_settle(lam, u, k, decided):  # pragma: no cover - compiled
             break
 
 
-@nb.njit(inline="always")
-def _central_z(u):
-    """:func:`_start_z` in Acklam's central region (_Q_TAIL <= u <= 1 - _Q_TAIL): no logarithm."""
-    a, b = _Q_A, _Q_B
-    q = u - 0.5
-    r = q * q
-    return (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q / \
-        (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1.0)
-
-
 @nb.njit(cache=True, nogil=True, error_model="numpy")
 def _central_starts(lam, u, k, z_lo, z_hi, t_up, t_down, ok):  # pragma: no cover - compiled
     """The first attempt's first half, for every pixel at once: where the
@@ -327,16 +328,6 @@ def _central_starts(lam, u, k, z_lo, z_hi, t_up, t_down, ok):  # pragma: no cove
         k[i] = kk
         t_up[i] = (kk + 0.5) / ll
         t_down[i] = (kk - 0.5) / ll
-
-
-@nb.njit(inline="always")
-def _pp_z_of_log(k, lam, t, log_t):
-    """:func:`_pp_z` given t = (k + 1/2) / lam and its logarithm: the series
-    of :func:`_pp_g` chosen by a select, so the loop around it vectorises."""
-    d = t - 1.0
-    series = d * (-1.0 / 3.0 + d * (1.0 / 6.0 - d / 10.0))
-    g = series if abs(d) < 1e-3 else (1.0 - t * t + 2.0 * t * log_t) / (d * d)
-    return (k - lam + 2.0 / 3.0 + 0.02 / (k + 1.0)) * math.sqrt((1.0 + g) / lam)
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")
