@@ -11,7 +11,9 @@ cache in a temporary folder: every scene rendered) and *warm* (the same
 cache again: renders reused), and prints the render, evaluate and report
 phases of each (timing.json, wall clock) with the worker time per stage,
 and the CPU seconds of the whole run (the study process and its workers:
-what other jobs on a shared machine move least).  With
+what other jobs on a shared machine move least) with that CPU time divided
+by the cores: no schedule of the same work on this machine finishes sooner,
+so a wall-clock target below it needs less work, not better packing.  With
 ``--against REV`` the same runs are made on commit REV, checked out beside
 this tree in a temporary git worktree, in the same invocation (this tree
 and REV alternate, so a change of machine load hits both), and the table
@@ -57,6 +59,7 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from cfa_mitsuba.study.chain import NO_MEMO_ENV  # noqa: E402
+from cfa_mitsuba.study.executors import _cpu_count  # noqa: E402
 
 
 def run(config: Path, out: Path, workers: int, shared: bool) -> dict:
@@ -190,12 +193,17 @@ def phases_main(args) -> int:
     print(f"{what}, {args.workers} worker(s); load average (1, 5, 15 min) before the runs: "
           + " ".join(f"{x:.2f}" for x in before) + ", after them: " + " ".join(f"{x:.2f}" for x in after))
     names = list(runs)
+    cores = _cpu_count()  # the cores this process may run on (its CPU affinity)
+    for r in runs.values():  # no schedule finishes before every core has done its share of the CPU time
+        for got in r.values():
+            got["cpu_floor_s"] = got["cpu_s"] / cores
     header = f"{'':<24}" + "".join(f"{n[:14] + ' ' + m:>20}" for n in names for m in runs[n])
     if len(names) == 2:
         header += "".join(f"{'ratio ' + m:>14}" for m in runs[names[0]])
     print(header)
-    for key in (*PHASES, *STAGES, "cpu_s"):
-        label = {"cpu_s": "CPU, all processes (s)"}.get(key) or key.replace("_s", "") + (
+    for key in (*PHASES, *STAGES, "cpu_s", "cpu_floor_s"):
+        label = {"cpu_s": "CPU, all processes (s)", "cpu_floor_s": f"CPU / {cores} cores (s)"}.get(key) or key.replace(
+            "_s", "") + (
             " (worker s)" if key in STAGES else " (s)")
         line = f"{label:<24}" + "".join(f"{runs[n][m][key]:>20.1f}" for n in names for m in runs[n])
         if len(names) == 2:
@@ -203,7 +211,7 @@ def phases_main(args) -> int:
                 a, b = runs[names[0]][m][key], runs[names[1]][m][key]
                 line += f"{(b / a if a > 0 else float('nan')):>14.2f}"
         print(line)
-    record = {"config": what, "load_average_before": before, "load_average": after, "runs": runs}
+    record = {"config": what, "load_average_before": before, "load_average": after, "cores": cores, "runs": runs}
     if len(names) == 2:
         m = next(iter(runs[names[0]]))  # the ratio REV / this tree of the first mode run
         record["against"] = names[1]
