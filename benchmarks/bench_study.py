@@ -201,10 +201,9 @@ def phases_main(args) -> int:
     if len(names) == 2:
         header += "".join(f"{'ratio ' + m:>14}" for m in runs[names[0]])
     print(header)
-    for key in (*PHASES, *STAGES, "cpu_s", "cpu_floor_s"):
-        label = {"cpu_s": "CPU, all processes (s)", "cpu_floor_s": f"CPU / {cores} cores (s)"}.get(key) or key.replace(
-            "_s", "") + (
-            " (worker s)" if key in STAGES else " (s)")
+    labels = {**{k: k[:-2] + " (s)" for k in PHASES}, **{k: k[:-2] + " (worker s)" for k in STAGES},
+              "cpu_s": "CPU, all processes (s)", "cpu_floor_s": f"CPU / {cores} cores (s)"}
+    for key, label in labels.items():
         line = f"{label:<24}" + "".join(f"{runs[n][m][key]:>20.1f}" for n in names for m in runs[n])
         if len(names) == 2:
             for m in runs[names[0]]:
