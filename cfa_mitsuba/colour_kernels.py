@@ -68,12 +68,14 @@ def _from_hue_terms(L1, L2, C1, C2, sin_half, c, s, rot_sin):
     sin of the mean hue and ``rot_sin`` = sin(2 dtheta), dtheta = 30 deg
     exp(-((h' - 275 deg) / 25 deg)^2) the rotation angle: Sharma eqs 8-9 and
     12-22."""
-    # lightness and chroma terms (eqs 8-9, 17-18)
+    # lightness and chroma terms (eqs 8-9, 17-18); S_L = (s + 0.015 t) / s, s = sqrt(20 + t), so
+    # l_term = dL s / (s + 0.015 t): one division where the formula as written takes two
     lm = 0.5 * (L1 + L2) - 50.0
     t = lm * lm
-    l_term = (L2 - L1) / (1.0 + 0.015 * t / math.sqrt(20.0 + t))
+    root = math.sqrt(20.0 + t)
+    l_term = (L2 - L1) * root / (root + 0.015 * t)
     cbar = 0.5 * (C1 + C2)
-    c_term = (C2 - C1) / (1.0 + 0.045 * cbar)
+    s_c = 1.0 + 0.045 * cbar
     # T by the multiple-angle identities from one cos/sin pair (eq. 15)
     c2 = 2.0 * c * c - 1.0
     s2 = 2.0 * s * c
@@ -83,7 +85,11 @@ def _from_hue_terms(L1, L2, C1, C2, sin_half, c, s, rot_sin):
     s4 = 2.0 * s2 * c2
     T = (1.0 - 0.17 * (c * _C30 + s * _S30) + 0.24 * c2
          + 0.32 * (c3 * _C6 - s3 * _S6) - 0.20 * (c4 * _C63 + s4 * _S63))
-    h_term = 2.0 * math.sqrt(C1 * C2) * sin_half / (1.0 + 0.015 * cbar * T)
+    s_h = 1.0 + 0.015 * cbar * T
+    # dC' / S_C and dH' / S_H over one division by S_C S_H (square roots and divisions bound this loop's time)
+    inv = 1.0 / (s_c * s_h)
+    c_term = (C2 - C1) * s_h * inv
+    h_term = 2.0 * math.sqrt(C1 * C2) * sin_half * s_c * inv
     # rotation term (eqs 19-22)
     c7 = _pow7(cbar)
     r_term = -rot_sin * 2.0 * math.sqrt(c7 / (c7 + _P25_7)) * c_term * h_term
@@ -153,15 +159,16 @@ def _hue_vectors(lab1, lab2, ux_out, uy_out, c1_out, c2_out, half_out, flag):  #
         nrm = math.sqrt(ux * ux + uy * uy)
         # |u1 + u2| = 2 cos(dh / 2): below 1e-2, hues within 1.15 deg of opposite
         flag[i] = (cc == 0.0) | (cross == 0.0) | (nrm <= 1e-2 * cc)
-        sn = cross / cc
+        inv_nrm = 1.0 / nrm
         cs = dot / cc
-        # sin(dh / 2), of the sign of dh = the sign of sin(dh); both halves made, one kept
-        near = sn / math.sqrt(2.0 * (1.0 + cs))
+        # sin(dh / 2), of the sign of dh = the sign of sin(dh); both halves made, one kept: near
+        # = sin(dh) / sqrt(2 (1 + cos dh)) = cross / nrm (nrm = C1 C2 sqrt(2 (1 + cos dh)))
+        near = cross * inv_nrm
         far = math.sqrt(0.5 * (1.0 - cs))
-        far = -far if sn < 0.0 else far
+        far = -far if cross < 0.0 else far
         half_out[i] = near if cs >= 0.0 else far
-        ux_out[i] = ux / nrm
-        uy_out[i] = uy / nrm
+        ux_out[i] = ux * inv_nrm
+        uy_out[i] = uy * inv_nrm
         c1_out[i] = C1
         c2_out[i] = C2
 

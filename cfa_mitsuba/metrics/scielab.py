@@ -162,7 +162,9 @@ def _convolve_extended(planes: np.ndarray, size: tuple[int, int], samples_per_de
     h, w = size
     fshape = _transform_shape(h, w, n)
     spectra = _kernel_spectra(samples_per_degree, parameters, fshape, dtype)
-    full = fft.irfft2(fft.rfft2(planes, s=fshape) * spectra, s=fshape)
+    spectrum = fft.rfft2(planes, s=fshape)
+    spectrum *= spectra  # in place, and the inverse may overwrite it: no copies of the spectrum
+    full = fft.irfft2(spectrum, s=fshape, overwrite_x=True)
     return full[:, n - 1:n - 1 + h, n - 1:n - 1 + w]
 
 

@@ -151,7 +151,8 @@ def ysnr(reference_xyz, test_xyz, white_xyz, *, steps=None, margin: int = 3,
     t = test[y0:y1, x0:x1].reshape(-1, 3)
     mean_y = float(t[:, 1].mean())
     require(mean_y > 0, "the mid-grey region of the camera image is black: no SNR")
-    noise = t - r * (t.mean(axis=0) / np.where(r.mean(axis=0) > 0, r.mean(axis=0), 1.0))
+    r_mean = r.mean(axis=0)
+    noise = t - r * (t.mean(axis=0) / np.where(r_mean > 0, r_mean, 1.0))
     rel = noise / (white / white[1])  # x' - ..., on Y's scale
     sd_y = float(noise[:, 1].std(ddof=1))
     chroma_var = 0.5 * (float((rel[:, 0] - rel[:, 1]).var(ddof=1)) + float((rel[:, 2] - rel[:, 1]).var(ddof=1)))
