@@ -6,6 +6,8 @@ import pytest
 from cfa_mitsuba import io
 from cfa_mitsuba.errors import CfaMitsubaError
 
+from reference_data import REFERENCE, load_input
+
 
 @pytest.mark.parametrize("suffix", [".png", ".exr", ".npy", ".npz"])
 def test_round_trip(tmp_path, suffix):
@@ -19,10 +21,10 @@ def test_round_trip(tmp_path, suffix):
     assert not list(tmp_path.glob("*.part"))
 
 
-def test_16bit_rgb_png_keeps_16_bits(reference_dir):
+def test_16bit_rgb_png_keeps_16_bits():
     # Pillow would return 8-bit data here; the reference .npy holds the truth.
-    got = io.read_image(reference_dir / "inputs/edges/edge_05deg_rgb.png")
-    expect = np.load(reference_dir / "inputs/edges/edge_05deg_rgb.npy")
+    got = io.read_image(REFERENCE / "inputs/edges/edge_05deg_rgb.png")
+    expect = load_input("edges/edge_05deg_rgb.npy")
     assert got.bit_depth == 16
     np.testing.assert_array_equal(got.data, expect)
 

@@ -8,7 +8,8 @@ import json
 import numpy as np
 import pytest
 
-from conftest import REFERENCE, assert_one_line_error, run_cli
+from conftest import assert_one_line_error, run_cli
+from reference_data import EXPECTED, REFERENCE, input_path
 
 from cfa_mitsuba.cli import main
 
@@ -29,7 +30,6 @@ def cli(capsys):
 
     return run
 
-EXPECTED = json.loads((REFERENCE / "expected.json").read_text()) if REFERENCE.is_dir() else {}
 COLOUR = REFERENCE / "inputs" / "colour"
 
 
@@ -64,9 +64,9 @@ def test_delta_e_per_pixel_headline_and_notice_on_stderr():
     assert "srgb8" in proc.stderr
 
 
-def test_scielab_xyz_npy_and_mtf_16bit_png(cli):
-    x = REFERENCE / "inputs" / "xyz"
-    out = one_json(cli("metric", "scielab", x / "xyz_scene_ref.npy", x / "xyz_scene_shift.npy",
+def test_scielab_xyz_npy_and_mtf_16bit_png(cli, tmp_path):
+    ref, shift = (input_path(f"xyz/xyz_scene_{k}.npy", tmp_path) for k in ("ref", "shift"))
+    out = one_json(cli("metric", "scielab", ref, shift,
                            "--samples-per-degree", "72", "--version", "1976", "--json"))
     want = ref_value(EXPECTED["xyz_pairs"]["scene_shift"]["scielab"], "isetcam", "scielab|spd=72|xyz2|dE1976")
     assert out["mean_interior"] == pytest.approx(want["mean_interior"], rel=2e-6)

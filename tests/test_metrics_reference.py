@@ -1,24 +1,21 @@
-"""Every reference value in shared/reference/expected.json that applies to our
-conventions, reproduced within the README's recommended tolerances (s. 4)."""
+"""Every reference value in tests/data/reference/expected.json that applies to our
+conventions, reproduced within the tolerances the reference's authors recommend."""
 
 from __future__ import annotations
 
-import json
 from functools import lru_cache
 
 import numpy as np
 import pytest
-from PIL import Image
 
 import cfa_mitsuba.metrics as cm
 from cfa_mitsuba.metrics import colourspace as mc
 
-from conftest import REFERENCE
+from reference_data import EXPECTED, load_input
 
-EXPECTED = json.loads((REFERENCE / "expected.json").read_text()) if REFERENCE.is_dir() else {}
-COLOUR_PAIRS = sorted(EXPECTED.get("colour_pairs", {}))
-XYZ_PAIRS = sorted(EXPECTED.get("xyz_pairs", {}))
-EDGES = sorted(EXPECTED.get("slanted_edges", {}))
+COLOUR_PAIRS = sorted(EXPECTED["colour_pairs"])
+XYZ_PAIRS = sorted(EXPECTED["xyz_pairs"])
+EDGES = sorted(EXPECTED["slanted_edges"])
 WHITE = [95.05, 100.0, 108.9]
 
 
@@ -32,22 +29,13 @@ def entries(section, pair, metric, *, oracle=None, primary=None):
 @lru_cache(maxsize=None)
 def colour_pair(pid):
     p = EXPECTED["colour_pairs"][pid]
-    load = lambda f: np.array(Image.open(REFERENCE / "inputs" / f)).astype(np.float64)  # noqa: E731
-    return load(p["reference"]), load(p["distorted"])
+    return load_input(p["reference"]), load_input(p["distorted"])
 
 
 @lru_cache(maxsize=None)
 def xyz_pair(pid):
     p = EXPECTED["xyz_pairs"][pid]
-    return tuple(np.load(REFERENCE / "inputs" / p[k]).astype(np.float64) for k in ("reference", "distorted"))
-
-
-def test_inputs_are_the_stored_ones(reference_dir):
-    import hashlib
-
-    for rel, info in EXPECTED["inputs"].items():
-        digest = hashlib.sha256((reference_dir / "inputs" / rel).read_bytes()).hexdigest()
-        assert digest == info["sha256"], rel
+    return load_input(p["reference"]), load_input(p["distorted"])
 
 
 # -- SSIM, MDSI, HaarPSI: the authors' MATLAB code (primary) -------------------------------------
@@ -166,9 +154,7 @@ def test_scielab_colour_pairs_isetcam(section, pid, entry):
 @lru_cache(maxsize=None)
 def edge_image(eid):
     p = EXPECTED["slanted_edges"][eid]
-    if p.get("file_npy"):
-        return np.load(REFERENCE / "inputs" / p["file_npy"]).astype(np.float64)
-    return np.array(Image.open(REFERENCE / "inputs" / p["file"])).astype(np.uint16).astype(np.float64)
+    return load_input(p.get("file_npy") or p["file"])
 
 
 @pytest.mark.parametrize("eid", EDGES)
