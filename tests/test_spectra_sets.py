@@ -5,6 +5,8 @@ data with the source files' known defects handled."""
 from __future__ import annotations
 
 import csv
+import hashlib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -183,20 +185,35 @@ def test_duplicate_wavelengths(tmp_path):
         read_curve_csv(clash)
 
 
-def test_shipped_files_are_verbatim_copies_and_not_duplicated(reference_dir):
+#: upstream files the package does not ship (each rebuilt from a shipped one), kept as test data
+UPSTREAM_ONLY = Path(__file__).resolve().parent / "data" / "filters"
+
+
+def _sha256sums(folder):
+    lines = (folder / "SHA256SUMS").read_text().splitlines()
+    return {rel: digest for digest, rel in (line.split("  ", 1) for line in lines)}
+
+
+def test_shipped_files_are_verbatim_copies_and_not_duplicated():
+    # SHA256SUMS holds the digests of the upstream extracts (ISETCam, pbrt-v4) the files were copied from
+    upstream = _sha256sums(FILTERS_DIR)
     files = sorted(p for p in FILTERS_DIR.rglob("*.csv"))
+    assert sorted(str(p.relative_to(FILTERS_DIR)) for p in files) == sorted(upstream)
     contents = {}
     for p in files:
         rel = p.relative_to(FILTERS_DIR)
-        assert p.read_bytes() == (reference_dir / "filters" / rel).read_bytes(), rel
+        assert hashlib.sha256(p.read_bytes()).hexdigest() == upstream[str(rel)], rel
         _, d = _csv(p)
         key = np.round(d[:, 1:], 12).tobytes()
         assert key not in contents, (rel, contents.get(key))
         contents[key] = rel
 
 
-def test_duplicated_datasets_are_rebuilt_not_shipped(reference_dir):
-    f = reference_dir / "filters/isetcam"
+def test_duplicated_datasets_are_rebuilt_not_shipped():
+    for rel, digest in _sha256sums(UPSTREAM_ONLY).items():
+        assert hashlib.sha256((UPSTREAM_ONLY / rel).read_bytes()).hexdigest() == digest, rel
+        assert not (FILTERS_DIR / rel).exists(), rel  # test data only: the package rebuilds it
+    f, shipped = UPSTREAM_ONLY / "isetcam", FILTERS_DIR / "isetcam"
     # ISETCam's RGBW join is the set mt9v024-rgbw
     _, joined = _csv(f / "colorfilters/auto/MT9V024_RGBW.csv")
     joined = joined[(joined[:, 0] >= 400) & (joined[:, 0] <= 700)]  # where the IR cut passes light
@@ -206,9 +223,9 @@ def test_duplicated_datasets_are_rebuilt_not_shipped(reference_dir):
                                    joined[:, i + 1], rtol=1e-12)
     # the IMX363 placeholder is MT9V024 RGB, bit for bit
     assert (f / "qe_IMX363_public.csv").read_bytes().split(b"\n", 1)[1] == \
-        (f / "colorfilters/auto/MT9V024_RGB.csv").read_bytes().split(b"\n", 1)[1]
+        (shipped / "colorfilters/auto/MT9V024_RGB.csv").read_bytes().split(b"\n", 1)[1]
     # D200 IR: the two files differ by the factor 0.8 only
-    _, a = _csv(f / "colorfilters/nikon/NikonD200IR.csv")
+    _, a = _csv(shipped / "colorfilters/nikon/NikonD200IR.csv")
     _, b = _csv(f / "colorfilters/nikon/d200irSensitivities.csv")
     np.testing.assert_allclose(a[:, 1:], 0.8 * b[:, 1:], rtol=1e-12)
 
