@@ -6,7 +6,7 @@ and the processed images (a shared leaf: it imports no stage).
 The sRGB <-> XYZ conversion is IEC 61966-2-1 with its 4-digit matrix and the
 white point given by the matrix's row sums, (95.05, 100, 108.9): the
 convention ISETCam's reference values were produced with
-(shared/reference/README.md, s. 3).  The transfer functions, CIELAB and the
+(tests/data/reference/README.md).  The transfer functions, CIELAB and the
 colour differences come from colour-science (exact CIE constants
 216/24389 and 24389/27; ISETCam under Octave uses the rounded 0.008856 /
 7.787, a 2e-7 relative difference).

@@ -4,8 +4,9 @@ and NPZ.
 Reading returns the stored numbers unchanged (code values for PNG, floats for
 EXR/NPY), with what the file said about them; interpreting them (sRGB code
 values, linear, XYZ) is the caller's business.  16-bit PNGs are decoded with
-pypng, because Pillow silently reduces 16-bit RGB PNGs to 8 bit
-(shared/reference/README.md, s. 1.1).
+pypng, because Pillow silently reduces 16-bit RGB PNGs to 8 bit (the
+reference RGB edge in tests/data/reference/ is kept as .npy beside its PNG
+for that reason).
 """
 
 from __future__ import annotations

@@ -3,8 +3,8 @@ with the eye's spatial sensitivity (Bae 2020 s. 2.2.2, Fig 4, Fig 10).
 
 Written here because no maintained Python library implements it with
 ISETCam's parameters.  The steps and numbers are those ISETCam's
-``scielab.m`` uses with its 'distribution' filters (shared/reference/README.md
-s. 5), except the boundary: we extend the image symmetrically (MATLAB's and
+``scielab.m`` uses with its 'distribution' filters (the reference values in
+tests/data/reference/ come from it), except the boundary: we extend the image symmetrically (MATLAB's and
 numpy's 'symmetric', Zhang's original code) and return a map of the input's
 size, registered to it, where ISETCam crops a row/column and convolves
 circularly.  Away from the border (one degree in) both agree to 1e-13.
