@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import os
 import struct
-import time
 import zlib
 
 import numpy as np
@@ -47,9 +46,9 @@ def _cli(*args, env=None):
 
     try:
         return subprocess.run([sys.executable, "-m", "cfa_mitsuba", *map(str, args)], capture_output=True, text=True,
-                              cwd=REPO, timeout=120, stdin=subprocess.DEVNULL, env=env)
-    except subprocess.TimeoutExpired:
-        pytest.fail(f"cfa-mitsuba {args[0]} blocked for 120 s")
+                              cwd=REPO, timeout=300, stdin=subprocess.DEVNULL, env=env)
+    except subprocess.TimeoutExpired:  # a hang guard (a command takes seconds), not a speed check
+        pytest.fail(f"cfa-mitsuba {args[0]} blocked for 300 s")
 
 
 def _capture(exr, cfa, out):
@@ -60,9 +59,7 @@ def _capture(exr, cfa, out):
 
 def test_fifo_as_spectrum_csv_is_refused_not_waited_on(tmp_path, exr):
     os.mkfifo(tmp_path / "red.csv")
-    t0 = time.monotonic()
     proc = _capture(exr, _cfa_toml(tmp_path, "red.csv"), tmp_path / "raw.npz")
-    assert time.monotonic() - t0 < 60
     assert_one_line_error(proc, "red.csv", "FIFO", "not a regular file")
     assert not (tmp_path / "raw.npz").exists()
 
@@ -181,10 +178,14 @@ def test_envi_header_contradicting_its_data_is_refused(tmp_path, key, value, nee
 
 # ------------------------------------------------------ many-channel EXR (5)
 
-def test_exr_with_10000_channels_converts_quickly(tmp_path):
+def test_exr_with_10000_channels_converts_without_an_n_by_n_table(tmp_path):
     """One pixel, 10,000 reflectance channels (a 310 KB file) ran past 120 s
-    (np.eye(n) built once per channel); a flat reflectance is D65's band
-    means up to one scale."""
+    (np.eye(n), 800 MB, built once per channel): the conversion's peak
+    allocation stays far below one such table (how fast it is:
+    benchmarks/bench_refusals.py); a flat reflectance is D65's band means up
+    to one scale."""
+    import tracemalloc
+
     import OpenEXR
 
     n = 10000
@@ -196,9 +197,13 @@ def test_exr_with_10000_channels_converts_quickly(tmp_path):
     with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage,
                        "spectralLayoutVersion": "1.0"}, chans) as f:
         f.write(str(p))
-    t0 = time.perf_counter()
-    img = cm.io.read_spectral_exr(p)
-    assert time.perf_counter() - t0 < 20
+    tracemalloc.start()
+    try:
+        img = cm.io.read_spectral_exr(p)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 400e6, f"{peak / 1e6:.0f} MB at peak"  # measured: about 100 MB; np.eye(10000) is 800 MB
     d65 = _box_means(*spectra.illuminant_table("D65"), img.wavelengths)
     ratio = img.data[0, 0] / d65
     np.testing.assert_allclose(ratio, ratio.mean(), rtol=1e-5)

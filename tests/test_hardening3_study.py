@@ -97,18 +97,20 @@ def test_a_stopped_study_leaves_no_process_and_resumes(small, tmp_path, sig):
     proc = subprocess.Popen(_cmd(config, out, "--workers", 2), cwd=REPO, stdout=subprocess.DEVNULL, stderr=log)
     children: set[int] = set()
     try:
-        t0 = time.time()
-        while not (out / ".work").is_dir() or not any((out / ".work").glob("*.json")):  # evaluating
+        # evaluating (a study that never gets there is a hang: pytest-timeout ends the test)
+        while not (out / ".work").is_dir() or not any((out / ".work").glob("*.json")):
             assert proc.poll() is None, (tmp_path / "stderr.txt").read_text()
-            assert time.time() - t0 < 240, "no task finished"
             time.sleep(0.05)
         children = _descendants(proc.pid)
         assert len(children) >= 3, children  # two pool workers and multiprocessing's resource tracker
         proc.send_signal(sig)  # the main process only, as a CI timeout or the OOM killer does
-        proc.wait(timeout=60)
-        time.sleep(5.0)
-        left = sorted(pid for pid in children if _alive(pid))
-        assert not left, f"alive 5 s after {sig.name}: " + "; ".join(
+        proc.wait(timeout=300)
+        for _ in range(600):  # workers notice their parent's end within a second; 60 s of polls at most
+            left = sorted(pid for pid in children if _alive(pid))
+            if not left:
+                break
+            time.sleep(0.1)
+        assert not left, f"alive a minute after {sig.name}: " + "; ".join(
             Path(f"/proc/{p}/cmdline").read_text().replace("\0", " ")[:100] for p in left)
     finally:
         log.close()
@@ -170,9 +172,7 @@ def test_runaway_studies_are_refused_fast_with_the_estimate(tmp_path, case):
     config = tmp_path / f"{case}.toml"
     config.write_text(text)
     out = tmp_path / "out"
-    t0 = time.perf_counter()
-    proc = _study(config, out, timeout=60)  # a study the limits fail to refuse must not run on
-    wall = time.perf_counter() - t0
+    proc = _study(config, out, timeout=600)  # a study the limits fail to refuse must not run on
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
     assert f"{case}.toml" in lines[0] and "--force" in lines[0]
@@ -182,28 +182,24 @@ def test_runaway_studies_are_refused_fast_with_the_estimate(tmp_path, case):
         assert "1,000,001 condition(s)" in lines[0] and "100,000-task limit" in lines[0]
     assert re.search(r"about [\d.,]+ (h|days)", lines[0])
     assert not out.exists()
-    assert wall < 5.0, wall  # the whole command, interpreter start included (1.3 s unloaded)
-    # the refusal itself, from reading the config to the message: under 2 s
-    from cfa_mitsuba.errors import CfaMitsubaError
-    from cfa_mitsuba.study.config import load_config
-    from cfa_mitsuba.study.sizing import check_study_size
-
-    t0 = time.perf_counter()
-    with pytest.raises(CfaMitsubaError, match="--force"):
-        check_study_size(load_config(config), None)
-    assert time.perf_counter() - t0 < 2.0
+    # how fast the refusal comes: benchmarks/bench_refusals.py (never a wall-time limit in a test)
 
 
-def test_the_count_never_builds_the_conditions():
+def test_the_count_never_builds_the_conditions(monkeypatch):
+    from cfa_mitsuba.study import conditions, runner
     from cfa_mitsuba.study.config import parse_config
     from cfa_mitsuba.study.sizing import study_size
 
     import tomllib
 
     config = parse_config(tomllib.loads(_sweep_of_a_million()), where="sweep.toml")
-    t0 = time.perf_counter()
+
+    def built(*args, **kwargs):
+        raise AssertionError("the size estimate built the conditions it should only count")
+
+    monkeypatch.setattr(conditions, "cross", built)
+    monkeypatch.setattr(runner, "scene_conditions", built)
     size = study_size(config, 2)
-    assert time.perf_counter() - t0 < 0.5
     assert (size.conditions, size.tasks, size.captures, size.outputs) == (1_000_001, 6_000_006, 12_000_012,
                                                                           24_000_024)
 
@@ -274,14 +270,12 @@ def test_runaway_designs_are_refused_with_the_estimate(tmp_path, case):
     config = tmp_path / f"{case}.toml"
     config.write_text(text)
     out = tmp_path / "out"
-    t0 = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "cfa_mitsuba", "design", str(config), "--out", str(out), "--quiet"],
-                          cwd=REPO, capture_output=True, text=True)
+                          cwd=REPO, capture_output=True, text=True, timeout=600)  # a hang guard only
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
     assert f"{case}.toml" in lines[0] and "candidate evaluation(s)" in lines[0] and needle in lines[0]
     assert "peak memory about" in lines[0] and re.search(r"about [\d.,]+ (h|days)", lines[0])
-    assert time.perf_counter() - t0 < 10
     assert not out.exists()
 
 
@@ -374,13 +368,19 @@ def test_force_starts_what_the_limits_refuse(monkeypatch):
         check_study_size(config, 2, force=True)
 
 
-def test_a_sweep_listing_a_million_values_is_refused_before_parsing(tmp_path):
+def test_a_sweep_listing_a_million_values_is_refused_before_parsing(tmp_path, monkeypatch):
+    import tomllib
+
     from cfa_mitsuba.errors import CfaMitsubaError
     from cfa_mitsuba.study.config import load_config
 
     config = tmp_path / "long.toml"
     config.write_text(SMALL + '\n[[sweep]]\nscene = "macbeth"\nseed = [' + ", ".join(map(str, range(10**6))) + "]\n")
-    t0 = time.perf_counter()
+
+    def parsed(*args, **kwargs):  # parsing it alone took 7 s: the size check must come first
+        raise AssertionError("the config was parsed before its size was checked")
+
+    monkeypatch.setattr(tomllib, "loads", parsed)
+    monkeypatch.setattr(tomllib, "load", parsed)
     with pytest.raises(CfaMitsubaError, match=r"long.toml: 7,\d{3},\d{3} bytes, more than a config file holds"):
         load_config(config)
-    assert time.perf_counter() - t0 < 2.0  # parsing it alone took 7 s

@@ -39,15 +39,13 @@ def study(*args, **popen):
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("quick")
-    t0 = time.perf_counter()
     proc = study("--out", out)
-    wall = time.perf_counter() - t0
     assert proc.returncode == 0, proc.stderr
-    return out, wall, proc
+    return out, proc
 
 
 def test_quick_study_writes_everything(quick):
-    out, wall, proc = quick
+    out, proc = quick
     for name in ("metrics.csv", "scores.csv", "report.html", "timing.json", "config.json"):
         assert (out / name).is_file(), name
     assert any((out / "figures").glob("*.png")) and any((out / "figures").glob("*.svg"))
@@ -56,14 +54,13 @@ def test_quick_study_writes_everything(quick):
     assert {"delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi", "haarpsi"} <= headline
     assert np.isfinite(metrics["value"]).all()
     assert not (out / "failures.csv").exists()
-    print(f"quick study: {wall:.1f} s wall (renders included on a cold cache)")
 
 
 def test_quick_study_matches_stored_values(quick):
     """Every value of the first noise realisation within its stored tolerance
     (4 sigma of the render noise, tests/data/make_quick_expected.py says how
     it was measured); metrics.csv's means are checked against it below."""
-    out, _, _ = quick
+    out, _ = quick
     every = pd.read_csv(out / "metrics_realisations.csv")
     got = every[every["realisation"] == 0]
     exp = pd.read_csv(REPO / "tests" / "data" / "quick_expected.csv", comment="#")
@@ -79,7 +76,7 @@ def test_quick_study_means_and_intervals(quick):
     """metrics.csv: the mean of the realisations with its 95 % t interval."""
     from scipy.stats import t
 
-    out, _, _ = quick
+    out, _ = quick
     every = pd.read_csv(out / "metrics_realisations.csv")
     means = pd.read_csv(out / "metrics.csv")
     assert {"value", "ci_low", "ci_high", "n"} <= set(means.columns)
@@ -104,7 +101,7 @@ def test_every_scored_metric_tells_the_cfas_apart(quick):
     """Under the default range policy every scored metric's normalised score
     varies across the CFAs for every demosaic (issue 12: no metric constant,
     none silently scored as a tie), and the policies' clipping table is written."""
-    out, _, _ = quick
+    out, _ = quick
     scores = pd.read_csv(out / "scores.csv")
     distinct = scores.groupby(["demosaic", "metric"])["score"].agg(lambda v: v.round(9).nunique())
     assert len(distinct) == len(set(scores["demosaic"])) * 8 and set(scores["demosaic"]) == set(QUICK_DEMOSAICS)
@@ -118,7 +115,7 @@ def test_moire_bounds_are_censored(quick):
     """No MSP at the chirp's top analysed frequency is stored as a
     measurement: every such value is marked censored (a lower bound), and
     every censored value is that top frequency."""
-    out, _, _ = quick
+    out, _ = quick
     every = pd.read_csv(out / "metrics_realisations.csv")
     msp = every[every["metric"] == "moire"]
     assert len(msp) and msp["censored"].dtype == bool
@@ -138,7 +135,7 @@ def test_quick_study_gets_no_worse_with_more_light(quick):
     decided each capture and its SNR against light."""
     import cfa_mitsuba as cm
 
-    out, _, _ = quick
+    out, _ = quick
     m = pd.read_csv(out / "metrics.csv")
     worse, pairs = [], 0
     for (scene, cfa, dem, metric), g in m.groupby(["scene", "cfa", "demosaic", "metric"]):
@@ -170,16 +167,15 @@ def _tasks_done(out: Path) -> int:
     return len(list((out / ".work").glob("*.json"))) if (out / ".work").is_dir() else 0
 
 
-def _wait_for_tasks(out: Path, n: int, proc, timeout=120.0):
-    t0 = time.time()
+def _wait_for_tasks(out: Path, n: int, proc):
+    """Until ``n`` tasks are saved (a study that stops making progress is a hang: pytest-timeout ends it)."""
     while _tasks_done(out) < n:
         assert proc.poll() is None, f"study ended before {n} tasks: {proc.communicate()}"
-        assert time.time() - t0 < timeout, "no progress"
         time.sleep(0.05)
 
 
 def test_killed_study_resumes_and_gives_the_same_tables(quick, tmp_path):
-    ref, _, _ = quick
+    ref, _ = quick
     out = tmp_path / "killed"
     proc = study("--out", out, "--no-report", start_new_session=True)
     _wait_for_tasks(out, 4, proc)
@@ -208,9 +204,8 @@ def dask_cluster(tmp_path):
          "--no-dashboard", "--scheduler-file", str(sched_file)],
         env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)]
     try:
-        t0 = time.time()
-        while not sched_file.exists():
-            assert time.time() - t0 < 60, "scheduler did not start"
+        while not sched_file.exists():  # a scheduler that never starts is a hang: pytest-timeout ends it
+            assert procs[0].poll() is None, "the scheduler exited"
             time.sleep(0.1)
         address = json.loads(sched_file.read_text())["address"]
         for _ in range(2):  # no options: the default nanny, threads and memory limit
@@ -219,8 +214,8 @@ def dask_cluster(tmp_path):
                                           stderr=subprocess.DEVNULL, start_new_session=True))
         from distributed import Client
 
-        with Client(address, timeout=60) as client:
-            client.wait_for_workers(2, timeout=60)
+        with Client(address, timeout=300) as client:  # hang guards: a cluster starts in seconds
+            client.wait_for_workers(2, timeout=300)
         yield address, procs
     finally:
         for p in procs[::-1]:
@@ -234,7 +229,7 @@ def dask_cluster(tmp_path):
 
 
 def test_dask_cluster_gives_identical_results_despite_a_killed_worker(quick, dask_cluster, tmp_path):
-    ref, _, _ = quick
+    ref, _ = quick
     address, procs = dask_cluster
     out = tmp_path / "dask"
     proc = study("--out", out, "--no-report", "--scheduler", address, start_new_session=True)
@@ -252,7 +247,7 @@ def test_decisions_name_exactly_the_cfas_whose_rank_interval_contains_one(quick)
     every aspect, the report's cards follow it, and policies.csv's totals for the study's policy are scores.csv's."""
     import re
 
-    out, _, _ = quick
+    out, _ = quick
     d = pd.read_csv(out / "decisions.csv", keep_default_na=False)
     assert list(d.columns) == ["aspect", "cfas", "verdict", "detail"]
     assert list(d["aspect"]) == ["colour", "sharpness", "moire", "low light", "overall"]
@@ -290,7 +285,7 @@ def test_profile_study_after_profiles_the_tables_and_report_on_a_copy(quick, tmp
     spec = importlib.util.spec_from_file_location("profile_study", REPO / "benchmarks" / "profile_study.py")
     prof = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(prof)
-    out, _, _ = quick
+    out, _ = quick
     before = {p: p.stat().st_mtime_ns for p in (out / "report.html", out / "metrics.csv", out / "scores.csv")}
     assert prof.main(["--after", str(out), "--top", "5"]) == 0
     text = capsys.readouterr().out
