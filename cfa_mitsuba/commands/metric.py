@@ -253,7 +253,7 @@ def run(args) -> int:
         xyz_r, xyz_t = _to_xyz(ref, white), _to_xyz(test, white)
         if args.mean_match:
             xyz_t, scale = cm.mean_match(xyz_t, xyz_r, return_scale=True)
-            _notice(f"mean-matched the test image (x {scale:.6g})")
+            _notice(f"mean-matched the test image (x {scale:#.6g})")
 
     options = {"version": args.version}
     if info.inputs == "srgb8":
@@ -287,9 +287,11 @@ def _emit(args, result, imgs) -> int:
         sys.stdout.write(json.dumps(payload, allow_nan=False) + "\n")
         return 0
     unit = f" {result.unit}" if result.unit else ""
-    print(f"{result.name}: {float(result):.6g}{unit}")
+    print(f"{result.name}: {float(result):#.6g}{unit}")
     for key, val in payload.items():
         if key in ("metric", "value", "unit", "inputs") or isinstance(val, (dict, list)):
             continue
-        print(f"  {key}: {val}")
+        # six significant digits, as the headline: a reader needs no more, and the last digits of
+        # a float differ between BLAS and libm builds (--json keeps full precision)
+        print(f"  {key}: {val:#.6g}" if isinstance(val, float) else f"  {key}: {val}")
     return 0

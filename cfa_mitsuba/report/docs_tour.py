@@ -13,12 +13,18 @@ are cut at 150 characters with ``...``, and the notices on how files were read
 (``... pass --X to override``) are left out.  Nothing is typed by hand, so
 the numbers the tour prints (exposure, raw range, condition number, dE00)
 are those of the code.  ``normalised`` masks what changes between runs
-(seconds, cache keys) so a test can compare a fresh run with the README.
+(seconds, cache keys) and :func:`differences` compares a fresh run with the
+README as text and numbers: the words exactly, an integer exactly, a
+decimal within ``TOUR_RTOL`` of the shown value or one unit in its last
+printed digit, whichever is larger (a value that moved in its last bits on
+another CPU, BLAS or libm can still turn its last printed digit over; a
+change two units or 1e-6 beyond it is real).
 """
 
 from __future__ import annotations
 
-__all__ = ["TOUR", "tour_files", "tour_commands", "run_tour_block", "run_tour", "normalised"]
+__all__ = ["TOUR", "TOUR_RTOL", "tour_files", "tour_commands", "run_tour_block", "run_tour", "normalised",
+           "differences"]
 
 import os
 import re
@@ -32,6 +38,10 @@ from ..errors import CfaMitsubaError
 
 TOUR = re.compile(r"(<!-- tour -->\n```console\n)(?P<block>.*?)(```\n<!-- /tour -->)", re.S)
 _NOTICE = re.compile(r"pass --[\w-]+( \S+)? to override$")
+#: relative tolerance of a printed decimal (beyond one unit in its last digit)
+TOUR_RTOL = 1e-6
+#: a printed number: sign, digits, an optional fraction and exponent
+_NUMBER = re.compile(r"(?<![\w])([-+]?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?)")
 _WIDTH = 150
 
 
@@ -129,3 +139,34 @@ def normalised(text: str) -> str:
     """``text`` with what differs between runs masked: seconds and cache keys."""
     text = re.sub(r"\b[0-9a-f]{32}\b", "KEY", text)
     return re.sub(r"\b\d+(\.\d+)? s\b", "T s", text)
+
+
+def _last_digit_unit(token: str) -> float:
+    """One unit in the last printed digit of the decimal ``token`` ('1.68723' -> 1e-5, '2.5e-07' -> 1e-8)."""
+    mantissa, _, exponent = token.lower().partition("e")
+    return 10.0 ** (int(exponent or 0) - len(mantissa.split(".")[1]))
+
+
+def _numbers_differ(fresh: str, shown: str, rtol: float) -> bool:
+    if "." not in shown.lower().partition("e")[0] or "." not in fresh.lower().partition("e")[0]:
+        return fresh != shown  # an integer (a count, a size, a seed) or an exact input: exactly
+    allowed = max(rtol * abs(float(shown)), _last_digit_unit(shown))
+    return abs(float(fresh) - float(shown)) > allowed * (1.0 + 1e-9)  # the subtraction's own rounding
+
+
+def differences(fresh: str, shown: str, rtol: float = TOUR_RTOL) -> list[str]:
+    """Where a tour's fresh output differs from the block shown in the docs,
+    one line each (empty: they agree).  Both are :func:`normalised`; words
+    and integers must match exactly, decimals within ``rtol`` relative or one
+    unit in the shown value's last digit (module docstring)."""
+    a, b = normalised(fresh).splitlines(), normalised(shown).splitlines()
+    if len(a) != len(b):
+        return [f"{len(a)} lines printed now, {len(b)} shown"]
+    out = []
+    for n, (now, was) in enumerate(zip(a, b), 1):
+        parts_now, parts_was = _NUMBER.split(now), _NUMBER.split(was)
+        # split with one group: text at even positions, numbers at odd ones
+        if len(parts_now) != len(parts_was) or parts_now[::2] != parts_was[::2] or any(
+                _numbers_differ(x, y, rtol) for x, y in zip(parts_now[1::2], parts_was[1::2])):
+            out.append(f"line {n}: now {now!r}, shown {was!r}")
+    return out
