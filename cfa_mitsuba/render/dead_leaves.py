@@ -8,10 +8,11 @@ between :data:`RADIUS_MIN_SENSOR_PX` sensor pixels and
 spectrum follows a power law close to that of natural images, Cao et al.
 2010 s. 2; Lee, Mumford and Huang 2001), centre uniform over the square
 widened by the largest radius (discs cut by its border count), and
-reflectance drawn uniformly from :data:`PALETTE`: four measured neutral
-patches of colour-science's 'ColorChecker N Ohta' set (neutral 8 to 3.5:
-Y about 0.59 to 0.09, a contrast of about 6:1, low enough that a denoiser
-tuned to remove noise also removes some of it).  Discs are drawn until
+reflectance drawn uniformly from :data:`PALETTE`: three measured neutral
+patches of colour-science's 'ColorChecker N Ohta' set (neutral 8, 6.5 and
+5: Y about 0.58 to 0.20, a contrast of about 2.9:1, below the slanted
+edge's 4:1, low enough that a denoiser takes texture the edge keeps; with
+neutral 3.5 added, 6.3:1, the edge and the texture lost alike).  Discs are drawn until
 every cell of the square is covered.  The surround and the flat patch on
 the right are 'neutral 6.5', the grey nearest the texture's mean
 reflectance, so that the flat patch's noise is the texture's.
@@ -59,7 +60,7 @@ from .light import d65_white_radiance
 from .types import Built, RenderConfig, Scene
 
 #: The discs' reflectances: measured neutral patches of 'ColorChecker N Ohta'.
-PALETTE = ("neutral 8 (.23 D)", "neutral 6.5 (.44 D)", "neutral 5 (.70 D)", "neutral 3.5 (1.05 D)")
+PALETTE = ("neutral 8 (.23 D)", "neutral 6.5 (.44 D)", "neutral 5 (.70 D)")
 #: The flat patch and the surround.
 FLAT_PATCH = "neutral 6.5 (.44 D)"
 #: Smallest disc radius, in sensor pixels: below the pixel, so the pattern has detail up to Nyquist and past it.
@@ -228,7 +229,7 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
 SCENE = Scene(
     name="dead-leaves",
     description="dead-leaves texture chart: occluding discs, radii p(r) ~ r^-3 from 0.5 sensor px to 1/8 of the "
-                "square, four measured neutral ColorChecker reflectances (6:1), and a flat grey patch; FOV 3.56 deg; "
+                "square, three measured neutral ColorChecker reflectances (2.9:1), and a flat grey patch; FOV 3.56 deg; "
                 "4x the sensor's sampling",
     width=1280, height=1024, fov_deg=2.0 * 1280 / 720, spp=16, oversample=4, kind="dead-leaves",
     builder=_build, jitter=False,
