@@ -66,6 +66,13 @@ def texture_acutance(reference_xyz, test_xyz, white_xyz, *, texture_roi, flat_ro
         Headline: the acutance (unitless, 1 for a perfect texture MTF).
         Details: ``pixels_per_degree``, ``nyquist_cy_deg``, ``display_ppi``,
         ``viewing_distance_m``.
+
+    Examples
+    --------
+    >>> from cfa_mitsuba.render.dead_leaves import camera_example
+    >>> y, geometry = camera_example()
+    >>> round(float(texture_acutance(None, y, None, **geometry)), 2)
+    0.93
     """
     for name, v in (("display_ppi", display_ppi), ("viewing_distance_m", viewing_distance_m)):
         require(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0,

@@ -50,6 +50,13 @@ def texture_mtf(reference_xyz, test_xyz, white_xyz, *, texture_roi, flat_roi, de
         Headline: the texture MTF at 0.25 cy/px (half Nyquist), unitless.
         Details: ``freq_cy_px``, ``mtf`` (0 to Nyquist), ``mtf_no_noise_subtraction``,
         ``noise_to_texture`` (P_noise / P_cam per ring), ``analysis_px``, ``noise_tile_px``.
+
+    Examples
+    --------
+    >>> from cfa_mitsuba.render.dead_leaves import camera_example
+    >>> y, geometry = camera_example()          # box pixels, no optics, no noise
+    >>> round(float(texture_mtf(None, y, None, **geometry)), 2)   # the pixel's sinc(0.25) = 0.90
+    0.9
     """
     s = texture_spectra(test_xyz, texture_roi=texture_roi, flat_roi=flat_roi, dead_leaves=dead_leaves)
     f, p_ideal = s["freq_cy_px"], s["p_ideal"]

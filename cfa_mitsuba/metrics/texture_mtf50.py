@@ -33,6 +33,14 @@ def texture_mtf50(reference_xyz, test_xyz, white_xyz, *, texture_roi, flat_roi, 
         Headline: texture MTF50 (cy/mm or cy/px).  Details: ``mtf50_cy_px``,
         ``mtf50_cy_mm``, ``mtf50_found`` (False: the MTF stays above 0.5 up
         to Nyquist, which is then reported).
+
+    Examples
+    --------
+    >>> from cfa_mitsuba.render.dead_leaves import camera_example
+    >>> y, geometry = camera_example()          # box pixels alone: above 0.5 up to Nyquist
+    >>> r = texture_mtf50(None, y, None, **geometry, pixel_pitch_um=2.2)
+    >>> round(float(r), 1), r.details["mtf50_found"]
+    (227.3, False)
     """
     curve = texture_mtf(reference_xyz, test_xyz, white_xyz, texture_roi=texture_roi, flat_roi=flat_roi,
                         dead_leaves=dead_leaves).details

@@ -46,7 +46,7 @@ natural images", Int. J. Comput. Vis. 41 (2001) 35-59.
 from __future__ import annotations
 
 __all__ = ["PALETTE", "FLAT_PATCH", "RADIUS_MIN_SENSOR_PX", "RADIUS_MAX_FRACTION", "DEAD_LEAVES_SEED", "SCENE",
-           "layout", "disc_labels", "chart_luminance"]
+           "layout", "disc_labels", "chart_luminance", "camera_example"]
 
 import functools
 import math
@@ -234,3 +234,22 @@ SCENE = Scene(
     width=1280, height=1024, fov_deg=2.0 * 1280 / 720, spp=16, oversample=4, kind="dead-leaves",
     builder=_build, jitter=False,
 )
+
+
+def camera_example(width: int = 448, height: int = 320, oversample: int = 4) -> tuple[np.ndarray, dict]:
+    """(the chart's luminance factor as a perfect camera sees it, the
+    texture metrics' geometry keywords): each camera pixel the mean of its K
+    x K render pixels (a box pixel, no optics, no noise), for the metrics'
+    examples and tests."""
+    stats = _statistics(width, height, oversample, MAX_CELLS_PER_PX)
+    lum = np.full((height, width), float(_luminance_factor((FLAT_PATCH,))[0]))
+    y0, x0, y1, x1 = stats["texture_rect"]
+    lum[y0:y1, x0:x1] = chart_luminance(stats)
+    k = int(oversample)
+    cam = lum.reshape(height // k, k, width // k, k).mean(axis=(1, 3))
+
+    def inward(r):
+        return (math.ceil(r[0] / k), math.ceil(r[1] / k), r[2] // k, r[3] // k)
+
+    return cam, {"texture_roi": inward(stats["texture_rect"]), "flat_roi": inward(stats["flat_rect"]),
+                 "dead_leaves": stats}
