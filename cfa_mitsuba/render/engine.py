@@ -359,8 +359,11 @@ def _render_canonical(sc: Scene, cfg: RenderConfig) -> SpectralImage:
     built = sc.build(cfg)
     start = time.perf_counter()
     achromatic = built.pattern_spectrum is not None
-    bands, scene = _render_boxes(mi, built, cfg, sc, _band_boxes(cfg, achromatic), width=cfg.width,
-                                 height=cfg.height, spp=cfg.spp)
+    if built.radiance is not None:  # computed exactly by the builder (a flat chart seen directly)
+        bands, scene, achromatic = np.asarray(built.radiance, dtype=np.float64), None, False
+    else:
+        bands, scene = _render_boxes(mi, built, cfg, sc, _band_boxes(cfg, achromatic), width=cfg.width,
+                                     height=cfg.height, spp=cfg.spp)
     if achromatic:
         data = bands[..., :1].astype(np.float64) * np.asarray(built.pattern_spectrum)[None, None, :]
     else:
@@ -410,7 +413,8 @@ def _render_canonical(sc: Scene, cfg: RenderConfig) -> SpectralImage:
         "render_time_s": round(elapsed, 3),
         "cache_key": key,
         "kind": sc.kind,
-        "renderer": f"mitsuba {mi.__version__}",
+        "renderer": (f"mitsuba {mi.__version__}" if built.radiance is None
+                     else "exact cell means (no Mitsuba: a flat chart seen directly)"),
         **meta_extra,
         **built.meta,
     }
