@@ -175,7 +175,7 @@ def build_design_report(out: Path, config, cands, table, agree, named_proxies, s
         spec = next(c for c in config.study.cfas if get_cfa(c).name == best_named)
         show.append((f"best named: {best_named}", get_cfa(spec)))
     for _, r in pareto.head(4).iterrows():
-        show.append((r["cfa"], get_cfa(r["toml"])))
+        show.append((r["cfa"], get_cfa(str(Path(out) / r["toml"]))))  # recorded relative to the output folder
     for title, cfa in show:
         key = "card-" + "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in cfa.name)
         src = _save(out, key, F.card_figure(cfa, title))

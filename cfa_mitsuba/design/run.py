@@ -49,9 +49,12 @@ def _bound(c, table_row, values) -> float:
     return float(values[c.bound][c.label][0]) if isinstance(c.bound, str) else float(c.bound)
 
 
-def _fullchain_table(config, search, values, names, named_proxies):
-    """fullchain.csv: one row per CFA run through the full chain."""
+def _fullchain_table(config, search, values, names, named_proxies, out):
+    """fullchain.csv: one row per CFA run through the full chain; a
+    candidate's ``toml`` relative to the output folder ``out``."""
     import pandas as pd
+
+    from ..io.portable import relative_path
 
     cands = search.set_index("key")
     rows = []
@@ -60,7 +63,7 @@ def _fullchain_table(config, search, values, names, named_proxies):
                      **{p: named_proxies[cfa].get(p) for p in PROXY_NAMES}, "proxy_score": np.nan})
     for key, (name, path) in names.items():
         c = cands.loc[key]
-        rows.append({"cfa": name, "kind": "candidate", "key": key, "toml": path, "tile_text": c["tile_text"],
+        rows.append({"cfa": name, "kind": "candidate", "key": key, "toml": relative_path(path, out), "tile_text": c["tile_text"],
                      **{p: c[p] for p in PROXY_NAMES},
                      "proxy_score": c["proxy_score"], "proxy_rank": int(c["proxy_rank"]), "chosen": c["chosen"]})
     table = pd.DataFrame(rows)
@@ -130,7 +133,7 @@ def run_design(config, out_dir, *, workers=None, scheduler=None, progress=True, 
     values, names, study = run_fullchain(config, picked, out, workers=workers, scheduler=scheduler,
                                          progress=progress, log=log)
     timing["fullchain_s"] = time.perf_counter() - t1
-    table = _fullchain_table(config, cands, values, names, named_proxies)
+    table = _fullchain_table(config, cands, values, names, named_proxies, out)
     table["dominated_by"] = front.pareto(table, config.objectives)
     table["pareto"] = (table["kind"] == "candidate") & table["feasible"] & (table["dominated_by"] == "")
     table["score"] = front.fullchain_scores(table, config.objectives)
