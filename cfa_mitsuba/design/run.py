@@ -104,18 +104,27 @@ def run_design(config, out_dir, *, workers=None, scheduler=None, progress=True, 
         f"{' '.join(config.alphabet)} ({config.spectra_set}"
         + (f"; {config.spectra.family} spectra for {' '.join(config.spectra.letters)}" if config.spectra else "")
         + f"); {len(config.objectives)} objective(s), {len(config.constraints)} constraint(s)")
-    res = run_search(config, out, log=log)
+    if config.method == "gradient":
+        from .gradient_search import gradient_selection, run_gradient
+
+        res = run_gradient(config, out, log=log)
+    else:
+        res = run_search(config, out, log=log)
     cands = res.candidates
     timing["search_s"] = time.perf_counter() - t0
     log(f"proxy: {len(cands):,} candidates ({res.evaluated:,} evaluated now, {res.reused:,} taken from saved state) "
         f"in {timing['search_s']:.1f} s")
 
-    cands["proxy_score"] = front.proxy_scores(cands, config.objectives)
+    selection = used_proxies(config)
+    if config.method == "gradient":  # the front of the gradient's own two objectives
+        cands["proxy_score"], selection = gradient_selection(cands, config.full_chain)
+    else:
+        cands["proxy_score"] = front.proxy_scores(cands, config.objectives)
     order = np.argsort(cands["proxy_score"].to_numpy(), kind="stable")
     rank = np.empty(len(cands), int)
     rank[order] = np.arange(1, len(cands) + 1)
     cands["proxy_rank"] = rank
-    best, sample = front.select(cands, used_proxies(config), config.full_chain, config.agreement_sample, config.seed)
+    best, sample = front.select(cands, selection, config.full_chain, config.agreement_sample, config.seed)
     chosen = np.array([""] * len(cands), dtype=object)
     chosen[best], chosen[sample] = "best", "sample"
     cands["chosen"] = chosen
