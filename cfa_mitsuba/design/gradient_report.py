@@ -18,6 +18,7 @@ def gradient_front_figure(cands, noise_label: str):
     """Every run's proxy ΔE00 against its noise objective, coloured by its
     colour weight; the candidates chosen for the full chain ringed."""
     import matplotlib as mpl
+    import matplotlib.ticker  # noqa: F401  (mpl.ticker)
 
     fig = new_figure(6.4, 4.4)
     ax = fig.add_axes((0.13, 0.14, 0.68, 0.76))
@@ -28,6 +29,8 @@ def gradient_front_figure(cands, noise_label: str):
     ax.scatter(cands.loc[chosen, "gradient_colour"], cands.loc[chosen, "gradient_noise"], s=90,
                facecolors="none", edgecolors="#CC3311", lw=1.2, label="run through the full chain", zorder=4)
     ax.set_xscale("log")
+    ax.xaxis.set_major_formatter(mpl.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.xaxis.set_minor_formatter(mpl.ticker.NullFormatter())
     ax.set_xlabel("proxy ΔE00 (ColorChecker, after the ISP's colour fit)")
     ax.set_ylabel(noise_label)
     ax.legend(loc="upper right", frameon=False, fontsize=8)
@@ -68,7 +71,8 @@ def gradient_html(config, cands, table, save) -> str:
     """The section: figures (``save(key, fig)`` -> src) and the manufacturability table."""
     e = html.escape
     noise = next(o for o in config.objectives if o.metric != "delta-e")
-    front = save("gradient-front", gradient_front_figure(cands, f"proxy {noise.title}"))
+    short = {"snr10": "proxy SNR10 [cd/m²]", "ysnr": "proxy relative Y noise", "ysnr-area": "proxy area Y noise"}
+    front = save("gradient-front", gradient_front_figure(cands, short.get(noise.metric, noise.metric)))
     picked = cands[cands["chosen"].fillna("").astype(str) == "best"].sort_values("proxy_rank")
     names = dict(zip(table["key"], table["cfa"])) if "key" in table else {}
     curves = save("gradient-curves", gradient_curves_figure(config, cands, list(picked["key"])[:4]))

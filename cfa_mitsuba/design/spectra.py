@@ -12,9 +12,11 @@ Families (``[spectra] family``):
   curves of one spectra set or several (a dye library; whole-pixel QE
   already), scaled down if it would peak above 1;
 * ``spline``: a free-form dye transmittance  T(l) = sum_k c_k B_k(l),  cubic
-  B-splines (de Boor) on a clamped, uniform knot vector over 380-720 nm
-  (``knots`` functions), on the common silicon and IR cut: QE = T x IR x
-  Si.  B-splines are non-negative and sum to 1, so coefficients in [0, 1]
+  B-splines (de Boor) on a clamped, uniform knot vector over the study's
+  bands (395-705 nm: the 10-nm boxes of 400..700; held at its end values
+  beyond, where no band sees it, so no coefficient is left free of the
+  objective) with ``knots`` functions, on the common silicon and IR cut:
+  QE = T x IR x Si.  B-splines are non-negative and sum to 1, so coefficients in [0, 1]
   bound T in [0, 1] (what :mod:`.gradient_search` searches).
 
 Curves are tabulated on a 2-nm grid, 380..720 nm (what the emitted CFA
@@ -78,7 +80,8 @@ def common_qe() -> np.ndarray:
 
 def spline_basis(n: int, x=None) -> np.ndarray:
     """(len(x), n) cubic B-spline basis on a clamped uniform knot vector over
-    380-720 nm (module doc), evaluated at ``x`` (default :data:`GRID_NM`).
+    the study's bands, 395-705 nm (module doc), evaluated at ``x`` (default
+    :data:`GRID_NM`; held at the ends' values outside).
 
     >>> bool(np.allclose(spline_basis(12).sum(axis=1), 1.0))
     True
@@ -88,7 +91,10 @@ def spline_basis(n: int, x=None) -> np.ndarray:
     if n < 4:
         raise ValueError("a cubic B-spline basis needs at least 4 functions")
     x = GRID_NM if x is None else np.asarray(x, dtype=np.float64)
-    lo, hi = float(GRID_NM[0]), float(GRID_NM[-1])
+    from .. import spectra as _sp
+
+    edges = _sp.band_edges(_sp.DEFAULT_WAVELENGTHS)
+    lo, hi = float(edges[0]), float(edges[-1])
     knots = np.concatenate([[lo] * 3, np.linspace(lo, hi, n - 2), [hi] * 3])
     return BSpline.design_matrix(np.clip(x, lo, hi), knots, 3).toarray()
 
