@@ -23,8 +23,8 @@ of their front (:func:`gradient_selection`).
 
 from __future__ import annotations
 
-__all__ = ["GradientSpec", "parse_gradient", "run_gradient", "gradient_selection", "NOISE_PROXY_OF",
-           "DEFAULT_WEIGHTS"]
+__all__ = ["GradientSpec", "parse_gradient", "run_gradient", "gradient_selection", "gradient_objectives",
+           "GRADIENT_COLUMNS", "NOISE_PROXY_OF", "DEFAULT_WEIGHTS"]
 
 import json
 import time
@@ -38,6 +38,8 @@ from .. import spectra as _spectra
 NOISE_PROXY_OF = {("snr10", "ysnr"): "snr10", ("snr10", "ysnr-area"): "snr10_area", ("ysnr", ""): "noise",
                   ("ysnr-area", ""): "noise_area"}
 COLOUR_METRICS = ("delta-e",)
+#: The candidates' columns of the gradient's own two objectives (what it optimised).
+GRADIENT_COLUMNS = ("gradient_colour", "gradient_noise")
 DEFAULT_WEIGHTS = (0.15, 0.3, 0.45, 0.6, 0.75, 0.9)
 #: Spline coefficients' lower bound: a channel never goes wholly dark (its white balance would divide by 0).
 _FLOOR = 1e-4
@@ -239,3 +241,21 @@ def gradient_selection(cands, n_best: int):
     proxies = ("gradient_colour", "gradient_noise")
     score = np.mean([_normalise(np.log(cands[p].to_numpy(dtype=float))) for p in proxies], axis=0)
     return score, proxies
+
+
+class _Predicted:
+    """An objective whose proxy is the gradient's own column (the rest delegated)."""
+
+    def __init__(self, objective, column: str):
+        self._o, self.proxies = objective, (column,)
+
+    def __getattr__(self, name):
+        return getattr(self._o, name)
+
+
+def gradient_objectives(config) -> list:
+    """The design's objectives, each predicted by the gradient's own
+    objective (``gradient_colour`` for ΔE00, ``gradient_noise`` for the
+    noise one) in the agreement (:func:`.front.agreement`)."""
+    return [_Predicted(o, GRADIENT_COLUMNS[0] if o.metric in COLOUR_METRICS else GRADIENT_COLUMNS[1])
+            for o in config.objectives]

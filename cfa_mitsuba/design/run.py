@@ -63,8 +63,9 @@ def _fullchain_table(config, search, values, names, named_proxies, out):
                      **{p: named_proxies[cfa].get(p) for p in PROXY_NAMES}, "proxy_score": np.nan})
     for key, (name, path) in names.items():
         c = cands.loc[key]
-        rows.append({"cfa": name, "kind": "candidate", "key": key, "toml": relative_path(path, out), "tile_text": c["tile_text"],
-                     **{p: c[p] for p in PROXY_NAMES},
+        extra = {k: c[k] for k in ("gradient_colour", "gradient_noise") if k in c}  # the gradient method's
+        rows.append({"cfa": name, "kind": "candidate", "key": key, "toml": relative_path(path, out),
+                     "tile_text": c["tile_text"], **{p: c[p] for p in PROXY_NAMES}, **extra,
                      "proxy_score": c["proxy_score"], "proxy_rank": int(c["proxy_rank"]), "chosen": c["chosen"]})
     table = pd.DataFrame(rows)
     for o in (*config.objectives, *config.constraints):
@@ -146,7 +147,12 @@ def run_design(config, out_dir, *, workers=None, scheduler=None, progress=True, 
     table["dominated_by"] = front.pareto(table, config.objectives)
     table["pareto"] = (table["kind"] == "candidate") & table["feasible"] & (table["dominated_by"] == "")
     table["score"] = front.fullchain_scores(table, config.objectives)
-    agree = front.agreement(table, config.objectives)
+    if config.method == "gradient":  # predicted by what the gradient optimised
+        from .gradient_search import gradient_objectives
+
+        agree = front.agreement(table, gradient_objectives(config))
+    else:
+        agree = front.agreement(table, config.objectives)
     n_cand = int((table["kind"] == "candidate").sum())
     agree["fullchain_s_per_candidate"] = timing["fullchain_s"] / max(1, n_cand + len(config.study.cfas))
     _save_csv(out / "fullchain.csv", table)
