@@ -100,9 +100,10 @@ def league_table(study_dir, config):
                    "source": info.get("source", ""), "demosaic_kept": why}
             for aspect, metric, scene, lum, _ in ASPECTS:
                 label = _label(metric, scene, lum if lum is not None else low)
-                row[label], row[f"{label} low"], row[f"{label} high"] = _value(metrics, snr10, scores, cfa.name,
-                                                                              dem, metric, scene,
-                                                                              lum if lum is not None else low)
+                got = _value(metrics, snr10, scores, cfa.name, dem, metric, scene, lum if lum is not None else low)
+                row[label], row[f"{label} low"], row[f"{label} high"] = got[:3]
+                if len(got) > 3:  # a metric read at the end of its range: a bound, not a measurement
+                    row[f"{label}_censored"] = got[3]
             rows.append(row)
     return pd.DataFrame(rows)
 
@@ -126,7 +127,10 @@ def _value(metrics, snr10, scores, cfa, dem, metric, scene, lum):
             if len(r) else nan
     r = metrics[(metrics["cfa"] == cfa) & (metrics["demosaic"] == dem) & (metrics["metric"] == metric)
                 & (metrics["scene"] == scene) & ((metrics["luminance"].astype(float) - lum).abs() < 1e-9)]
-    return tuple(float(r.iloc[0][k]) for k in ("value", "ci_low", "ci_high")) if len(r) else nan
+    if not len(r):
+        return nan + (False,)
+    cens = str(r.iloc[0].get("censored", False)).lower() in ("true", "1")
+    return tuple(float(r.iloc[0][k]) for k in ("value", "ci_low", "ci_high")) + (cens,)
 
 
 def aspect_labels(table) -> list[tuple[str, str, str, str]]:
@@ -136,7 +140,8 @@ def aspect_labels(table) -> list[tuple[str, str, str, str]]:
     out = []
     for aspect, metric, scene, lum, what in ASPECTS:
         if lum is None and metric not in ("snr10", "mean_score"):
-            cols = [c for c in table.columns if c.startswith(f"{metric}@{scene}/L") and not c.endswith((" low", " high"))]
+            cols = [c for c in table.columns if c.startswith(f"{metric}@{scene}/L")
+                    and not c.endswith((" low", " high", "_censored"))]
             lums = sorted(float(c.rsplit("/L", 1)[1]) for c in cols)
             label = _label(metric, scene, lums[0]) if lums else ""
         else:
@@ -166,6 +171,9 @@ def league_decisions(table):
             v, lo, hi = -v, -hi, -lo
         cfas, verdict, detail = decide(names, v, lo, hi)
         note = " (lower is better: values shown negated)" if goal == "min" else ""
+        if f"{label}_censored" in t and t[f"{label}_censored"].astype(bool).any():
+            note += (f"; {int(t[f'{label}_censored'].astype(bool).sum())} of {len(t)} entries read at the end "
+                     "of the metric's range (a bound: they tie there)")
         out.append((aspect, label, " ".join(cfas), verdict, f"{what}: {detail}{note}"))
     return pd.DataFrame(out, columns=["aspect", "metric", "entries", "verdict", "detail"])
 
@@ -173,7 +181,7 @@ def league_decisions(table):
 def _html(table, decisions, config, timing) -> str:
     e = html.escape
     labels = [c for c in table.columns if c not in ("cfa", "demosaic", "tile", "spectra", "source", "demosaic_kept")
-              and not c.endswith((" low", " high"))]
+              and not c.endswith((" low", " high", "_censored"))]
     head = "".join(f"<th>{e(c)}</th>" for c in labels)
     rows = []
     for _, r in table.iterrows():

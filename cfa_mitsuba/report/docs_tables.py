@@ -201,12 +201,13 @@ def league_table(repo: Path, results: str) -> str:
         raise CfaMitsubaError(f"{results}/league.csv not found (cfa-mitsuba league configs/league.toml --out {results})")
     f = pd.read_csv(path, keep_default_na=False)
     skip = ("cfa", "demosaic", "tile", "spectra", "source", "demosaic_kept")
-    cols = [c for c in f.columns if c not in skip and not c.endswith((" low", " high"))]
+    cols = [c for c in f.columns if c not in skip and not c.endswith((" low", " high", "_censored"))]
     head = ["CFA", "demosaic", *cols, "source"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in f.to_dict("records"):
-        cells = [f"{_fmt(r[c], '.3g')} [{_fmt(r[c + ' low'], '.3g')}, {_fmt(r[c + ' high'], '.3g')}]"
-                 if r[c] != "" else "—" for c in cols]
+        cells = [(f"{_fmt(r[c], '.3g')} [{_fmt(r[c + ' low'], '.3g')}, {_fmt(r[c + ' high'], '.3g')}]"
+                  + (" (bound)" if str(r.get(c + "_censored", "")) == "True" else "")) if r[c] != "" else "—"
+                 for c in cols]
         lines.append("| " + " | ".join([r["cfa"], r["demosaic"], *cells, str(r["source"]).replace("|", "/")]) + " |")
     return "\n\n" + "\n".join(lines) + "\n\n"
 
