@@ -385,6 +385,8 @@ def parse_design(data: dict, *, where: str = "design", base: Path | None = None)
             ck.fail("search.engine", f"'exhaustive' cannot search this space: {why}; use engine = \"nsga2\" "
                                      "(or \"auto\")")
         engines[(h, w)] = "exhaustive" if (engine == "exhaustive" or (engine == "auto" and fits)) else "nsga2"
+        if method == "gradient":  # one fixed layout, its spectra by L-BFGS-B (design/gradient_search.py)
+            engines[(h, w)] = "gradient"
     population = ck.integer(search.get("population", 40), "search.population", 4)
     generations = ck.integer(search.get("generations", 20), "search.generations", 1)
     full_chain = ck.integer(search.get("full_chain", 6), "search.full_chain", 1)
