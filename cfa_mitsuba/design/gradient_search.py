@@ -146,13 +146,10 @@ class _Problem:
 
     def starts(self, n: int, seed: int) -> list:
         """The set's own curves fitted to the basis, then seeded random band-pass curves."""
-        from .spectra import GRID_NM, common_qe, fit_to_basis
+        from .spectra import GRID_NM, common_qe, fit_to_basis, letter_curves
 
         rng = np.random.default_rng(seed)
-        sset = self.config.spectra_set
-        from .spectra import letter_curves
-
-        own = letter_curves(self.config.alphabet, sset)
+        own = letter_curves(self.config.alphabet, self.config.spectra_set)
         out = [np.concatenate([fit_to_basis(self.config.spectra, np.interp(GRID_NM, *own[a]), self.grid)
                                for a in self.free])]
         nominal = {"R": 610.0, "G": 540.0, "B": 460.0, "C": 500.0, "M": 560.0, "Y": 570.0, "W": 550.0}
@@ -178,7 +175,9 @@ def _params(problem, theta) -> list[dict]:
 
 
 def run_gradient(config, out_dir, *, log=print):
-    """The gradient search of ``config`` (module doc): a :class:`.search.SearchResult`
+    """The gradient search of ``config`` (module doc; ``out_dir`` unused: the
+    search keeps no state, a rerun repeats it, seeded, and the full chain
+    resumes from its study's ``.work/``): a :class:`.search.SearchResult`
     whose candidates carry the standard proxies of the emitted curves and
     ``gradient_colour``, ``gradient_noise``, ``weight``, ``start``,
     ``iterations``, ``converged`` and the manufacturability columns."""
@@ -232,7 +231,7 @@ def run_gradient(config, out_dir, *, log=print):
     return SearchResult(cands, len(found), 0, {(h, w): "gradient"})
 
 
-def gradient_selection(cands, n_best: int):
+def gradient_selection(cands):
     """(proxy score, proxies) for choosing the full chain's candidates: the
     front of the gradient's own two objectives, min-max normalised and
     averaged (:func:`.front.select` takes the rest)."""

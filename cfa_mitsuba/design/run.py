@@ -118,7 +118,7 @@ def run_design(config, out_dir, *, workers=None, scheduler=None, progress=True, 
 
     selection = used_proxies(config)
     if config.method == "gradient":  # the front of the gradient's own two objectives
-        cands["proxy_score"], selection = gradient_selection(cands, config.full_chain)
+        cands["proxy_score"], selection = gradient_selection(cands)
     else:
         cands["proxy_score"] = front.proxy_scores(cands, config.objectives)
     order = np.argsort(cands["proxy_score"].to_numpy(), kind="stable")
