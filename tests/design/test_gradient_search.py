@@ -127,3 +127,22 @@ def test_a_gradient_config_is_sized_by_its_runs():
     assert n == 1 * 2 * 8 and seconds > 0 and "L-BFGS-B" in text
     cfg = dataclasses.replace(cfg, gradient=dataclasses.replace(cfg.gradient, starts=4))
     assert design_size(cfg)[0] == 32
+
+
+def test_a_dye_library_mixture_stays_within_its_bounds_and_below_qe_1(tmp_path):
+    from cfa_mitsuba.design.gradient_search import run_gradient
+    from cfa_mitsuba.design.spectra import basis_matrices, library
+
+    text = GOOD.replace('family = "spline"\nknots = 8',
+                        'family = "mixture"\nbasis = ["isetcam-rgb", "pbrt-sony-ilce-9"]\nweight = [0, 2]')
+    cfg = parse_design(tomllib.loads(text))
+    assert cfg.spectra.basis == ("isetcam-rgb", "pbrt-sony-ilce-9")
+    n = len(library(cfg.spectra.basis))
+    cands = run_gradient(cfg, tmp_path, log=lambda *a: None).candidates
+    for _, row in cands.iterrows():
+        for p in json.loads(row["params"]):
+            w = np.asarray(p["weights"])
+            assert w.size == n and w.min() >= 0 and w.max() <= 2
+            # the penalty holds the unscaled mixture near QE 1 (mixture_qe scales any excess away)
+            assert (basis_matrices(cfg.spectra)[0] @ w).max() <= 1.05
+        assert np.isfinite(row["gradient_colour"]) and row["peak"] <= 1.0 + 1e-9
