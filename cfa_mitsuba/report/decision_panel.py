@@ -102,7 +102,7 @@ def decision_panel(root: Path, config: dict | None = None) -> str:
         clip = getattr(r, "clipped_share", "")
         clip = f"{100 * float(clip):.0f} %" if str(clip).strip() not in ("", "nan") else ""
         rows.append(f"<tr><th>{_e(r.aspect)}</th><td>{what}</td><td>{_e(level)}</td><td>{_e(clip)}</td>"
-                    f"<td class=\"note\">{_e(getattr(r, 'quantity', ''))}: {_e(r.detail)}</td></tr>")
+                    f"<td class=\"note\">{_e(r.detail)}</td></tr>")
     style = ("<style>table.decisions{table-layout:auto;width:100%}table.decisions td,table.decisions th"
              "{text-align:left;white-space:normal;vertical-align:top}table.decisions td.note{font-size:.85em}"
              "</style>")
@@ -115,7 +115,7 @@ def decision_panel(root: Path, config: dict | None = None) -> str:
             "with each metric left out; 'depends on' names those that change it. Low light is decided on SNR10 "
             f"and on the swept metrics' own values, not on scores. {_e(intervals_cover(config))}</p>"
             '<table class="data decisions"><thead><tr><th>decision</th><th>answer</th><th>level</th>'
-            "<th>scores clipped</th><th>quantity and detail</th></tr></thead>"
+            "<th>scores clipped</th><th>what was compared, and the detail</th></tr></thead>"
             f"<tbody>{''.join(rows)}</tbody></table></section>")
 
 

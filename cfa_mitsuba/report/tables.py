@@ -186,12 +186,23 @@ def table2(res: Results, luminance: float) -> str | None:
                 mark = '<sup class="oor-mark">†</sup>' if oor else ""
                 ge, some, why = _bound_mark(res, r)
                 tip += why
-                row.append(f'<td class="{" ".join(klass)}" data-value="{_num(r.value)}" title="{_e(tip)}">'
-                           f"{ge}{fmt_value(m, r.value)}{mark}{some}{_pm(cis[c], m)}</td>")
+                value = r.value
+                if some:  # bounds in some realisations: metrics.csv's value under the rule (their median)
+                    value, cis[c] = _metrics_value(res, r)
+                row.append(f'<td class="{" ".join(klass)}" data-value="{_num(value)}" title="{_e(tip)}">'
+                           f"{ge}{fmt_value(m, value)}{mark}{some}{_pm(cis[c], m)}</td>")
             row.append("</tr>")
             out.append("".join(row))
     out.append("</tbody></table>")
     return "".join(out)
+
+
+def _metrics_value(res: Results, row):
+    """(value, (ci_low, ci_high)) of metrics.csv for a scores.csv row (read under study/censored.py's rule)."""
+    m = res.metrics
+    r = m[(m["scene"] == row.scene) & (m["cfa"] == row.cfa) & (m["demosaic"] == row.demosaic)
+          & (m["luminance"] == row.luminance) & (m["metric"] == row.metric)].iloc[0]
+    return float(r["value"]), (float(r["ci_low"]), float(r["ci_high"]))
 
 
 def _bound_mark(res: Results, row) -> tuple[str, str, str]:

@@ -30,8 +30,10 @@ panel and cards, Table 3, the paper comparison's "best" claims):
    ``equivalent`` (``cfas``: the leader and every CFA within the practical
    difference of it);
 3. ``tie`` when several CFAs can rank first; ``clipped`` when more than
-   :data:`CLIPPED_LIMIT` of the scores used are clipped to a range bound
-   (the range no longer spans the values: nothing is decided from them);
+   :data:`CLIPPED_LIMIT` of the scores used (each CFA, demosaic and metric's
+   mean over the realisations) lie outside their range and are clipped to
+   its bound (the range no longer spans the values: nothing is decided
+   from them);
    ``unmeasured`` when the study has no value for the row.
 
 Each row is recomputed under the alternatives a reader could reasonably
@@ -94,8 +96,14 @@ def practical_threshold(rows, ranges: dict) -> float:
 
 
 def _clipped_share(rows) -> float:
-    raw = rows["raw_score"].to_numpy(dtype=float)
-    return float(np.mean((raw < -1e-9) | (raw > 1 + 1e-9))) if raw.size else 0.0
+    """The share of the scores used (each CFA, demosaic and metric: the mean over its realisations,
+    scores.csv's ``raw_score``) that eq. 8 puts outside [0, 1], where clipping acts on the value
+    itself: a range that does not span it.  A realisation of the worst CFA a hair below the worst
+    mean is noise about a value inside the range, not a value outside it."""
+    if rows.empty:
+        return 0.0
+    raw = rows.groupby(["cfa", "demosaic", "metric"], sort=False)["raw_score"].mean().to_numpy(dtype=float)
+    return float(np.mean((raw < -1e-9) | (raw > 1 + 1e-9)))
 
 
 def score_outcome(every, ranges: dict, metrics=(), demosaic: str | None = None) -> Outcome | None:

@@ -124,10 +124,12 @@ def _metric_outcome(realisations, metric: str, level: float):
 
 
 def _clipped_at(rows, ranges, metric) -> float:
+    """The share of the level's scores (each CFA and demosaic's mean value) the study's range clips."""
     r = ranges.get(metric)
     if r is None or rows is None or rows.empty:
         return float("nan")
-    raw = np.asarray(r.normalise(rows["value"].astype(float).to_numpy()))
+    means = rows.groupby(["cfa", "demosaic"], sort=False)["value"].mean().to_numpy(float)
+    raw = np.asarray(r.normalise(means))
     return round(float(np.mean((raw < -1e-9) | (raw > 1 + 1e-9))), 4)
 
 
