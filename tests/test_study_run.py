@@ -128,6 +128,12 @@ def test_moire_bounds_are_censored(quick):
     assert not every.loc[every["metric"] != "moire", "censored"].any()
     means = pd.read_csv(out / "metrics.csv")
     assert means.loc[means["metric"] == "moire", "censored"].any()
+    # censored_count: how many realisations are bounds; censored only when all are (study/censored.py)
+    keys = ["scene", "cfa", "demosaic", "luminance", "metric"]
+    counts = every.groupby(keys)["censored"].sum().rename("count").reset_index()
+    both = means.merge(counts, on=keys)
+    assert (both["censored_count"] == both["count"]).all()
+    assert (both["censored"] == (both["count"] == both["n"])).all()
 
 
 def test_quick_study_gets_no_worse_with_more_light(quick):

@@ -46,26 +46,33 @@ def ordinal(k: int) -> str:
 
 
 def _values(run, metric: str, demosaic: str, column: str = "value", scene: str | None = None) -> dict:
-    from ..errors import CfaMitsubaError
-
     m = run.metrics
     sel = m[(m["metric"] == metric) & (m["demosaic"] == demosaic)]
     if scene is not None:
         sel = sel[sel["scene"] == scene]
     if sel.empty:
-        raise CfaMitsubaError(f"claim fact: no {metric} with {demosaic} in {run.path}")
+        raise KeyError(f"no {metric} with {demosaic} in {run.path}")
     return {str(c): float(g[column].iloc[0]) for c, g in sel.groupby("cfa", sort=False)}
 
 
 def fact_text(run, spec: dict) -> str:
-    """The text of one fact (module docstring) on ``run`` (a :class:`.paper_data.Run`)."""
+    """The text of one fact (module docstring) on ``run`` (a :class:`.paper_data.Run`); a fact about a
+    CFA or metric the run lacks reads "(not measured in this run)"."""
     from ..errors import CfaMitsubaError
-    from ..metrics import get_metric
-    from .paper_data import cfa_label
 
     kind = spec.get("kind")
     if kind not in KINDS:
         raise CfaMitsubaError(f"claim fact: unknown kind {kind!r} (expected one of: {', '.join(KINDS)})")
+    try:
+        return _fact(run, spec, kind)
+    except (KeyError, ValueError, ZeroDivisionError):  # a CFA or metric the run does not have
+        return "(not measured in this run)"
+
+
+def _fact(run, spec: dict, kind: str) -> str:
+    from ..metrics import get_metric
+    from .paper_data import cfa_label
+
     if kind == "ratio":
         v = _values(run, spec["metric"], spec["demosaic"], spec["column"], spec.get("scene"))
         return f"{v[spec['a']] / v[spec['b']]:.1f}"
@@ -75,6 +82,8 @@ def fact_text(run, spec: dict) -> str:
     if kind == "means":
         (ga, gb), (la, lb) = spec["groups"], spec["labels"]
         ma, mb = float(np.mean([v[c] for c in ga])), float(np.mean([v[c] for c in gb]))
+        if not (np.isfinite(ma) and np.isfinite(mb)):
+            raise ValueError("empty group")
         word = "above" if round(ma, dec) > round(mb, dec) else "below" if round(ma, dec) < round(mb, dec) else "equal to"
         return f"{la} {ma:.{dec}f}, {word} {lb} {mb:.{dec}f}"
     if kind == "spread":

@@ -110,7 +110,8 @@ def decision_panel(root: Path, config: dict | None = None) -> str:
             '<p class="note">A CFA is named first only when its rank interval is exactly 1 and its lead is at '
             "least the practical difference (the smallest difference that matters, from each metric's record); "
             "a separated lead below it is 'no practical winner'; several CFAs whose rank intervals contain 1 are "
-            "a tie; nothing is decided from scores of which more than 10 % are clipped to a range bound. Each "
+            "a tie; nothing is decided where more than 10 % of the scores used (each CFA, demosaic and metric's "
+            "mean) lie outside their range and are clipped to its bound. Each "
             "answer was recomputed under the other range policies, the other ways of scoring a moiré bound and "
             "with each metric left out; 'depends on' names those that change it. Low light is decided on SNR10 "
             f"and on the swept metrics' own values, not on scores. {_e(intervals_cover(config))}</p>"
