@@ -176,7 +176,8 @@ def cell_interval(c: Cell, pool: RenderPool | None = None) -> tuple[float, float
     One render, or one realisation per render: the Student-t interval of the
     realisations (they are independent).  Several renders with several
     realisations each: ``pool``'s render variance times ``render_weight``
-    plus ``MS_w / n``, with Satterthwaite's degrees of freedom; ``pool``
+    plus ``MS_w / n``, with Satterthwaite's degrees of freedom (and never
+    narrower than the sensor-only half width); ``pool``
     None takes the value's own estimate (:func:`pool_render` of it alone:
     one degree of freedom for R = 2, as wide as the render means' t interval
     when the renders differ)."""
@@ -197,5 +198,7 @@ def cell_interval(c: Cell, pool: RenderPool | None = None) -> tuple[float, float
         return (c.mean, c.mean, c.mean, c.sd, c.n)
     denom = (a ** 2 / pool.df if math.isfinite(pool.df) and pool.df > 0 else 0.0) + b ** 2 / c.df_within
     df = var ** 2 / denom if denom > 0 else math.inf
-    half = t_quantile(max(df, 1.0)) * math.sqrt(var)
+    # never narrower than the sensor-only interval (Satterthwaite's df can exceed the within df when the
+    # pooled render term, known to many df, is a large share: the t quantile then falls a little)
+    half = max(t_quantile(max(df, 1.0)) * math.sqrt(var), t_quantile(c.df_within) * math.sqrt(b))
     return (c.mean, c.mean - half, c.mean + half, c.sd, c.n)
