@@ -2,6 +2,8 @@
 conditions and the intervals under them (issue 46); :mod:`.docs_tables`
 registers them with the others.
 
+- ``@decision-detail RESULTS ASPECT``: one decision's detail sentence
+  (decisions.csv), the numbers it was decided on and what it depends on;
 - ``@conditions RESULTS``: each CFA family's exposure regime at the base
   luminance and the f-number of every scene (:mod:`.conditions`);
 - ``@realisations RESULTS``: what a value's realisations are (sensor seeds x
@@ -37,6 +39,14 @@ def _csv(repo: Path, results: str, name: str, **kw):
     if not path.is_file():
         raise CfaMitsubaError(f"{results}/{name} not found")
     return pd.read_csv(path, **kw)
+
+
+def decision_detail(repo: Path, results: str, aspect: str) -> str:
+    d = _csv(repo, results, "decisions.csv", dtype=str, keep_default_na=False)
+    row = d[d["aspect"] == aspect]
+    if row.empty:
+        raise CfaMitsubaError(f"{results}/decisions.csv has no {aspect!r} row")
+    return row["detail"].iloc[0].rstrip(".")
 
 
 def conditions_sentence(repo: Path, results: str) -> str:
@@ -145,6 +155,7 @@ def protocols_sentence(repo: Path, folder: str) -> str:
 
 
 GENERATORS = {
+    "decision-detail": decision_detail,
     "conditions": conditions_sentence,
     "realisations": realisations_sentence,
     "practical-table": practical_table,
