@@ -53,16 +53,16 @@ _KINDS = (("censored at", "how moiré bounds are scored"), ("ranges:", "the rang
 
 
 def depends_words(depends_on: str) -> str:
-    """decisions.csv's ``depends_on`` in words: each alternative with what kind of choice it is.
+    """decisions.csv's ``depends_on`` in words: the alternatives grouped by the kind of choice they are.
 
-    >>> depends_words("without moire; censored at best measured")
-    'without moire (which metrics count); censored at best measured (how moiré bounds are scored)'
+    >>> depends_words("without moire; censored at best measured; without ssim")
+    'without moire, without ssim (which metrics count); censored at best measured (how moiré bounds are scored)'
     """
-    out = []
+    groups: dict = {}
     for label in [x.strip() for x in str(depends_on or "").split(";") if x.strip()]:
         kind = next((k for key, k in _KINDS if key in label), "")
-        out.append(f"{label} ({kind})" if kind else label)
-    return "; ".join(out)
+        groups.setdefault(kind, []).append(label)
+    return "; ".join(", ".join(labels) + (f" ({kind})" if kind else "") for kind, labels in groups.items())
 
 
 def _flag(value) -> bool:
