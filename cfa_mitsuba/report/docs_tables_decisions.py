@@ -143,14 +143,14 @@ def protocols_sentence(repo: Path, folder: str) -> str:
     m = a.merge(b, on=keys, suffixes=("_p", "_b")).drop_duplicates(["scene", "cfa", "luminance"])
     m = m.assign(d=m["clipped_fraction_b"] - m["clipped_fraction_p"])
     by = m.groupby("luminance")["d"].max()
-    same = [lum for lum, d in by.items() if d <= 1e-9]
-    differ = by[by > 1e-9]
-    text = (f"at {', '.join(f'{x:g}' for x in same)} cd/m² the two protocols clip the same pixels" if same
-            else "at no level of the sweep do the two protocols clip the same pixels")
+    same = [lum for lum, d in by.items() if d < 5e-4]
+    differ = by[by >= 5e-4]
+    text = (f"at {', '.join(f'{x:g}' for x in same)} cd/m² the two protocols clip the same share of every CFA's "
+            "pixels (within 0.05 %)" if same else "at no level of the sweep do the two protocols clip alike")
     if len(differ):
         text += (f"; from {differ.index.min():g} cd/m² up the `bayer` protocol clips up to "
-                 f"{100 * differ.max():.0f} % more of a CFA's pixels than the program "
-                 f"({', '.join(f'{lum:g} cd/m²: {100 * d:.0f} %' for lum, d in differ.items())})")
+                 f"{100 * differ.max():.1f} % more of a CFA's pixels than the program "
+                 f"({', '.join(f'{lum:g} cd/m²: {100 * d:.1f} %' for lum, d in differ.items())})")
     return text
 
 
