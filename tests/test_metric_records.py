@@ -77,3 +77,17 @@ def test_every_metric_evaluates_by_name_on_one_input():
         cm.metrics.evaluate("moire", cm.metrics.MetricInputs(xyz, xyz, white))
     with pytest.raises(cm.CfaMitsubaError, match="unknown metric"):
         cm.metrics.get_metric("no-such-metric")
+
+
+def test_every_scored_metric_states_its_practical_difference_and_its_source():
+    """Issue 46: a decision names a winner only past the smallest difference that matters; each scored
+    record gives it in its own unit (or as a share of the value) with where it comes from."""
+    for r in cm.metrics.METRICS.values():
+        if not r.scored:
+            continue
+        amount = r.practical(r.unit, typical=100.0)
+        assert amount is not None and amount > 0, r.name
+        assert len(r.practical_source) > 20 and any(ch.isdigit() for ch in r.practical_source), r.name
+    de = cm.metrics.get_metric("delta-e")
+    assert de.practical("dE00") == 0.8 and de.practical("dE76") == 2.3  # ISETCam's dE76 runs get CIELAB's JND
+    assert cm.metrics.get_metric("mtf").practical("cy/mm", typical=80.0) == pytest.approx(4.0)

@@ -59,6 +59,24 @@ def test_exposure_policies_set_where_auto_exposure_is_chosen(tmp_path):
     assert fixed.base_condition().exposure == 0.02
 
 
+def test_one_f_number_for_every_scene_unless_the_config_asks_for_the_scenes_own(tmp_path):
+    """Issue 46: the puppy (f/2 in its own render) and the charts are captured
+    at one f-number, [optics] f_number or f/4; "scene" asks for each scene's
+    own lens; a user's scene is treated like a built-in one."""
+    from cfa_mitsuba.study.runner import plan_study
+
+    def renders(text):
+        cfg = load_config(write(tmp_path, GOOD + text))
+        sources, _ = plan_study(cfg, None)
+        return cfg.base_condition().f_number, {s["scene"]: s["settings"].get("f_number") for s in sources}
+
+    assert renders("") == (4.0, {"macbeth": None, "puppy": 4.0})  # a chart's render does not depend on it
+    assert renders("[optics]\nf_number = 2.8\n") == (2.8, {"macbeth": None, "puppy": 2.8})
+    assert renders('[optics]\nf_number = "scene"\n') == (None, {"macbeth": None, "puppy": None})
+    custom = load_config(REPO / "configs" / "examples" / "custom_scene.toml")
+    assert custom.base_condition().f_number == (custom.optics.get("f_number") or 4.0)
+
+
 def test_good_config_values(tmp_path):
     cfg = load_config(write(tmp_path, GOOD + '[sensor]\npixel_pitch_um = 1.4\nnoise = "shot"\n'))
     assert cfg.sensor == {"pixel_pitch_um": 1.4} and cfg.capture == {"noise": "shot"}

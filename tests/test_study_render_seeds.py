@@ -126,13 +126,18 @@ def test_tiny_study_pairs_realisations_and_reports_the_render_share(tmp_path):
     assert (scores["total_rank_best"] <= scores["total_rank"]).all()
     assert (scores["total_rank"] <= scores["total_rank_worst"]).all()
     assert (tmp_path / "out" / "decisions.csv").is_file()
-    # the interval of a value from its realisations, by the nested rule
-    from cfa_mitsuba.study.intervals import nested_interval
+    # the interval of a value from its realisations: the render component pooled over the scene and
+    # metric's values (both CFAs), the sensor component the value's own (study/variance.py)
+    from cfa_mitsuba.study.variance import cell, cell_interval, pool_render
 
-    for (scene, cfa, metric), g in every.groupby(["scene", "cfa", "metric"]):
-        mean, lo, hi, _, n = nested_interval(g["value"], g["render_seed"])
-        row = by.loc[(scene, metric, cfa)]
-        assert row["value"] == pytest.approx(mean, rel=1e-8) and row["ci_low"] == pytest.approx(lo, rel=1e-6, abs=1e-9)
+    for (scene, metric), pool_rows in every.groupby(["scene", "metric"]):
+        cells = {cfa: cell(g["value"], g["render_seed"]) for cfa, g in pool_rows.groupby("cfa")}
+        pool = pool_render(list(cells.values()))
+        for cfa, c in cells.items():
+            mean, lo, hi, _, n = cell_interval(c, pool)
+            row = by.loc[(scene, metric, cfa)]
+            assert row["value"] == pytest.approx(mean, rel=1e-8)
+            assert row["ci_low"] == pytest.approx(lo, rel=1e-6, abs=1e-9)
     # a second run with render_seeds = 1 reuses render 0 and realisations 0, 1 of the sensor seeds
     cfg1 = dataclasses.replace(cfg, render_seeds=1)
     run_study(cfg1, tmp_path / "one", workers=1, progress=False, log=lambda m: None)

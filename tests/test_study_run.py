@@ -81,7 +81,9 @@ def test_quick_study_means_and_intervals(quick):
     means = pd.read_csv(out / "metrics.csv")
     assert {"value", "ci_low", "ci_high", "n"} <= set(means.columns)
     assert (means["n"] == 3).all()
-    g = every.groupby(KEYS)["value"]
+    # a value with bounds among its realisations is their Kaplan-Meier median (study/censored.py; tests/study)
+    means = means[means["censored_count"] == 0]
+    g = every.merge(means[KEYS], on=KEYS).groupby(KEYS)["value"]
     check = means.set_index(KEYS)
     m, sd = g.mean(), g.std(ddof=1)
     assert np.allclose(check.loc[m.index, "value"], m, rtol=1e-9)
@@ -126,6 +128,12 @@ def test_moire_bounds_are_censored(quick):
     assert not every.loc[every["metric"] != "moire", "censored"].any()
     means = pd.read_csv(out / "metrics.csv")
     assert means.loc[means["metric"] == "moire", "censored"].any()
+    # censored_count: how many realisations are bounds; censored only when all are (study/censored.py)
+    keys = ["scene", "cfa", "demosaic", "luminance", "metric"]
+    counts = every.groupby(keys)["censored"].sum().rename("count").reset_index()
+    both = means.merge(counts, on=keys)
+    assert (both["censored_count"] == both["count"]).all()
+    assert (both["censored"] == (both["count"] == both["n"])).all()
 
 
 def test_quick_study_gets_no_worse_with_more_light(quick):
@@ -243,32 +251,44 @@ def test_dask_cluster_gives_identical_results_despite_a_killed_worker(quick, das
 
 
 def test_decisions_name_exactly_the_cfas_whose_rank_interval_contains_one(quick):
-    """decisions.csv (issue 24): the overall row is Table 3's rank intervals, the rule is the same for
-    every aspect, the report's cards follow it, and policies.csv's totals for the study's policy are scores.csv's."""
+    """decisions.csv (issues 24, 46): the overall row is Table 3's rank intervals plus the practical
+    difference, the rule is the same for every decision, each says what it depends on, low light is
+    decided on SNR10 and values, the report's cards follow the rows, and policies.csv's totals for the
+    study's policy are scores.csv's."""
     import re
+
+    from cfa_mitsuba.study.decisions import COLUMNS, VERDICTS
 
     out, _ = quick
     d = pd.read_csv(out / "decisions.csv", keep_default_na=False)
-    assert list(d.columns) == ["aspect", "cfas", "verdict", "detail"]
-    assert list(d["aspect"]) == ["colour", "sharpness", "moire", "low light", "overall"]
+    assert list(d.columns) == COLUMNS
+    dems = list(dict.fromkeys(pd.read_csv(out / "scores.csv")["demosaic"]))
+    assert list(d["aspect"])[:4 + len(dems)] == ["colour", "sharpness", "moire", "overall"] + [f"with {x}" for x in dems]
+    assert {"low light", "low light: scielab", "low light: ssim"} <= set(d["aspect"])
     s = pd.read_csv(out / "scores.csv").drop_duplicates("cfa")
     overall = d[d["aspect"] == "overall"].iloc[0]
-    assert set(overall["cfas"].split()) == set(s[s["total_rank_best"] == 1]["cfa"])
+    can_be_first = set(s[s["total_rank_best"] == 1]["cfa"])
     one = s[(s["total_rank_best"] == 1) & (s["total_rank_worst"] == 1)]
-    assert overall["verdict"] == ("winner" if len(one) == 1 else "tie")
+    if len(one) == 1:  # separated: a winner, or equivalent when the lead is below the practical difference
+        assert overall["verdict"] in ("winner", "equivalent") and overall["cfas"].split()[0] == one["cfa"].iloc[0]
+    else:
+        assert overall["verdict"] == "tie" and set(overall["cfas"].split()) == can_be_first
     for r in d.itertuples():
-        assert r.verdict in ("winner", "tie", "unmeasured")
-        assert (r.verdict == "winner") == (len(r.cfas.split()) == 1 and "lies above every other" in r.detail)
+        assert r.verdict in VERDICTS
+        assert (r.verdict == "winner") == ("at least the practical difference" in r.detail), r.aspect
+        assert str(r.robust) in ("True", "False") and (str(r.robust) == "True") == (r.depends_on == ""), r.aspect
     low = d[d["aspect"] == "low light"].iloc[0]
-    # the low-light aspect reads the lowest luminance below the base one of a sweep of S-CIELAB or SSIM
+    assert low["quantity"].startswith("SNR10") and low["verdict"] != "unmeasured"
+    # the swept metrics are decided on their values at the lowest luminance below the base one
     cfg = json.loads((out / "config.json").read_text())
     lowest = min(v for sw in cfg["sweeps"] if not sw["metrics"] or {"scielab", "ssim"} & set(sw["metrics"])
                  for v in sw["values"].get("luminance", ()) if v < min(cfg["luminances"]))
-    assert low["verdict"] != "unmeasured" and re.search(rf"\b{lowest:g}\b[^;]* cd/m\^2", low["detail"])
-    # the report's cards name a best CFA only when its rank interval is exactly 1
+    sc = d[d["aspect"] == "low light: scielab"].iloc[0]
+    assert float(sc["luminance"]) == lowest and "values" in sc["quantity"]
+    # the report's cards name a best CFA only where decisions.csv names a winner
     html = (out / "report.html").read_text()
     named = re.findall(r'<div class="k">Best CFA overall</div><div class="v">(?:<span[^>]*></span>)?([\w-]+)<', html)
-    assert named == list(one["cfa"]), named
+    assert named == ([overall["cfas"]] if overall["verdict"] == "winner" else []), named
     pol = pd.read_csv(out / "policies.csv")
     ideal = pol[(pol["scope"] == "rank") & (pol["policy"] == "ideal")].set_index("cfa")
     np.testing.assert_allclose(ideal.loc[s["cfa"], "total_score"].to_numpy(), s["total_score"].to_numpy(), rtol=1e-9)

@@ -62,19 +62,19 @@ def test_one_row_per_axis_value(swept):
         assert axis in m.columns, axis
     for scene, metric in (("slanted-edge", "mtf"), ("puppy", "ssim")):
         rows = m[(m.scene == scene) & (m.metric == metric)]
-        # base (the scene's own f-number, seed 0), two f-numbers, three seeds
+        # base (the study's f-number, seed 0), two f-numbers, three seeds
         assert len(rows) == 6, rows
         assert sorted(rows[rows.seed == 0].f_number.round(3)) == sorted(
             {2.8, 8.0, float(rows[rows.base].f_number.iloc[0])})
         assert sorted(rows[~rows.base].seed) == [0, 0, 1, 2, 3]
-    # the puppy's base f-number is its render's own (f/2), used by diffraction too
-    assert float(m[(m.scene == "puppy") & m.base].f_number.iloc[0]) == 2.0
+    # one f-number for every scene unless the config asks for each one's own lens (issue 46): f/4 by default
+    assert float(m[(m.scene == "puppy") & m.base].f_number.iloc[0]) == 4.0
     assert float(m[(m.scene == "slanted-edge") & m.base].f_number.iloc[0]) == 4.0
     # the report draws a metric against each swept axis
     assert (out / "figures" / "sweep-f_number.png").is_file()
     assert (out / "figures" / "sweep-seed.png").is_file()
     timing = json.loads((out / "timing.json").read_text())
-    assert {"puppy", "puppy@f2.8", "puppy@f8"} <= set(timing["renders"])  # defocus follows the f-number
+    assert {"puppy@f4", "puppy@f2.8", "puppy@f8"} <= set(timing["renders"])  # defocus follows the f-number
 
 
 def _edge_curve(out, who, tag):

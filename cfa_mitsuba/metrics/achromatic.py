@@ -85,5 +85,8 @@ RECORDS = (
     MetricRecord(name="achromatic", function=achromatic, scenes=("gray-bar",), inputs="xyz", unit="L*",
                  higher_is_better=False, scored=True, label="AR error", order=6, decimals=3,
                  description="achromatic reproduction error, mean |ΔL*| along the gray bar",
-                 paper="ΔR (s. 2.2.6, Fig 14)", score_range=(1.0, 0.5)),
+                 paper="ΔR (s. 2.2.6, Fig 14)", score_range=(1.0, 0.5),
+                 practical_difference=(("L*", 0.8),),
+                 practical_source="0.8 L*: CIEDE2000's 50:50 % perceptibility threshold (Paravina et al. 2015) "
+                                  "for a pure lightness difference at mid-grey, where CIEDE2000 equals dL*"),
 )

@@ -131,11 +131,19 @@ def delta_e(reference_xyz, test_xyz, white_xyz, *, patches=None, grey_patches=No
     return MetricResult(details[f"mean_{key}"], name="delta-e", unit=unit, details=details)
 
 
+#: The smallest colour difference that matters (the ΔE records' ``practical_source``).
+PRACTICAL_DE = ("0.8 dE00: the 50:50 % perceptibility threshold of CIEDE2000 (Paravina et al. 2015, "
+                "J. Esthet. Restor. Dent. 27 S1:S1-S9, adopted by ISO/TR 28642:2016); 2.3 dEab (dE76): the "
+                "just noticeable difference of CIELAB (Mahy, Van Eycken & Oosterlinck 1994, Color Res. Appl. "
+                "19:105-121; colour-science's JND_CIE1976)")
+
 #: This module's metric records (collected by :mod:`.registry`).
 _DELTA_E = MetricRecord(
     name="delta-e", function=delta_e, scenes=("macbeth",), inputs="xyz", unit="dE00", higher_is_better=False,
     scored=True, label="ΔE00", order=1, decimals=2, paper="ΔE (s. 2.2.1, Fig 8)", score_range=(6.0, 2.2),
-    range_units=("dE00", "dE76"), description="colour error, mean CIEDE2000 over the 24 ColorChecker patches")
+    range_units=("dE00", "dE76"), description="colour error, mean CIEDE2000 over the 24 ColorChecker patches",
+    practical_difference=(("dE00", 0.8), ("dE76", 2.3), ("dEab", 2.3)),
+    practical_source=PRACTICAL_DE)
 RECORDS = (
     _DELTA_E,
     # values read from delta-e's details: reported, not scored

@@ -146,5 +146,9 @@ RECORDS = (
                  higher_is_better=True, scored=True, label="HaarPSI", order=8, decimals=3,
                  description="Haar wavelet perceptual similarity (Reisenhofer 2018), 1 = identical",
                  paper="HaarPSI (s. 2.2.8, Fig 15)", score_range=(0.0, 1.0),
-                 reference_cache=("reference_maps", haarpsi_reference_maps)),
+                 reference_cache=("reference_maps", haarpsi_reference_maps),
+                 practical_difference=(("", 0.02),),
+                 practical_source="0.02: our choice, no published threshold for HaarPSI (2 % of its 0-1 "
+                                  "range, less than SSIM's 0.05, as HaarPSI spreads a distortion over more "
+                                  "of its range)"),
 )

@@ -137,5 +137,8 @@ RECORDS = (
                  scored=True, label="MDSI", order=7, decimals=3,
                  description="mean deviation similarity index (Nafchi 2016), 0 = identical",
                  paper="MDSI (s. 2.2.7, Fig 15)", score_range=(0.5, 0.0),
-                 reference_cache=("reference_maps", mdsi_reference_maps)),
+                 reference_cache=("reference_maps", mdsi_reference_maps),
+                 practical_difference=(("", 0.02),),
+                 practical_source="0.02: our choice, no published threshold for MDSI (4 % of the paper's "
+                                  "0-0.5 range)"),
 )

@@ -143,5 +143,7 @@ RECORDS = (
                  higher_is_better=True, scored=True, label="MSP", order=5, decimals=2,
                  description="moiré starting point: first frequency where the block-mean C*ab passes 25",
                  paper="MSP (s. 2.2.5, Figs 12-13)", score_range=(0.04, 0.30), range_scaling="chirp_cy_px",
-                 censored_key="censored"),
+                 censored_key="censored", practical_difference=(("%", 10.0),),
+                 practical_source="10 % of the starting frequency (about 1/7 octave): our choice, no published "
+                                  "threshold for where colour moire starts"),
 )

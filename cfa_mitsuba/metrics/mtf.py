@@ -475,7 +475,11 @@ _MTF = MetricRecord(
     name="mtf", function=mtf, scenes=("slanted-edge",), inputs="linear", unit="cy/mm", higher_is_better=True,
     scored=True, label="MTF50", order=4, decimals=1, paper="MTF50 (s. 2.2.4, Figs 6, 11)",
     score_range=(30.0, 110.0), range_scaling="pixel_pitch", ideal_details=True,
-    description="luminance MTF50 of the slanted edge (ISO 12233 e-SFR)")
+    description="luminance MTF50 of the slanted edge (ISO 12233 e-SFR)",
+    practical_difference=(("%", 5.0),),
+    practical_source="5 % of the MTF50: our choice, no published threshold; perceived sharpness is acutance's "
+                     "(IEEE 1858-2016 CPIQ), whose just noticeable difference depends on the print or display "
+                     "size and the viewing distance, so none holds for MTF50 alone")
 RECORDS = (
     _MTF,
     _MTF.detail("mtf50p_cy_mm", name="mtf50p", unit="cy/mm", label="MTF50P", order=103, decimals=1,

@@ -69,6 +69,12 @@ class MetricRecord:
         ``function`` unless its ``[metrics.<name>]`` table sets them (S-CIELAB's
         ``fft_precision = 'single'``: the same numbers to 1e-5 dE00 in about half
         the filtering time); a direct call gets the function's own defaults.
+    practical_difference : ``((unit, amount), ...)``: the smallest difference
+        of the headline value that matters to a user, per unit the value
+        may be in (``'%'``: a share of the value itself); a decision names a
+        best CFA only when its lead is at least this large
+        (study/decisions.py).  ``practical_source`` says where each amount
+        comes from (a published threshold, or our choice and why).
     summary_options : ``((keyword, value), ...)``: options that leave out of
         the details what only the details files read, passed by a study for
         every camera output whose details it does not keep (the realisations
@@ -100,12 +106,30 @@ class MetricRecord:
     reference_cache: tuple[str, Callable[..., Any]] | None = None
     study_options: tuple[tuple[str, Any], ...] = ()
     summary_options: tuple[tuple[str, Any], ...] = ()
+    practical_difference: tuple[tuple[str, float], ...] = ()
+    practical_source: str = ""
 
     def __post_init__(self):
         if self.inputs not in INPUT_KINDS:
             raise ValueError(f"metric {self.name!r}: inputs must be one of {INPUT_KINDS}, got {self.inputs!r}")
         if (self.function is None) == (self.parent is None):
             raise ValueError(f"metric {self.name!r}: give a function, or a parent and detail_key (not both)")
+
+    def practical(self, unit: str, typical: float | None = None) -> float | None:
+        """The practical difference in ``unit`` (None when the record gives
+        none for it); a relative one (``'%'``) is taken of ``typical`` (the
+        value it applies to; None: not known, None returned).
+
+        >>> MetricRecord(name="t", function=abs, scenes=("x",), inputs="xyz", unit="cy/mm", higher_is_better=True,
+        ...              scored=True, label="t", description="", practical_difference=(("%", 5.0),)).practical("cy/mm", 80.0)
+        4.0
+        """
+        table = dict(self.practical_difference)
+        if unit in table:
+            return float(table[unit])
+        if "%" in table and typical is not None and typical == typical:
+            return abs(float(typical)) * float(table["%"]) / 100.0
+        return None
 
     @property
     def secondary(self) -> bool:

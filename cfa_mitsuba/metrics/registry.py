@@ -127,6 +127,7 @@ def record_json(r: MetricRecord) -> dict:
         "label": r.label, "description": r.description, "paper": r.paper,
         "derived_from": r.parent, "censored_key": r.censored_key, "function": fn,
         "study_options": dict(r.study_options), "summary_options": dict(r.summary_options),
+        "practical_difference": dict(r.practical_difference), "practical_source": r.practical_source,
     }
 
 

@@ -24,6 +24,7 @@ from ..errors import require
 from ._common import as_image, as_pair, as_white
 from ._result import MetricResult, summarise_array
 from .colourspace import delta_e_1976, delta_e_2000, xyz_to_lab
+from .delta_e import PRACTICAL_DE  # one source for the ΔE threshold
 from .record import NATURAL, MetricRecord
 
 #: XYZ -> opponent (luminance, red-green, blue-yellow), rows = output channels
@@ -369,7 +370,9 @@ _SCIELAB = MetricRecord(
     scored=True, label="S-CIELAB", order=2, decimals=2, paper="ΔEs (s. 2.2.2, Fig 10)", score_range=(9.5, 2.5),
     range_units=("dE00", "dE76"), reference_cache=("reference_lab", scielab_reference),
     study_options=(("fft_precision", "single"),), summary_options=(("order_statistics", False),),
-    description="colour reproduction error, mean S-CIELAB ΔE00 over the image (Zhang-Wandell)")
+    description="colour reproduction error, mean S-CIELAB ΔE00 over the image (Zhang-Wandell)",
+    practical_difference=(("dE00", 0.8), ("dE76", 2.3)),
+    practical_source=PRACTICAL_DE + " (S-CIELAB is CIELAB on uniform areas: Zhang & Wandell 1997)")
 RECORDS = (
     _SCIELAB,
     _SCIELAB.detail("mean_interior", name="scielab-interior", unit="dE00", label="S-CIELAB interior", order=105,

@@ -69,7 +69,18 @@ def _first(group, score: str, best: str, worst: str) -> str:
 
 
 def rank_summary(repo: Path, results: str) -> str:
-    """One sentence: who is first overall and with each demosaic, by the rule."""
+    """One sentence: who is first overall and with each demosaic, by the rule: decisions.csv's
+    answers with what each depends on, or (a run written before decisions said that) the rank
+    intervals alone."""
+    import pandas as pd
+
+    path = repo / results / "decisions.csv"
+    d = pd.read_csv(path, dtype=str, keep_default_na=False) if path.is_file() else None
+    if d is not None and "robust" in d.columns:
+        from .decision_panel import answer_words
+
+        rows = d[(d["aspect"] == "overall") | d["aspect"].str.startswith("with ")]
+        return "; ".join(f"{r.aspect}: {answer_words(r)}" for r in rows.itertuples(index=False))
     s = _scores(repo, results)
     lum = sorted(s["luminance"].unique())[0]
     s = s[s["luminance"] == lum]
@@ -103,9 +114,20 @@ def decisions_table_md(repo: Path, results: str) -> str:
     if not path.is_file():
         raise CfaMitsubaError(f"{results}/decisions.csv not found")
     d = pd.read_csv(path, dtype=str, keep_default_na=False)
-    lines = ["| aspect | CFA(s) that can rank first | verdict |", "|---|---|---|"]
+    if "robust" not in d.columns:  # written before decisions said what they depend on
+        lines = ["| aspect | CFA(s) that can rank first | verdict |", "|---|---|---|"]
+        for r in d.itertuples(index=False):
+            lines.append(f"| {r.aspect} | {_names(r.cfas.split()) if r.cfas else '—'} | {r.verdict} |")
+        return "\n\n" + "\n".join(lines) + "\n\n"
+    from .decision_panel import depends_words
+
+    lines = ["| decision | CFA(s) named | verdict | level | scores clipped there | depends on |", "|---|---|---|---|---|---|"]
     for r in d.itertuples(index=False):
-        lines.append(f"| {r.aspect} | {_names(r.cfas.split()) if r.cfas else '—'} | {r.verdict} |")
+        level = f"{float(r.luminance):g} cd/m²" if r.luminance not in ("", "nan") else "—"
+        clip = f"{100 * float(r.clipped_share):.0f} %" if r.clipped_share not in ("", "nan") else "—"
+        dep = "nothing checked changes it" if r.robust.lower() == "true" else depends_words(r.depends_on)
+        lines.append(f"| {r.aspect} | {_names(r.cfas.split()) if r.cfas else '—'} | {r.verdict} | {level} | {clip} "
+                     f"| {dep} |")
     return "\n\n" + "\n".join(lines) + "\n\n"
 
 
@@ -341,10 +363,12 @@ GENERATORS = {
 def _register_more() -> None:
     """Generators kept in modules of their own (one per page), under the same names space."""
     from .docs_tables_convergence import GENERATORS as convergence
+    from .docs_tables_decisions import GENERATORS as decisions
     from .docs_tables_pages import GENERATORS as pages
 
     GENERATORS.update(convergence)
     GENERATORS.update(pages)
+    GENERATORS.update(decisions)
 
 
 _register_more()

@@ -46,7 +46,15 @@ def _csv(repo: Path, results: str, name: str):
 
 
 def _rows(repo: Path, results: str, metric: str, luminance: str | None):
+    from ..study.censored import apply_rule
+
     m = _csv(repo, results, "metrics.csv")
+    real = repo / results / "metrics_realisations.csv"
+    if "censored_count" not in m.columns and real.is_file():  # an older run, read under study/censored.py's rule
+        import pandas as pd
+
+        r = pd.read_csv(real)
+        m = apply_rule(m, r[r["metric"] == metric])
     m = m[m["metric"] == metric]
     # the reference luminance (100 cd/m^2) unless the metric was measured elsewhere only
     lum = float(luminance) if luminance else (100.0 if (m["luminance"] == 100.0).any() else m["luminance"].min())
@@ -74,28 +82,41 @@ def bench_table(repo: Path, path: str) -> str:
 
 
 def metric_table(repo: Path, results: str, metric: str, demosaic: str, luminance: str | None = None) -> str:
-    """One metric per CFA for one demosaic: mean ± half the 95 % interval; ``>=`` marks a censored bound."""
+    """One metric per CFA for one demosaic: the value ± half its 95 % interval, by the rule of
+    study/censored.py: ``>=`` only when every realisation is a bound, else the count of bounds."""
     rows = _rows(repo, results, metric, luminance)
     rows = rows[rows["demosaic"] == demosaic]
     unit = rows["unit"].iloc[0] if isinstance(rows["unit"].iloc[0], str) else ""
-    lines = [f"| {demosaic} | {metric} ({unit}), mean ± half the 95 % interval | censored |", "|---|---|---|"]
+    lines = [f"| {demosaic} | {metric} ({unit}), value ± half the 95 % interval | realisations that are bounds |",
+             "|---|---|---|"]
     for r in rows.itertuples(index=False):
-        cens = str(r.censored) == "True"
-        lines.append(f"| {r.cfa} | {'>= ' if cens else ''}{r.value:.2f} ± {(r.ci_high - r.ci_low) / 2:.2f} | "
-                     f"{'yes' if cens else 'no'} |")
+        count = int(getattr(r, "censored_count", 0) or 0)
+        every = str(r.censored) == "True" and count >= int(r.n)
+        shown = (f"{r.value:.2f} [{r.ci_low:.2f}, {r.ci_high:.2f}] (median)" if count and not every
+                 else f"{'>= ' if every else ''}{r.value:.2f} ± {(r.ci_high - r.ci_low) / 2:.2f}")
+        lines.append(f"| {r.cfa} | {shown} | {'every one' if every else f'{count} of {int(r.n)}' if count else 'none'} |")
     return "\n\n" + "\n".join(lines) + "\n\n"
 
 
 def censored_sentence(repo: Path, results: str, metric: str) -> str:
-    """How many of a metric's values are censored bounds, and which."""
+    """How many of a metric's values are bounds in every realisation, and which; and those bounds in some."""
     rows = _rows(repo, results, metric, None)
-    cens = rows[rows["censored"].astype(str) == "True"]
+    count = (rows["censored_count"] if "censored_count" in rows.columns
+             else (rows["censored"].astype(str) == "True") * rows["n"])
+    cens = rows[(rows["censored"].astype(str) == "True") & (count >= rows["n"])]
+    some = rows[(count > 0) & (count < rows["n"])]
     by: dict = {}
     for r in cens.itertuples(index=False):
         by.setdefault(r.cfa, []).append(r.demosaic)
     n_dem = rows["demosaic"].nunique()
     parts = [f"{c} ({'every demosaic' if len(d) == n_dem else ', '.join(d)})" for c, d in by.items()]
-    return f"{len(cens)} of {len(rows)} values are bounds" + (f": {'; '.join(parts)}" if parts else "")
+    text = f"{len(cens)} of {len(rows)} values are bounds in every realisation" + (
+        f": {'; '.join(parts)}" if parts else "")
+    if len(some):
+        text += "; " + "; ".join(f"{r.cfa} with {r.demosaic} in {int(c)} of {int(r.n)} (its value, {r.value:.2f}, is "
+                                 "the realisations' median, a measurement)"
+                                 for r, c in zip(some.itertuples(index=False), count[some.index]))
+    return text
 
 
 def above_ideal_sentence(repo: Path, results: str, metric: str) -> str:

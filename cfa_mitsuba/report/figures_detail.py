@@ -228,8 +228,9 @@ def moire_curves(res: Results):
                 "matrix turns their disagreement into colours no light has (docs/isp.md): "
                 + "; ".join(beyond[:8]) + (" …" if len(beyond) > 8 else "") + ".")
     if lower_bounds:
-        cap += (" A ▷ marker means the camera never passed the threshold: its MSP is the chirp's top frequency, "
-                "a lower bound (" + ", ".join(lower_bounds[:8]) + (" …" if len(lower_bounds) > 8 else "") + ").")
+        cap += (" A ▷ marker means the drawn realisation never passed the threshold: its MSP is the chirp's top "
+                "frequency, a lower bound (metrics.csv's censored_count says in how many realisations; "
+                + ", ".join(lower_bounds[:8]) + (" …" if len(lower_bounds) > 8 else "") + ").")
     return ReportFigure("moire", "moire", title, cap, fig)
 
 

@@ -221,6 +221,8 @@ def luminance_sweep(res: Results):
     """The metrics measured at several luminances (the paper's sweep of
     S-CIELAB and SSIM on PUPPY, 3..400 cd/m^2) against luminance on a log
     axis: one row per metric, one column per demosaic, a line per CFA."""
+    from .conditions import exposure_policy_sentence
+
     title = "Metrics against scene luminance"
     m = res.metrics
     pairs = []
@@ -273,8 +275,5 @@ def luminance_sweep(res: Results):
     cfa_legend(fig, cst, [c for c in res.cfas if c in cfas_drawn], ncol=ncol)
     cap = ("Each metric that was measured at several luminances, against the scene's mean luminance "
            "(log axis; the dotted line is the luminance the scores use); whiskers: the 95 % interval over the "
-           "noise realisations. The exposure is the one chosen at the "
-           "reference luminance (capture.reference_luminance_cd_m2, 100 cd/m² by default) at every level, so "
-           "darker scenes give fewer photons and more visible noise, and scenes brighter than the reference can "
-           "saturate pixels.")
+           "noise realisations. " + exposure_policy_sentence(res.config))
     return ReportFigure("luminance-sweep", "sweep", title, cap, fig)

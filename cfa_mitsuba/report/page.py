@@ -179,8 +179,15 @@ def _summary(res: Results, facts: dict, not_run: list) -> str:
     cards = []
     from .decision_panel import decision_panel, summary_cards, sweep_lines
 
+    from .decision_panel import read_decisions
+
     parts.append(decision_panel(res.root, res.config))
-    for label, c, sub in summary_cards(res.scores, res.primary_luminance, res.demosaics):
+    from .conditions import condition_lines
+
+    lines = condition_lines(res.all_metrics if res.all_metrics is not None else res.metrics, res.cfa_facts, cfg)
+    if lines:
+        parts.append('<p class="note"><b>Conditions of these answers.</b> ' + " ".join(_e(x) for x in lines) + "</p>")
+    for label, c, sub in summary_cards(res.scores, res.primary_luminance, res.demosaics, read_decisions(res.root)):
         cards.append((label, c, sub, cst.get(c, {}).get("color")))
     if cards:
         parts.append('<div class="cards">')
@@ -233,34 +240,9 @@ def _summary(res: Results, facts: dict, not_run: list) -> str:
 
 
 def _conventions(res: Results) -> str:
-    items = [
-        "<b>Ideal sensor</b>: the same optics and pixel with CIE 1931 colour-matching functions at every pixel, "
-        "no mosaic and no noise (ISETCam's 'idealxyz'); every metric compares the camera's output with it. "
-        "The camera output is mean-matched to the ideal before comparison (its scale factor is in the details).",
-        "<b>ΔE00</b>: CIEDE2000; <b>ΔE*ab</b>: CIE 1976; both relative to the scene white. <b>ΔL grey</b>: the "
-        "mean |ΔL*| of the six grey patches (the paper's Table 1 'Mean ΔL').",
-        "<b>S-CIELAB</b>: Zhang-Wandell spatial filtering, then CIEDE2000 per pixel; the table holds the mean "
-        "over the image. <b>SSIM</b>, <b>MDSI</b>, <b>HaarPSI</b>: on the 8-bit sRGB images (MDSI 0 = "
-        "identical, the others 1 = identical).",
-        "<b>MTF50</b>: the frequency where the ISO 12233 luminance MTF (0.3R + 0.6G + 0.1B) falls to 0.5, in "
-        "cycles per millimetre on the sensor (Nyquist = 1 / (2 × pixel pitch)).",
-        "<b>MSP</b>: moiré starting point, the chirp frequency in cycles per degree of visual angle where the "
-        "block-mean chroma C*ab first exceeds the threshold (25). The paper reports a pixel position under "
-        "the name 'cpd'; ours is a true frequency, so its numbers are not the paper's.",
-        "<b>AR error</b>: mean |ΔL*| along the gray bar's central row, ten columns left out at each end.",
-        "<b>Scores</b> (eq. 8): (value − worst) / (best − worst) with the ranges listed above, so 1 is best for "
-        "every metric; a CFA's score for a demosaic is the mean of its metric scores (Table 3), 'total' the "
-        "mean over demosaics; ranks: 1 = best, ties share the lower rank.",
-        "<b>Table marks</b>: a red box marks the best value of a metric for a demosaic (the paper's red boxes); "
-        "† a value outside its score range; ≥ an MSP that is a lower bound; ↑/↓ higher/lower is better. Hover "
-        "a cell for its score and rank.",
-        "<b>Colours</b>: each CFA keeps one colour and marker in every figure (Paul Tol's colour-blind-safe "
-        "schemes; markers and line styles tell CFAs apart where colours are close).",
-        "<b>Files</b>: every figure is also in <code>figures/</code> next to this report (PNG and SVG); the "
-        "numbers are in <code>metrics.csv</code> and <code>scores.csv</code>, the curves and patch tables in "
-        "<code>details/</code>. Rebuild with <code>cfa-mitsuba report RESULTS_DIR</code>.",
-    ]
-    return '<ul class="tight">' + "".join(f"<li>{i}</li>" for i in items) + "</ul>"
+    from .conventions import convention_items
+
+    return '<ul class="tight">' + "".join(f"<li>{i}</li>" for i in convention_items(res)) + "</ul>"
 
 
 def render_page(res: Results, *, figures: list, absents: list, embeds: dict, tables: dict, facts: dict) -> str:
@@ -328,9 +310,10 @@ def _tables_section(res: Results, tables: dict) -> str:
             t.append(f'<div class="tablewrap">{tab}</div>')
             t.append('<p class="note">Boxed: the best value of the metric for the demosaic (the paper\'s red '
                      "boxes) when its paired difference with every other CFA is separated (rank interval exactly 1); "
-                     "dashed: the best value, but tied with another CFA. Each value ± half its 95 % interval. ↑ higher / ↓ lower is better; † outside the metric's score range (see below); ≥ an "
-                     "MSP where no moiré was found up to the chirp's top frequency. Hover a cell for its score and "
-                     "rank.</p>")
+                     "dashed: the best value, but tied with another CFA. Each value ± half its 95 % interval. ↑ higher / "
+                     "↓ lower is better; † outside the metric's score range (see below); ≥ an MSP where no moiré was "
+                     "found up to the chirp's top frequency in any realisation; k/n≥ a value whose realisations "
+                     "include k such bounds (their median, a measurement). Hover a cell for its score and rank.</p>")
     if not tables.get("table2"):
         t.append('<div class="absent"><b>Not available:</b> nothing was scored.</div>')
     for L, tab in tables.get("table3", []):
@@ -343,7 +326,8 @@ def _tables_section(res: Results, tables: dict) -> str:
                      "± half its 95 % interval over the noise realisations, and its rank in brackets (1 = best); "
                      "a range such as (1–3) is a rank interval: CFAs whose paired score difference interval contains 0 "
                      "are tied, and a tie is not a ranking. 'Total' is the mean over the methods; rows are sorted by "
-                     "it. Boxed: a rank interval of exactly 1 (first beyond the intervals). Shading follows the "
+                     "it. Boxed: the winner decisions.csv names (rank interval exactly 1 and a lead of at least the "
+                     "practical difference; see the decisions above). Shading follows the "
                      f"score. {_e(intervals_cover(res.config))}</p>")
     if not tables.get("table3"):
         t.append('<div class="absent"><b>Not available:</b> nothing was scored.</div>')

@@ -27,6 +27,7 @@ from pathlib import Path
 
 from ..errors import CfaMitsubaError
 from ..metrics import get_metric
+from .claim_facts import explanation
 from .claim_verdicts import spearman_interval
 from .paper_data import Run, cfa_label, claims, isetcam_values, judge, load_run, paper_values
 
@@ -58,9 +59,12 @@ def _ours(run: Run, metric: str, cfa: str, demosaic: str = "bilinear") -> str:
     if v is None:
         return "-"
     d = get_metric(metric).decimals
+    row = run.row(metric, demosaic, cfa)
     if run.is_bound(metric, demosaic, cfa):
-        return f">= {v[0]:.{d}f} (no moire up to the chirp's top)"
-    return f"{v[0]:.{d}f} [{v[1]:.{d}f}, {v[2]:.{d}f}]"
+        return f">= {v[0]:.{d}f} (no moire up to the chirp's top in any realisation)"
+    k = int(row["censored_count"]) if row is not None and "censored_count" in row else 0
+    some = f" ({k} of {int(row['n'])} realisations bounds: their median)" if k else ""
+    return f"{v[0]:.{d}f} [{v[1]:.{d}f}, {v[2]:.{d}f}]{some}"
 
 
 def _paper_cell(rows, cfa: str) -> str:
@@ -101,8 +105,7 @@ def _claim_lines(claim: dict, runs) -> list[str]:
     out = [f"*Claim* ({'the paper' if claim['source'] == 'paper' else 'ISETCam'}): {claim['text']}", ""]
     for run in runs:
         verdict, detail = judge(run, claim)
-        why = claim.get({"holds": "why_holds", "differs": "why_differs", "tie": "why_tie"}.get(
-            verdict, ""), "the run's 95 % intervals cannot tell the compared values apart" if verdict == "tie" else "")
+        why = explanation(run, claim, verdict)
         out.append(f"- {run.label}: {_MARK[verdict]}. Measured: {detail}." + (f" Why: {why}" if why else ""))
     return out + [""]
 
@@ -240,12 +243,19 @@ def comparison_markdown(runs) -> str:
     out += ["## How a verdict is reached", "",
             "Each claim makes comparisons, and each comparison is judged on the run's 95 % intervals "
             "(cfa_mitsuba/report/claim_verdicts.py): a claim **holds** only when every comparison it makes is "
-            "separated (the intervals do not overlap) in the claimed direction; it is a **tie** when none is "
-            "reversed but some intervals overlap; it **differs** when one is separated the other way. Group "
-            "claims are judged pairwise, every CFA of a group against every CFA of the other, never on group "
-            "means. \"X has the best score\" holds only when X's rank interval is exactly 1. A spread or a "
-            "bound is compared with the intervals' ends. Spearman correlations carry their 95 % interval "
-            "(Fisher z). tests/test_claim_verdicts.py recomputes every verdict from the committed CSVs.", ""]
+            "separated in the claimed direction; it is a **tie** when none is reversed but some are not "
+            "separated; it **differs** when one is separated the other way. Two CFAs are compared through "
+            "their paired difference (the same render and sensor seeds; its 95 % interval, the render "
+            "component pooled over every pair of that metric and demosaic, must exclude 0), as the study's "
+            "rank intervals are; a run without its realisations falls back on the two marginal intervals. "
+            "Group claims are judged pairwise, every CFA of a group against every CFA of the other, never on "
+            "group means. \"X has the best score\" holds only when the study's decision rule names X: its rank "
+            "interval is exactly 1 and its lead is at least the practical difference (decisions.csv; a run "
+            "written before that rule: rank interval exactly 1). A spread or a bound is compared with the "
+            "intervals' ends. An MSP is printed as >= only when every realisation is a bound. Spearman "
+            "correlations carry their 95 % interval (Fisher z). Every number in an explanation is generated from "
+            "the run it explains (cfa_mitsuba/report/claim_facts.py). tests/test_claim_verdicts.py recomputes "
+            "every verdict and every explanation's facts from the committed CSVs.", ""]
     out += ["## Verdicts at a glance", ""] + _glance(runs)
     # a claim the data marks as physically wrong is listed when every run contradicts it
     wrong = [c for c in claims() if c.get("wrong") and all(judge(run, c)[0] == "differs" for run in runs)]

@@ -83,24 +83,54 @@ class Run:
     timing: dict
     cfa_facts: dict = field(default_factory=dict)
     realisations: object = None
+    decisions: object = None
+    _wide: dict = field(default_factory=dict, repr=False)
+
+    def _comparison(self, metric: str, demosaic: str):
+        """(cfas x realisations values, render seeds, pooled render component
+        of every pair's differences) of one metric and demosaic, or None."""
+        key = (metric, demosaic)
+        if key not in self._wide:
+            from ..study.intervals import difference_pool
+
+            r = self.realisations
+            sel = r[(r["metric"] == metric) & (r["demosaic"] == demosaic)]
+            if sel.empty:
+                self._wide[key] = None
+            else:
+                wide = sel.pivot_table(index="cfa", columns="realisation", values="value", aggfunc="mean")
+                seeds = (sel.groupby("realisation")["render_seed"].max().reindex(wide.columns).fillna(0).astype(int)
+                         if "render_seed" in sel.columns else None)
+                groups = None if seeds is None else seeds.to_numpy()
+                self._wide[key] = (wide, groups, difference_pool(wide.to_numpy(float), groups))
+        return self._wide[key]
 
     def paired(self, metric: str, demosaic: str, a: str, b: str):
         """(lo, hi) of the 95 % interval of CFA ``a``'s value minus ``b``'s over
-        paired realisations (study/intervals.py), None without realisations."""
+        paired realisations, the render component pooled over every pair of
+        CFAs of that metric and demosaic, as the study's rank intervals
+        (study/intervals.py); None without realisations."""
         r = self.realisations
         if r is None or r.empty:
             return None
         from ..study.intervals import paired_difference
 
-        sel = r[(r["metric"] == metric) & (r["demosaic"] == demosaic)]
-        va = sel[sel["cfa"] == a].set_index("realisation")
-        vb = sel[sel["cfa"] == b].set_index("realisation")
-        common = va.index.intersection(vb.index)
-        if not len(common):
+        got = self._comparison(metric, demosaic)
+        if got is None or a not in got[0].index or b not in got[0].index:
             return None
-        groups = va.loc[common, "render_seed"] if "render_seed" in va.columns else None
-        _, lo, hi, n = paired_difference(va.loc[common, "value"], vb.loc[common, "value"], groups)
+        wide, groups, pool = got
+        _, lo, hi, n = paired_difference(wide.loc[a].to_numpy(float), wide.loc[b].to_numpy(float), groups, pool)
         return (lo, hi) if n else None
+
+    def decision(self, demosaic: str):
+        """decisions.csv's row for a demosaic or 'total' ('overall'), None
+        when the run's decisions.csv has none (written before issue 46)."""
+        d = self.decisions
+        if d is None or "robust" not in d.columns:
+            return None
+        aspect = "overall" if demosaic == "total" else f"with {demosaic}"
+        sel = d[d["aspect"] == aspect]
+        return None if sel.empty else sel.iloc[0]
 
     def value(self, metric: str, demosaic: str, cfa: str):
         """(value, ci_low, ci_high, unit) of one CFA, or None."""
@@ -113,10 +143,17 @@ class Run:
         hi = r["ci_high"] if "ci_high" in r and np.isfinite(r["ci_high"]) else r["value"]
         return float(r["value"]), float(lo), float(hi), str(r["unit"]) if isinstance(r["unit"], str) else ""
 
+    def row(self, metric: str, demosaic: str, cfa: str):
+        """metrics.csv's row of one CFA (a pandas Series), or None."""
+        m = self.metrics
+        sel = m[(m["metric"] == metric) & (m["demosaic"] == demosaic) & (m["cfa"] == cfa)]
+        return None if sel.empty else sel.iloc[0]
+
     def is_bound(self, metric: str, demosaic: str, cfa: str) -> bool:
         """Whether a value is a bound, not a measurement (the MSP of a chirp
-        with no moire up to its top): metrics.csv's ``censored`` column where
-        the study wrote one, else the first realisation's ``passed`` flag."""
+        with no moire up to its top in every realisation): metrics.csv's
+        ``censored`` column (read under study/censored.py's rule) where the
+        study wrote one, else the first realisation's ``passed`` flag."""
         m = self.metrics
         if "censored" in m.columns:
             sel = m[(m["metric"] == metric) & (m["demosaic"] == demosaic) & (m["cfa"] == cfa)]
@@ -149,10 +186,14 @@ def load_run(path, key: str, label: str) -> Run:
     """A study's results folder (metrics.csv, scores.csv, config.json, timing.json)."""
     import pandas as pd
 
+    from ..study.censored import apply_rule
+
     p = Path(path)
     if not (p / "metrics.csv").is_file():
         raise CfaMitsubaError(f"{str(p)!r} holds no metrics.csv: not a study's results folder")
     m = pd.read_csv(p / "metrics.csv")
+    all_real = pd.read_csv(p / "metrics_realisations.csv") if (p / "metrics_realisations.csv").is_file() else None
+    m = apply_rule(m, all_real)  # an older metrics.csv read under one rule for bounds
     base = m[m["base"].astype(str).str.lower().isin(("true", "1"))]
     base = base[base["luminance"] == base["luminance"].min()]
     scores = pd.read_csv(p / "scores.csv") if (p / "scores.csv").is_file() else None
@@ -164,12 +205,13 @@ def load_run(path, key: str, label: str) -> Run:
         return json.loads(f.read_text()) if f.is_file() else {}
 
     every = None
-    if (p / "metrics_realisations.csv").is_file():  # paired comparisons for the claims
-        every = pd.read_csv(p / "metrics_realisations.csv")
-        every = every[every["base"].astype(str).str.lower().isin(("true", "1"))]
+    if all_real is not None:  # paired comparisons for the claims
+        every = all_real[all_real["base"].astype(str).str.lower().isin(("true", "1"))]
         every = every[every["luminance"] == every["luminance"].min()].reset_index(drop=True)
+    decisions = (pd.read_csv(p / "decisions.csv", dtype=str, keep_default_na=False)
+                 if (p / "decisions.csv").is_file() else None)
     return Run(key, label, p, base.reset_index(drop=True), scores, read("config.json"), read("timing.json"),
-               read("cfas.json"), every)
+               read("cfas.json"), every, decisions)
 
 
 def _group(run: Run, metric: str, demosaic: str, cfas) -> list[tuple]:
@@ -242,10 +284,21 @@ def _at_most(run: Run, claim: dict) -> tuple[str, str]:
 
 
 def _best(run: Run, claim: dict) -> tuple[str, str]:
+    """A "best" claim by the one decision rule (study/decisions.py): decisions.csv's
+    row of the demosaic (or 'overall') where the run has it, else the rank
+    intervals alone (a run written before the rule had a practical difference)."""
     got = run.scores_of(claim["demosaic"])
     if claim["cfa"] not in got:
         return "not measured", "no score in this run"
     s = got[claim["cfa"]]
+    row = run.decision(claim["demosaic"])
+    if row is not None:
+        named = str(row["cfas"]).split()
+        verdict = ("holds" if row["verdict"] == "winner" and named == [claim["cfa"]]
+                   else "tie" if claim["cfa"] in named and row["verdict"] != "winner" else "differs")
+        detail = (f"{cfa_label(claim['cfa'])} rank {s[3]} (interval {s[4]}-{s[5]}) of {len(got)}, score {s[0]:.4f}; "
+                  f"decision: {row['verdict']} ({', '.join(cfa_label(c) for c in named) or 'none'})")
+        return verdict, detail
     can_be_first = [cfa_label(c) for c, r in sorted(got.items(), key=lambda kv: -kv[1][0]) if r[4] == 1]
     detail = (f"{cfa_label(claim['cfa'])} rank {s[3]} (interval {s[4]}-{s[5]}) of {len(got)}, score {s[0]:.4f}; "
               f"rank interval containing 1: {', '.join(can_be_first)}")

@@ -6,9 +6,10 @@ From a finished study's CSVs (``render_seeds`` > 1; study/intervals.py):
   (render and sensor noise) to its sensor-noise-only half width
   (metrics.csv ``sensor_half_width``), over the values whose realisations
   span several renders (``render_seeds`` > 1: the path-traced scenes; a
-  chart's ratio is 1 by construction).  A ratio below 1 is a value whose
-  renders did not differ detectably: its realisations were pooled, and the
-  pooled interval has more degrees of freedom than the within-render one;
+  chart's ratio is 1 by construction).  The render component is pooled over
+  a scene, level and metric's values (study/variance.py), so a ratio is 1
+  where that pool finds no render noise and grows with the pooled render
+  variance against the value's own sensor variance;
 - the overall rank intervals (Table 3's total) with render noise, from
   scores.csv, against those with sensor noise only: the same realisations
   restricted to render seed 0 and scored again (needs

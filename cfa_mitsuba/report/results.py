@@ -276,6 +276,24 @@ def _score_here(metrics, base, ranges, config):
     return score(pd.concat(keep).reset_index(drop=True), ranges or None)
 
 
+def _old_censored(metrics, root: Path):
+    """metrics.csv written before ``censored_count``: read under the rule of
+    study/censored.py from metrics_realisations.csv (a value with bounds in
+    some realisations only is their Kaplan-Meier median, not a bound)."""
+    if "censored_count" in metrics.columns or not (root / "metrics_realisations.csv").is_file():
+        return metrics
+    import pandas as pd
+
+    from ..study.censored import apply_rule
+
+    try:
+        real = pd.read_csv(root / "metrics_realisations.csv", dtype={"scene": str, "cfa": str, "demosaic": str,
+                                                                     "metric": str, "unit": str})
+    except (OSError, ValueError):
+        return metrics
+    return apply_rule(metrics, real)
+
+
 def load_results(out_dir) -> Results:
     """Load a results directory; :class:`CfaMitsubaError` (one line) when it
     is missing or holds no ``metrics.csv``."""
@@ -291,7 +309,7 @@ def load_results(out_dir) -> Results:
         raise CfaMitsubaError(f"{str(root)!r} is not a results directory (no metrics.csv)")
     _cached_json.cache_clear()
     notes = []
-    all_metrics = _read_metrics(mpath)
+    all_metrics = _old_censored(_read_metrics(mpath), root)
     metrics, swept = split_sweeps(all_metrics)
     config = _read_json(root / "config.json") or {}
     if not (root / "config.json").is_file():

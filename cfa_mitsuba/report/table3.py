@@ -5,9 +5,11 @@ interval; the CFA column carries the total's rank interval.  Rows instead
 of columns keep a table of any number of CFAs inside the page's width
 (at 1400 px every row of the paper study's 12 is visible), and sorting by
 the total puts the tied groups next to each other.  A cell is marked best
-only when its rank interval is exactly 1 (the decision rule of
-:mod:`cfa_mitsuba.study.decisions`); cells whose rank interval spans more
-than one rank are marked as ties.
+only where the decision rule of :mod:`cfa_mitsuba.study.decisions` names it
+the winner (decisions.csv's ``overall`` and ``with <demosaic>`` rows: rank
+interval exactly 1 *and* a lead of at least the practical difference; an
+older results folder without those rows: rank interval exactly 1); cells
+whose rank interval spans more than one rank are marked as ties.
 """
 
 from __future__ import annotations
@@ -35,10 +37,13 @@ def _span(b: int, w: int) -> str:
     return f"{b}" if b == w else f"{b}–{w}"
 
 
-def _cell(v, lo_ci, hi_ci, b, w, n_cfas, lo, hi, extra="") -> str:
+def _cell(v, lo_ci, hi_ci, b, w, n_cfas, lo, hi, extra="", named=None) -> str:
+    """One cell; ``named``: whether the decision names this CFA the winner
+    (None: no decision for this row, the rank interval alone decides)."""
     if v is None or not np.isfinite(v):
         return '<td class="na">—</td>'
-    klass = "best" if (b, w) == (1, 1) and n_cfas > 1 else ""
+    first = (b, w) == (1, 1) and n_cfas > 1
+    klass = "best" if (first if named is None else named) else ""
     if b != w:
         klass += " tie"
     half = (hi_ci - lo_ci) / 2 if np.isfinite(lo_ci) and np.isfinite(hi_ci) else np.nan
@@ -48,8 +53,22 @@ def _cell(v, lo_ci, hi_ci, b, w, n_cfas, lo, hi, extra="") -> str:
             f'title="{_e(tip)}">{v:.4f}{pm}{extra} <span class="rank">({_span(b, w)})</span></td>')
 
 
-def table3_rows(scores, luminance: float, cfas, demosaics) -> str | None:
-    """HTML of Table 3 at ``luminance`` from scores.csv (rows: CFAs by total score)."""
+def _winners(decisions) -> dict:
+    """{'total' or demosaic: the CFA decisions.csv names the winner, or ''}
+    for the rows it has."""
+    out = {}
+    if decisions is None:
+        return out
+    for r in decisions.itertuples(index=False):
+        key = "total" if r.aspect == "overall" else r.aspect[5:] if str(r.aspect).startswith("with ") else None
+        if key is not None:
+            out[key] = str(r.cfas).split()[0] if r.verdict == "winner" else ""
+    return out
+
+
+def table3_rows(scores, luminance: float, cfas, demosaics, decisions=None) -> str | None:
+    """HTML of Table 3 at ``luminance`` from scores.csv (rows: CFAs by total
+    score); ``decisions``: decisions.csv, whose winners are the cells marked best."""
     s = scores[scores["luminance"] == luminance]
     if not len(s):
         return None
@@ -68,6 +87,7 @@ def table3_rows(scores, luminance: float, cfas, demosaics) -> str | None:
     out = ['<table class="data scores t3"><thead><tr><th>rank</th><th>CFA</th>', head,
            "<th>Total (mean over demosaics)</th></tr></thead><tbody>"]
     n = len(tot)
+    winners = _winners(decisions)
     for r in tot.itertuples(index=False):
         tb, tw = (int(r.total_rank_best), int(r.total_rank_worst)) if have_ci else (int(r.total_rank),) * 2
         sw = f'<span class="swatch" style="background:{cst.get(r.cfa, {}).get("color", "#999")}"></span>'
@@ -81,9 +101,11 @@ def table3_rows(scores, luminance: float, cfas, demosaics) -> str | None:
                     else (int(p.demosaic_rank),) * 2)
             ci = (float(p.mean_score_ci_low), float(p.mean_score_ci_high)) if have_ci else (np.nan, np.nan)
             flag = ('<sup class="oor-mark">*</sup>' if uneven and int(p.n_metrics) != int(nmet.max()) else "")
-            row.append(_cell(float(p.mean_score), *ci, b, w, n, lo, hi, flag))
+            named = (winners[d] == r.cfa) if d in winners else None
+            row.append(_cell(float(p.mean_score), *ci, b, w, n, lo, hi, flag, named))
         ci = ((float(r.total_score_ci_low), float(r.total_score_ci_high)) if have_ci else (np.nan, np.nan))
-        row.append(_cell(float(r.total_score), *ci, tb, tw, n, lo, hi))
+        named = (winners["total"] == r.cfa) if "total" in winners else None
+        row.append(_cell(float(r.total_score), *ci, tb, tw, n, lo, hi, named=named))
         out.append("".join(row) + "</tr>")
     out.append("</tbody></table>")
     if uneven:

@@ -184,22 +184,46 @@ def table2(res: Results, luminance: float) -> str | None:
                        f"[0, 1])" if oor and hasattr(r, "raw_score") else "")
                        + (f"; rank {int(r.metric_rank)} of {n_cfa}" if hasattr(r, "metric_rank") else ""))
                 mark = '<sup class="oor-mark">†</sup>' if oor else ""
-                ge = ""
-                if m == "moire" and _moire_lower_bound(res, r):
-                    ge = "≥"
-                    tip += "; no moiré up to the chirp's top frequency: a lower bound"
-                row.append(f'<td class="{" ".join(klass)}" data-value="{_num(r.value)}" title="{_e(tip)}">'
-                           f"{ge}{fmt_value(m, r.value)}{mark}{_pm(cis[c], m)}</td>")
+                ge, some, why = _bound_mark(res, r)
+                tip += why
+                value = r.value
+                if some:  # bounds in some realisations: metrics.csv's value under the rule (their median)
+                    value, cis[c] = _metrics_value(res, r)
+                row.append(f'<td class="{" ".join(klass)}" data-value="{_num(value)}" title="{_e(tip)}">'
+                           f"{ge}{fmt_value(m, value)}{mark}{some}{_pm(cis[c], m)}</td>")
             row.append("</tr>")
             out.append("".join(row))
     out.append("</tbody></table>")
     return "".join(out)
 
 
-def _moire_lower_bound(res: Results, row) -> bool:
-    """The camera never passed the moiré threshold: its MSP is the chirp's top frequency."""
-    rec = res.metric_detail("moire", row.scene, row.cfa, row.demosaic, row.luminance)
-    return bool(rec is not None and rec.get("passed") is False)
+def _metrics_value(res: Results, row):
+    """(value, (ci_low, ci_high)) of metrics.csv for a scores.csv row (read under study/censored.py's rule)."""
+    m = res.metrics
+    r = m[(m["scene"] == row.scene) & (m["cfa"] == row.cfa) & (m["demosaic"] == row.demosaic)
+          & (m["luminance"] == row.luminance) & (m["metric"] == row.metric)].iloc[0]
+    return float(r["value"]), (float(r["ci_low"]), float(r["ci_high"]))
+
+
+def _bound_mark(res: Results, row) -> tuple[str, str, str]:
+    """(prefix, mark, tooltip words) of a value under the rule of
+    study/censored.py: "≥" only when every realisation is a bound (no moiré
+    up to the chirp's top); a value with bounds in some realisations is
+    their median, marked with how many."""
+    m = res.metrics
+    sel = m[(m["scene"] == row.scene) & (m["cfa"] == row.cfa) & (m["demosaic"] == row.demosaic)
+            & (m["luminance"] == row.luminance) & (m["metric"] == row.metric)]
+    if not len(sel) or "censored_count" not in sel.columns:
+        return "", "", ""
+    r = sel.iloc[0]
+    count, n = int(r["censored_count"]), int(r["n"]) if "n" in r and r["n"] == r["n"] else 0
+    if count and count >= n and str(r["censored"]).lower() in ("true", "1"):
+        return "≥", "", "; no moiré up to the chirp's top frequency in any realisation: a lower bound"
+    if count:
+        return ("", f'<sup class="oor-mark">{count}/{n}≥</sup>',
+                f"; {count} of {n} realisations saw no moiré up to the chirp's top: the value is the "
+                "realisations' Kaplan-Meier median, a measurement")
+    return "", "", ""
 
 
 def _table2_from_metrics(res: Results, luminance: float) -> str | None:
@@ -238,12 +262,14 @@ def table3(res: Results, luminance: float) -> str | None:
     demosaic (columns), their mean over demosaics ('total'), each with its
     interval and rank interval (the paper's Table 3 and Fig 17;
     :mod:`.table3`)."""
+    from .decision_panel import read_decisions
     from .table3 import table3_rows
 
     s = res.scores
     if s is None or not len(s[s["luminance"] == luminance]):
         return None
-    return table3_rows(s, luminance, res.cfas, res.demosaics)
+    first = luminance == min(res.base_luminances) if res.base_luminances else True
+    return table3_rows(s, luminance, res.cfas, res.demosaics, read_decisions(res.root) if first else None)
 
 
 def policy_table(res: Results) -> str | None:

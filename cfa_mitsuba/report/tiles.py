@@ -80,28 +80,50 @@ def _ranges(res: Results) -> tuple[dict, set]:
 
 
 def _scores(res: Results) -> dict:
-    """{(cfa, readout): {demosaic: mean score}} at the primary luminance."""
+    """{(cfa, readout): {demosaic: mean score}} at the primary luminance.
+
+    The study's own read-out: scores.csv's ``mean_score`` (Table 3's cells,
+    the one rule for scores and bounds: study/censored.py).  Another
+    read-out (a ``[[sweep]] readout``): its values in metrics.csv scored with
+    the same ranges and the same rule for a bound."""
+    import pandas as pd
+
+    from ..study.censored import values_for_scoring
+    from ..study.scoring import ScoreRange
     from .figures_sweep import axis_rows
 
+    own = str((res.config.get("base_condition") or {}).get("readout") or "full")
+    out: dict = {}
+    s = res.scores
+    if s is not None and len(s) and res.primary_luminance is not None:
+        s = s[s["luminance"] == res.primary_luminance]
+        for (cfa, dem), g in s.groupby(["cfa", "demosaic"], sort=False):
+            out.setdefault((str(cfa), own), {})[str(dem)] = float(g["mean_score"].iloc[0])
     m = res.all_metrics if res.all_metrics is not None else res.metrics
-    rows = axis_rows(res, "readout") if "readout" in m.columns else res.metrics
+    if "readout" not in m.columns:
+        return out
+    rows = axis_rows(res, "readout")
+    rows = rows[rows["readout"].astype(str) != own]
     if res.primary_luminance is not None:
         rows = rows[rows["luminance"] == res.primary_luminance]
     ranges, constant = _ranges(res)
     clip = bool((res.config.get("clip_scores", True)))
-    out: dict = {}
+    by: dict = {}
     for metric in SCORED_METRICS:
         if metric not in ranges or metric in constant:
             continue
-        scene = res.scene_for(metric)
+        g = rows[(rows["metric"] == metric) & (rows["scene"] == res.scene_for(metric))]
+        if not len(g):
+            continue
         worst, best = (float(v) for v in ranges[metric])
-        g = rows[(rows["metric"] == metric) & (rows["scene"] == scene)]
+        g = values_for_scoring(g.assign(censored=g["censored"] if "censored" in g else False),
+                               {metric: ScoreRange(worst, best)})
         for r in g.itertuples(index=False):
-            s = (float(r.value) - worst) / (best - worst)
-            s = min(max(s, 0.0), 1.0) if clip else s
-            key = (str(r.cfa), str(getattr(r, "readout", "full")))
-            out.setdefault(key, {}).setdefault(str(r.demosaic), []).append(s)
-    return {k: {d: float(np.mean(v)) for d, v in by.items()} for k, by in out.items()}
+            sc = (float(r.value) - worst) / (best - worst)
+            sc = min(max(sc, 0.0), 1.0) if clip else sc
+            by.setdefault((str(r.cfa), str(r.readout)), {}).setdefault(str(r.demosaic), []).append(sc)
+    out.update({k: {d: float(pd.Series(v).mean()) for d, v in per.items()} for k, per in by.items()})
+    return out
 
 
 def tiles_by_family(res: Results):
@@ -160,7 +182,8 @@ def tiles_by_family(res: Results):
         x += 0.6 + 0.11 * len(d)
     lum = f" at {res.primary_luminance:g} cd/m²" if res.primary_luminance is not None else ""
     cap = ("Each CFA's repeating tile (R, G, B, C, M, Y as their colours; W, any clear pixel, white) beside the mean of "
-           f"its scores{lum}, one bar per demosaic (0 worst, 1 best, the study's score ranges), grouped by the "
+           f"its scores{lum}, one bar per demosaic (0 worst, 1 best, the study's score ranges; Table 3's cells, "
+           "a moiré bound scored by the same rule), grouped by the "
            "filter letters the layout uses.  A block layout read with remosaic is drawn with the Bayer tile it is "
            "rearranged to, one binned with its blocks outlined and the binned tile; a readout other than the "
            "study's own comes from a [[sweep]] readout = [...] and is scored here with the same ranges.")

@@ -289,6 +289,25 @@ def _isp(ck: _Checker, isp_cfg) -> dict:
     return out
 
 
+def one_f_number(optics_table):
+    """The one place a study's f-number is decided (issue 46): every scene,
+    built-in or a user's, is captured at ``[optics] f_number``, the optics
+    default f/4 (:data:`cfa_mitsuba.optics.DEFAULT_F_NUMBER`) when the config
+    gives none; ``f_number = "scene"`` asks for each scene's own lens (a
+    render's sidecar: the puppy's thin lens is f/2), which is then what
+    metrics.csv's ``f_number`` says per scene."""
+    if not isinstance(optics_table, dict):
+        return optics_table  # the table checker says what is wrong with it
+    from ..optics import DEFAULT_F_NUMBER
+
+    out = dict(optics_table)
+    if "f_number" not in out:
+        out["f_number"] = DEFAULT_F_NUMBER
+    elif out["f_number"] == "scene":
+        del out["f_number"]
+    return out
+
+
 def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, dict, dict]:
     """(optics, sensor, capture): ``[optics]``, ``[sensor]`` (a preset and
     its overrides) and the capture settings kept in ``[sensor]`` (noise,
@@ -296,7 +315,7 @@ def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, di
     from ..optics import OpticsParams
     from ..sensor.params import NOISE_MODES, SensorParams
 
-    optics = _dataclass_table(ck, data.get("optics", {}), "optics", OpticsParams, {})
+    optics = _dataclass_table(ck, one_f_number(data.get("optics", {})), "optics", OpticsParams, {})
     capture_extra = {
         "noise": lambda v, k: ck.string(v, k, NOISE_MODES),
         "exposure": lambda v, k: v if v == "auto" else ck.number(v, k, positive=True),

@@ -1,200 +1,201 @@
-"""decisions.csv: which CFA to pick for each aspect, and how sure that is.
+"""decisions.csv: which CFA to pick, how sure that is, and what the answer
+depends on.
 
-One row per aspect (``aspect``, ``cfas``, ``verdict``, ``detail``):
+Rows (``aspect``):
 
-- ``colour``: the mean score of ΔE00 (Macbeth) and S-CIELAB (puppy);
-- ``sharpness``: MTF50 (slanted edge);
-- ``moire``: the moire starting point (chirp);
-- ``low light``: S-CIELAB and SSIM at the lowest swept luminance below
-  the base one at which the CFAs' scores differ (scored with the study's
-  ranges; lower levels, where every CFA clips to the range's bound, are
-  passed over and named in the detail);
-- ``overall``: the total score of Table 3 (scores.csv's ``total_rank``).
+- ``colour`` (the mean score of ΔE00 on the Macbeth chart and S-CIELAB on
+  the puppy), ``sharpness`` (MTF50), ``moire`` (the moire starting point),
+  ``overall`` (Table 3's total: every scored metric) and ``with <demosaic>``
+  (Table 3's row of that demosaic), each at the base luminance, on the
+  scores of every realisation (render seed x sensor seed) averaged over the
+  aspect's metrics and the demosaics;
+- ``low light`` (study/lowlight.py): SNR10, the scene luminance at which
+  YSNR reaches 10 (lower is better), and ``low light: <metric>``: each
+  swept scored metric's own values at the lowest swept luminance below the
+  base one.  Low light is decided on physics, never on scores clipped to a
+  range's bound.
 
-Each aspect's score of a CFA is the mean, over the study's demosaics and
-the aspect's metrics, of its scores, computed per realisation (render seed
-x sensor seed); its 95 % interval is :func:`.intervals.nested_interval`'s and
-its rank interval comes from paired comparisons: the per-realisation score
-differences of two CFAs under the same render and sensor seeds
-(:func:`.intervals.paired_rank_interval`).  The rule, the same
-everywhere the project names a best CFA: ``cfas`` lists every CFA whose
-rank interval contains 1; ``verdict`` is ``winner`` only when that is one
-CFA with rank interval exactly 1 (its interval lies wholly above every
-other's), else ``tie``; ``unmeasured`` when the study has no value for the
-aspect (no luminance below the base: no low-light row).
+The rule, the same everywhere the project names a best CFA (the report's
+panel and cards, Table 3, the paper comparison's "best" claims):
+
+1. rank intervals from paired comparisons (:func:`.ranking.paired_ranks`);
+   ``cfas`` lists every CFA whose rank interval contains 1;
+2. ``winner`` only when that is one CFA with rank interval exactly 1 *and*
+   its lead over the next CFA is at least the practical difference: the
+   smallest difference that matters to a user, from the metric records
+   (``practical_difference``); for a mean score of M metrics it is the change
+   a practical difference on one of them makes to the mean (each metric's in
+   score units, its practical difference over its range's width, averaged
+   over the metrics and divided by M); a separated lead below it is
+   ``equivalent`` (``cfas``: the leader and every CFA within the practical
+   difference of it);
+3. ``tie`` when several CFAs can rank first; ``clipped`` when more than
+   :data:`CLIPPED_LIMIT` of the scores used (each CFA, demosaic and metric's
+   mean over the realisations) lie outside their range and are clipped to
+   its bound (the range no longer spans the values: nothing is decided
+   from them);
+   ``unmeasured`` when the study has no value for the row.
+
+Each row is recomputed under the alternatives a reader could reasonably
+choose (study/alternatives.py: each other range policy, each other
+convention for censored values, each metric left out in turn; for low
+light, each swept metric's values at each level): ``robust`` is true when
+the answer (the winner, or no single winner) is the same under every one,
+and ``depends_on`` lists those that change it (``without moire``,
+``censored at best measured``, ``ranges: paper``, ``scielab at 1 cd/m^2``),
+the detail saying what each gives.  ``luminance`` is the level decided at,
+``quantity`` what was compared and ``clipped_share`` the share of the
+scores at that level clipped to a range bound under the study's ranges.
 """
 
 from __future__ import annotations
 
-__all__ = ["ASPECTS", "VERDICTS", "decide", "decisions_table", "write_decisions"]
+__all__ = ["ASPECTS", "VERDICTS", "COLUMNS", "CLIPPED_LIMIT", "Outcome", "decide", "robustness",
+           "practical_threshold", "score_outcome", "decisions_table", "write_decisions"]
 
 from pathlib import Path
 
 import numpy as np
 
-from .intervals import nested_interval, rank_interval
+from .decision_rule import Outcome, decide, robustness
+from .intervals import aggregate
 
-#: (aspect, the scored metrics it averages); ``low light`` reads the sweep's lowest luminance.
-ASPECTS = (("colour", ("delta-e", "scielab")), ("sharpness", ("mtf",)), ("moire", ("moire",)),
-           ("low light", ("scielab", "ssim")), ("overall", ()))
-VERDICTS = ("winner", "tie", "unmeasured")
-COLUMNS = ["aspect", "cfas", "verdict", "detail"]
+#: (aspect, the scored metrics it averages: () every one), decided on scores at the base luminance.
+ASPECTS = (("colour", ("delta-e", "scielab")), ("sharpness", ("mtf",)), ("moire", ("moire",)), ("overall", ()))
+VERDICTS = ("winner", "equivalent", "tie", "clipped", "unmeasured")
+COLUMNS = ["aspect", "cfas", "verdict", "robust", "depends_on", "luminance", "quantity", "clipped_share", "detail"]
+#: The largest share of clipped scores a decision on scores accepts.
+CLIPPED_LIMIT = 0.10
 
 
-def decide(cfas, scores, lows, highs, ranks=None) -> tuple[list[str], str, str]:
-    """(the CFAs whose rank interval contains 1, verdict, plain-words detail).
+def practical_threshold(rows, ranges: dict) -> float:
+    """The practical difference of a mean score of ``rows`` (per-realisation
+    scored rows: metric, value, unit): what a practical difference on one of
+    its M metrics makes to the mean, on average over the metrics: the mean
+    of each one's practical difference (its record's, at the median value
+    for a relative one) over its range's width (each at most 1), divided by
+    M; a metric whose record gives none counts 0.
 
-    ``scores``, ``lows``, ``highs``: each CFA's score (higher is better) and
-    its 95 % interval; ``ranks``: (best ranks, worst ranks) from paired
-    comparisons (:func:`.ranking.paired_ranks`); without them the rank
-    intervals follow from the marginal intervals (:func:`.intervals.rank_interval`).
-
-    >>> decide(["a", "b", "c"], [0.9, 0.85, 0.5], [0.88, 0.80, 0.45], [0.92, 0.89, 0.55])[:2]
-    (['a', 'b'], 'tie')
-    >>> decide(["a", "b"], [0.9, 0.5], [0.88, 0.45], [0.92, 0.55])[:2]
-    (['a'], 'winner')
+    >>> import pandas as pd
+    >>> from cfa_mitsuba.study.scoring import ScoreRange
+    >>> rows = pd.DataFrame({"metric": ["delta-e", "ssim"], "value": [2.0, 0.8], "unit": ["dE00", ""]})
+    >>> round(practical_threshold(rows, {"delta-e": ScoreRange(4.0, 0.0), "ssim": ScoreRange(0.5, 1.0)}), 4)
+    0.075
     """
-    cfas = list(cfas)
-    s, lo, hi = (np.asarray(x, dtype=float) for x in (scores, lows, highs))
-    if ranks is None:
-        _, best, worst = rank_interval(s, lo, hi)
-    else:
-        best, worst = (np.asarray(x, dtype=int) for x in ranks)
-    order = [i for i in np.argsort(-s, kind="stable") if best[i] == 1]
-    top = [cfas[i] for i in order]
-    verdict = "winner" if len(order) == 1 and worst[order[0]] == 1 else "tie"
+    from ..metrics import METRICS
 
-    def one(i):
-        rank = f"rank {best[i]}" if best[i] == worst[i] else f"ranks {best[i]}-{worst[i]}"
-        return f"{cfas[i]} {s[i]:.3f} [{lo[i]:.3f}, {hi[i]:.3f}] ({rank})"
-
-    if verdict == "winner":
-        detail = (f"{one(order[0])}: its score lies above every other CFA's (paired differences, 95 % intervals "
-                  "above 0)" if ranks is not None else f"{one(order[0])}: its interval lies above every other CFA's")
-    else:
-        detail = f"{len(order)} CFA(s) can rank first within their 95 % intervals: " + "; ".join(one(i) for i in order)
-    return top, verdict, detail
+    out = []
+    for metric, g in rows.groupby("metric", sort=False):
+        rec, r = METRICS.get(metric), ranges.get(metric)
+        if rec is None or r is None:
+            continue
+        unit = next((u for u in g["unit"] if isinstance(u, str)), "") if "unit" in g.columns else rec.unit
+        pd_ = rec.practical(unit, float(np.nanmedian(g["value"].astype(float))))
+        out.append(0.0 if pd_ is None else min(1.0, pd_ / abs(float(r.best) - float(r.worst))))
+    return float(np.mean(out)) / len(out) if out else 0.0
 
 
-def _aspect_rows(aspect, metrics, scored_every, lowlight_every):
+def _clipped_share(rows) -> float:
+    """The share of the scores used (each CFA, demosaic and metric: the mean over its realisations,
+    scores.csv's ``raw_score``) that eq. 8 puts outside [0, 1], where clipping acts on the value
+    itself: a range that does not span it.  A realisation of the worst CFA a hair below the worst
+    mean is noise about a value inside the range, not a value outside it."""
+    if rows.empty:
+        return 0.0
+    raw = rows.groupby(["cfa", "demosaic", "metric"], sort=False)["raw_score"].mean().to_numpy(dtype=float)
+    return float(np.mean((raw < -1e-9) | (raw > 1 + 1e-9)))
+
+
+def score_outcome(every, ranges: dict, metrics=(), demosaic: str | None = None) -> Outcome | None:
+    """The decision on the mean score of ``metrics`` (() every one in
+    ``every``) over the demosaics (or ``demosaic``'s alone), from
+    per-realisation scored rows; None when there are none."""
     from .ranking import paired_ranks, realisation_renders
 
-    if aspect == "low light":
-        rows = lowlight_every
-    else:
-        rows = scored_every[scored_every["metric"].isin(metrics)]
+    rows = every if not metrics else every[every["metric"].isin(list(metrics))]
+    if demosaic is not None:
+        rows = rows[rows["demosaic"] == demosaic]
     if rows is None or rows.empty:
         return None
     renders = realisation_renders(rows)
-    per = rows.groupby(["cfa", "realisation"], sort=False)["score"].mean().reset_index()
-    cfas, s, lo, hi = [], [], [], []
-    for cfa, g in per.groupby("cfa", sort=False):
-        mean, low, high, _, _ = nested_interval(g["score"], g["realisation"].map(renders).fillna(0) if renders else None)
-        cfas.append(cfa), s.append(mean), lo.append(low), hi.append(high)
+    per = (rows.groupby(["cfa", "demosaic", "realisation"], sort=False)["score"].mean()
+           .groupby(["cfa", "realisation"], sort=False).mean().reset_index())
+    per["_render"] = per["realisation"].map(renders).fillna(0).astype(int) if renders else 0
+    agg = aggregate(per, ["cfa"], "score", groups="_render", pool_by=[])
     items, _, best, worst = paired_ranks(per, "cfa", "score", renders)
-    pos = [items.index(c) for c in cfas]
-    return cfas, s, lo, hi, (best[pos], worst[pos])
+    pos = [items.index(c) for c in agg["cfa"]]
+    top, verdict, detail = decide(agg["cfa"], agg["score"], agg["ci_low"], agg["ci_high"], (best[pos], worst[pos]),
+                                  practical=practical_threshold(rows, ranges))
+    share = _clipped_share(rows)
+    if share > CLIPPED_LIMIT:
+        verdict = "clipped"
+        detail = (f"{100 * share:.0f} % of the scores used are clipped to a range bound (more than "
+                  f"{100 * CLIPPED_LIMIT:.0f} %): the ranges do not span these values, so no CFA is named; " + detail)
+    return Outcome(top, verdict, detail, share)
 
 
-def decisions_table(scores, scored_every, lowlight_every=None, lowlight_luminance=None, lowlight_skipped=()):
+def _score_rows(alternatives, base_luminance):
+    """decisions.csv's rows decided on scores (every aspect, every demosaic)."""
+    own = alternatives[0]
+    every = own.every
+    demosaics = list(dict.fromkeys(every["demosaic"])) if len(every) else []
+    specs = [(aspect, metrics, None) for aspect, metrics in ASPECTS]
+    specs += [(f"with {d}", (), d) for d in demosaics]
+    out = []
+    for aspect, metrics, dem in specs:
+        base = score_outcome(every, own.ranges, metrics, dem) if len(every) else None
+        what = _quantity(aspect, metrics)
+        if base is None:
+            missing = ", ".join(metrics) if metrics else "no scored metric"
+            out.append((aspect, "", "unmeasured", False, "", base_luminance, what, np.nan,
+                        f"the study measured none of {missing}"))
+            continue
+        used = list(dict.fromkeys(every[every["metric"].isin(list(metrics))]["metric"] if metrics
+                                  else every["metric"]))
+        others = [(alt.label, score_outcome(alt.every, alt.ranges, metrics, dem)) for alt in alternatives[1:]]
+        if len(used) > 1:
+            others += [(f"without {m}", score_outcome(every, own.ranges, [x for x in used if x != m], dem))
+                       for m in used]
+        robust, depends, words = robustness(base, others)
+        out.append((aspect, " ".join(base.cfas), base.verdict, robust, depends, base_luminance, what,
+                    round(base.clipped_share, 4), f"{what}: {base.detail}.{words}"))
+    return out
+
+
+def _quantity(aspect: str, metrics) -> str:
+    if aspect == "overall":
+        return "total score (Table 3, mean over the demosaics of the mean of every scored metric)"
+    if aspect.startswith("with "):
+        return f"mean score of every scored metric with {aspect[5:]} (Table 3's row)"
+    names = {"delta-e": "dE00", "scielab": "S-CIELAB", "mtf": "MTF50", "moire": "moire starting point"}
+    return "mean score of " + " and ".join(names.get(m, m) for m in metrics) + ", over the demosaics"
+
+
+def decisions_table(alternatives, realisations=None, base_luminance=None, ranges=None):
     """decisions.csv as a DataFrame.
 
-    ``scores``: scores.csv; ``scored_every``: the scored rows per
-    realisation (``cfa``, ``metric``, ``realisation``, ``score``), at the
-    base luminance; ``lowlight_every``: the same for the low-light rows
-    (None: the study has none) at ``lowlight_luminance`` cd/m^2;
-    ``lowlight_skipped``: the lower levels passed over, where every CFA
-    scored the same bound.
-    """
+    ``alternatives``: :func:`.alternatives.score_alternatives`' list (the
+    study's own scoring first; empty: no scores); ``realisations``:
+    metrics_realisations.csv (the low-light rows; None: none);
+    ``ranges``: the study's ranges (the low-light levels' clipped share)."""
     import pandas as pd
 
-    out = []
-    for aspect, metrics in ASPECTS:
-        if aspect == "overall":
-            if scores is None or scores.empty:
-                out.append((aspect, "", "unmeasured", "no scores"))
-                continue
-            tot = scores.drop_duplicates("cfa")
-            cfas, verdict, detail = decide(tot["cfa"], tot["total_score"], tot["total_score_ci_low"],
-                                           tot["total_score_ci_high"],
-                                           ranks=(tot["total_rank_best"], tot["total_rank_worst"]))
-            # the rank intervals of scores.csv are the same computation: keep them the one source
-            top = tot[tot["total_rank_best"] == 1].sort_values("total_score", ascending=False)["cfa"].tolist()
-            assert sorted(top) == sorted(cfas), (top, cfas)
-            out.append((aspect, " ".join(top), verdict, "Table 3's total score: " + detail))
-            continue
-        got = _aspect_rows(aspect, metrics, scored_every, lowlight_every)
-        if got is None:
-            why = ("no luminance below the base one" if aspect == "low light"
-                   else f"the study measured none of {', '.join(metrics)}")
-            out.append((aspect, "", "unmeasured", why))
-            continue
-        cfas, verdict, detail = decide(*got)
-        what = {"colour": "mean score of dE00 and S-CIELAB", "sharpness": "MTF50 score",
-                "moire": "moire starting point score",
-                "low light": f"mean score of S-CIELAB and SSIM at {lowlight_luminance:g} cd/m^2"
-                + (f" (the lowest level at which the CFAs' scores differ; at "
-                   f"{', '.join(f'{v:g}' for v in lowlight_skipped)} cd/m^2 every CFA scores the range's bound)"
-                   if lowlight_skipped else "")
-                if lowlight_luminance is not None else ""}[aspect]
-        out.append((aspect, " ".join(cfas), verdict, f"{what}, over the demosaics: {detail}"))
-    return pd.DataFrame(out, columns=COLUMNS)
+    from .lowlight import lowlight_rows
+
+    rows = _score_rows(alternatives, base_luminance) if alternatives else [
+        (aspect, "", "unmeasured", False, "", base_luminance, _quantity(aspect, m), np.nan, "no scores")
+        for aspect, m in ASPECTS]
+    rows += lowlight_rows(realisations, ranges or {})
+    return pd.DataFrame(rows, columns=COLUMNS)
 
 
-def _lowlight(realisations, ranges, clip, scored_metrics_):
-    """(per-realisation scored rows at the low-light level, that luminance,
-    the lower levels passed over) or (None, None, ()).
-
-    The level is the lowest swept luminance below the base one at which the
-    CFAs' scores differ: below the range the study scores against, every
-    CFA's S-CIELAB and SSIM clip to the same bound (0), a tie that says
-    nothing about the CFAs, so such levels are passed over and named."""
-    from .scoring import normalise
-
-    none = None, None, ()
-    if realisations is None or realisations.empty or "base" not in realisations:
-        return none
-    base = realisations[realisations["base"].astype(bool)]
-    if base.empty:
-        return none
-    base_lum = float(base["luminance"].astype(float).min())
-    metrics = [m for m in ("scielab", "ssim") if m in ranges and m in scored_metrics_]
-    below = realisations[realisations["metric"].isin(metrics)
-                         & (realisations["luminance"].astype(float) < base_lum)]
-    if below.empty:
-        return none
-    cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
-    cols += ["render_seed"] if "render_seed" in below.columns else []
-    import pandas as pd
-
-    def scored(lum):
-        low = below[below["luminance"].astype(float) == lum]
-        # only the other axes at their base values: a sweep over luminance alone
-        low = low.drop_duplicates(["scene", "cfa", "demosaic", "metric", "realisation"])
-        parts = [normalise(g[cols].drop(columns="realisation"), ranges, clip=clip).assign(realisation=r)
-                 for r, g in low.groupby("realisation", sort=True)]
-        return pd.concat(parts, ignore_index=True)
-
-    levels = sorted(below["luminance"].astype(float).unique())
-    for i, lum in enumerate(levels):
-        rows = scored(lum)
-        per_cfa = rows.groupby("cfa")["score"].mean()
-        if per_cfa.max() - per_cfa.min() > 1e-12:
-            return rows, lum, tuple(levels[:i])
-    return scored(levels[0]), levels[0], ()  # no level tells the CFAs apart: the lowest, a tie
-
-
-def write_decisions(out_dir: Path, realisations, scored_real, scores, ranges, *, clip: bool, constant=()) -> None:
+def write_decisions(out_dir: Path, realisations, alternatives, ranges) -> None:
     """Write ``out_dir/decisions.csv`` (atomically) from a study's rows."""
     from ..io import atomic_output
-    from ..metrics import scored_metrics
-    from .ranking import _realisation_scores
 
-    cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
-    cols += ["render_seed"] if "render_seed" in scored_real.columns else []
-    kept = scored_real[~scored_real["metric"].isin(list(constant))]
-    every = _realisation_scores(kept[cols], ranges, clip) if len(kept) else kept
-    low, lum, skipped = _lowlight(realisations, ranges, clip, set(scored_metrics()) - set(constant))
-    table = decisions_table(scores, every, low, lum, skipped)
+    base = realisations[realisations["base"].astype(str).str.lower().isin(("true", "1"))] \
+        if realisations is not None and "base" in realisations else None
+    lum = float(base["luminance"].astype(float).min()) if base is not None and len(base) else None
+    table = decisions_table(alternatives, realisations, lum, ranges)
     with atomic_output(Path(out_dir) / "decisions.csv") as tmp:
         table.to_csv(tmp, index=False)

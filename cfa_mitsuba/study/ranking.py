@@ -18,7 +18,8 @@ Under any policy a metric whose values are the same for every CFA cannot
 rank them: it is reported as such (``constant``) and left out of the mean
 scores rather than scored as a tie of ones.  Each realisation (render seed
 x sensor seed) is scored on its own; the tables carry the mean and 95 %
-interval over realisations (:func:`.intervals.nested_interval`), and rank
+interval over realisations (:func:`.intervals.nested_interval`, the render
+component pooled over the values of one level: :mod:`.variance`), and rank
 intervals from paired comparisons: realisation k of every CFA has the same
 render and sensor seed, so two CFAs are compared through their
 per-realisation score differences (:func:`.intervals.paired_rank_interval`).
@@ -130,23 +131,30 @@ def _set_ranks(table, g, item, names, got, ranked_on=None):
     table.loc[g.index, names] = np.stack([np.asarray(r)[idx_r], np.asarray(b)[idx], np.asarray(w)[idx]], 1)
 
 
-def score_realisations(rows, ranges: dict, *, clip: bool = True, constant=()):
+def score_realisations(rows, ranges: dict, *, clip: bool = True, constant=(), every=None):
     """scores.csv: per-realisation scores averaged, with intervals and rank intervals.
 
     ``rows``: the scored metric rows of every realisation (columns of
     :data:`.scoring.METRIC_COLUMNS` plus ``realisation``); ``ranges``: the
-    policy's ranges; ``constant``: metrics left out (they cannot rank).
+    policy's ranges; ``constant``: metrics left out (they cannot rank);
+    ``every``: those rows already scored per realisation (then ``rows`` is
+    not read).
     """
     import pandas as pd
 
-    rows = rows[~rows["metric"].isin(list(constant))]
-    if rows.empty:
-        return rows
-    every = _realisation_scores(rows, ranges, clip)
+    if every is None:
+        rows = rows[~rows["metric"].isin(list(constant))]
+        if rows.empty:
+            return rows
+        every = _realisation_scores(rows, ranges, clip)
+    elif every.empty:
+        return every
+    every = every.copy()
     renders = realisation_renders(every)
     every["_render"] = every["realisation"].map(renders).fillna(0).astype(int)
-    out = aggregate(every, _KEYS, "value", groups="render_seed")
-    out = out.merge(aggregate(every, _KEYS, "score", prefix="score_", groups="render_seed").rename(
+    pool = ["scene", "luminance", "metric"]  # the render component: one per scene, level and metric (variance.py)
+    out = aggregate(every, _KEYS, "value", groups="render_seed", pool_by=pool)
+    out = out.merge(aggregate(every, _KEYS, "score", prefix="score_", groups="render_seed", pool_by=pool).rename(
         columns={"score_score": "score"}), on=_KEYS)
     first = every.drop_duplicates(_KEYS).set_index(_KEYS)[["unit", "worst", "best"]]
     out = out.join(first, on=_KEYS)
@@ -164,7 +172,8 @@ def score_realisations(rows, ranges: dict, *, clip: bool = True, constant=()):
                    paired_ranks(sub, "cfa", "score", renders), ranked_on=g["raw_score"])
     # per (cfa, demosaic, luminance): the mean score and its interval over realisations
     per = every.drop_duplicates(["cfa", "demosaic", "luminance", "realisation"])
-    per_agg = aggregate(per, ["cfa", "demosaic", "luminance"], "mean_score", prefix="mean_score_", groups="_render")
+    per_agg = aggregate(per, ["cfa", "demosaic", "luminance"], "mean_score", prefix="mean_score_", groups="_render",
+                        pool_by=["luminance"])
     per_agg = per_agg.rename(columns={"mean_score_mean_score": "mean_score"}).drop(
         columns=["mean_score_std", "mean_score_n"])
     per_agg = per_agg.merge(per.groupby(["cfa", "demosaic", "luminance"])["n_metrics"].max().reset_index(),
@@ -176,7 +185,8 @@ def score_realisations(rows, ranges: dict, *, clip: bool = True, constant=()):
         _set_ranks(per_agg, g, "cfa", ["demosaic_rank", "demosaic_rank_best", "demosaic_rank_worst"],
                    paired_ranks(sub, "cfa", "mean_score", renders))
     tot = every.drop_duplicates(["cfa", "luminance", "realisation"])
-    tot_agg = aggregate(tot, ["cfa", "luminance"], "total_score", prefix="total_score_", groups="_render")
+    tot_agg = aggregate(tot, ["cfa", "luminance"], "total_score", prefix="total_score_", groups="_render",
+                        pool_by=["luminance"])
     tot_agg = tot_agg.rename(columns={"total_score_total_score": "total_score"}).drop(
         columns=["total_score_std", "total_score_n"])
     for col in ("total_rank", "total_rank_best", "total_rank_worst"):

@@ -4,7 +4,9 @@
                                ``render_seed``)
     metrics.csv                one row per (scene, cfa, demosaic, condition, metric):
                                the mean over realisations, ``ci_low``, ``ci_high`` (95 %,
-                               render and sensor noise: study/intervals.py), ``n``,
+                               render and sensor noise: study/intervals.py, the render
+                               component pooled over a scene, level and metric), ``n``,
+                               ``censored`` and ``censored_count`` (bounds: study/censored.py),
                                ``render_seeds`` (the renders it spans) and
                                ``sensor_half_width`` (the half width from sensor noise alone)
     ideal.csv                  the ideal sensor measured against itself (the anchor of
@@ -43,9 +45,11 @@ def key_columns() -> list[str]:
 
 def metric_columns(*, realisations: bool = False) -> list[str]:
     """metrics.csv's columns: the keys, one per condition axis, ``base``,
-    the metric, its mean ``value`` with ``ci_low``, ``ci_high``, ``n``,
-    ``unit`` and ``censored`` (the value is a bound: True when any
-    realisation's is), the capture columns, ``render_seeds`` (how many
+    the metric, its ``value`` with ``ci_low``, ``ci_high``, ``n``,
+    ``unit``, ``censored`` (the value is a bound: True when every
+    realisation's is) and ``censored_count`` (how many realisations are
+    bounds; with some, ``value`` is their Kaplan-Meier median:
+    study/censored.py), the capture columns, ``render_seeds`` (how many
     renders its realisations span: 1 for a chart) and ``sensor_half_width``
     (the 95 % half width from sensor noise alone: how much of the interval
     is not render noise); per realisation: ``realisation``, ``value``,
@@ -53,8 +57,14 @@ def metric_columns(*, realisations: bool = False) -> list[str]:
     keys = key_columns()
     if realisations:
         return [*keys[:-1], "realisation", "metric", "value", "unit", "censored", *CAPTURE_COLUMNS, "render_seed"]
-    return [*keys, "value", "ci_low", "ci_high", "n", "unit", "censored", *CAPTURE_COLUMNS, "render_seeds",
-            "sensor_half_width"]
+    return [*keys, "value", "ci_low", "ci_high", "n", "unit", "censored", "censored_count", *CAPTURE_COLUMNS,
+            "render_seeds", "sensor_half_width"]
+
+
+#: The key columns a value's render component is not pooled over: the
+#: values of one scene, condition and metric share it (study/variance.py),
+#: whatever the CFA, its spectra set and the demosaic.
+NOT_POOLED = ("cfa", "demosaic", "spectra")
 
 
 def order_rows(rows, config_order: dict, columns: list[str] | None = None):
@@ -101,7 +111,8 @@ def mean_table(realisations):
     if "render_seed" not in keyed.columns or keyed["render_seed"].isna().all():  # a table written before render seeds
         keyed = keyed.assign(render_seed=0)
     keyed = keyed.assign(render_seed=keyed["render_seed"].fillna(0).astype(int))
-    agg = aggregate(keyed, keys, "value", groups="render_seed").drop(columns=["std"])
+    agg = aggregate(keyed, keys, "value", groups="render_seed",
+                    pool_by=[k for k in keys if k not in NOT_POOLED]).drop(columns=["std"])
     spread = keyed.groupby(keys, sort=False, dropna=False).apply(
         lambda g: pd.Series({"render_seeds": int(g["render_seed"].nunique()),
                              "sensor_half_width": sensor_half_width(g["value"], g["render_seed"])}),
@@ -109,15 +120,39 @@ def mean_table(realisations):
     agg = agg.merge(spread, on=keys, how="left")
     unit = keyed.drop_duplicates(keys)[keys + ["unit"]]
     out = agg.merge(unit, on=keys, how="left")
-    bound = keyed.assign(censored=keyed["censored"].fillna(False).astype(bool)).groupby(
-        keys, sort=False, dropna=False)["censored"].any().reset_index()
-    out = out.merge(bound, on=keys, how="left")
+    out = _censored_values(out, keyed, keys)
     have = [c for c in CAPTURE_COLUMNS if c in keyed.columns]
     if have:
         caps = keyed[keys + have].copy()
         caps[have] = caps[have].apply(pd.to_numeric, errors="coerce")
         out = out.merge(caps.groupby(keys, sort=False, dropna=False)[have].mean().reset_index(), on=keys, how="left")
     return out.reindex(columns=metric_columns())
+
+
+def _censored_values(out, keyed, keys):
+    """``censored`` and ``censored_count`` for every value, and the values
+    with bounds among their realisations summarised by the rule of
+    study/censored.py (the Kaplan-Meier median and its interval)."""
+    import pandas as pd
+
+    from .censored import is_bound, summarise
+
+    keyed = keyed.assign(censored=is_bound(keyed["censored"]) if "censored" in keyed.columns else False)
+    counts = keyed.groupby(keys, sort=False, dropna=False)["censored"].sum().astype(int).rename("censored_count")
+    out = out.merge(counts.reset_index(), on=keys, how="left")
+    out["censored"] = False
+    mixed = out.index[out["censored_count"] > 0]
+    if len(mixed):
+        some = keyed[keyed["censored"]].drop_duplicates(keys)[keys]
+        for _, g in keyed.merge(some, on=keys).groupby(keys, sort=False, dropna=False):
+            got = summarise(g["value"].to_numpy(float), g["censored"].to_numpy(bool))
+            sel = pd.Series(True, index=out.index)
+            for k in keys:
+                sel &= (out[k] == g[k].iloc[0]) | (out[k].isna() & pd.isna(g[k].iloc[0]))
+            for col, v in got.items():
+                out.loc[sel, col] = v
+    out["censored"] = out["censored"].astype(bool)
+    return out
 
 
 def scored_rows(metrics, builtin_scenes):
@@ -151,17 +186,18 @@ def _ideal_values(ideal, scored) -> dict:
 
 
 def _measured(scores, means):
-    """scores.csv with the measured means and intervals in ``value``, ``ci_low``, ``ci_high`` and the
-    ``censored`` flag (the scores may have been computed from a bound's scoring value)."""
+    """scores.csv with metrics.csv's values and intervals in ``value``, ``ci_low``, ``ci_high`` and its
+    ``censored`` and ``censored_count`` (the scores may have been computed from a bound's scoring value)."""
     if scores.empty:
         return scores
     keys = ["scene", "cfa", "demosaic", "luminance", "metric"]
-    m = means[keys + ["value", "ci_low", "ci_high", "censored"]].copy()
+    m = means[keys + ["value", "ci_low", "ci_high", "censored", "censored_count"]].copy()
     m["luminance"] = m["luminance"].astype(float)
     out = scores.drop(columns=["value", "ci_low", "ci_high"]).assign(luminance=scores["luminance"].astype(float))
     out = out.merge(m, on=keys, how="left")
     cols = list(scores.columns)
-    cols.insert(cols.index("unit") + 1 if "unit" in cols else len(cols), "censored")
+    at = cols.index("unit") + 1 if "unit" in cols else len(cols)
+    cols[at:at] = ["censored", "censored_count"]
     return out[cols]
 
 
@@ -171,8 +207,9 @@ def write_tables(out_dir: Path, realisations, ideal, *, paper_ranges: dict, over
     (metrics, scores, ranges, constant metrics)."""
     import pandas as pd
 
-    from .ranking import policy_ranges, policy_summary, score_realisations
-    from .scoring import ScoreRange
+    from .alternatives import ScoringSetup, score_alternatives
+    from .censored import values_for_scoring
+    from .ranking import policy_summary, score_realisations
 
     def save(name, df):
         with atomic_output(out_dir / name) as tmp:
@@ -185,29 +222,23 @@ def write_tables(out_dir: Path, realisations, ideal, *, paper_ranges: dict, over
         save("ideal.csv", ideal)
     scored_real = scored_rows(realisations, builtin_scenes)
     scored_mean = scored_rows(metrics, builtin_scenes)
-    ranges, constant, scores = dict(paper_ranges), [], scored_mean.iloc[0:0]
+    ranges, constant, scores, alternatives = dict(paper_ranges), [], scored_mean.iloc[0:0], []
     if len(scored_real):
-        ideal_vals = _ideal_values(ideal, scored_mean)
-        ranges, constant = policy_ranges(policy, scored_mean, paper_ranges, ideal_vals)
-        for m, (worst, best) in overrides.items():  # the config's own ranges win
-            ranges[m] = ScoreRange(worst, best, ())
-            if m in constant and worst != best:
-                constant.remove(m)
-        cols = ["scene", "cfa", "demosaic", "luminance", "metric", "value", "unit", "realisation"]
-        cols += ["render_seed"] if "render_seed" in scored_real.columns else []
-        from .censored import values_for_scoring
-
-        scored_real = values_for_scoring(scored_real, ranges)  # a bound scores by the stated rule (censored.py)
-        per_realisation = score_realisations(scored_real[cols], ranges, clip=clip, constant=constant)
+        setup = ScoringSetup(paper_ranges, _ideal_values(ideal, scored_mean), policy, dict(overrides), clip)
+        ranges, constant = setup.ranges(policy, scored_mean)
+        every = setup.every(scored_real, ranges, constant)  # a bound scores by the stated rule (censored.py)
+        per_realisation = score_realisations(None, ranges, clip=clip, constant=constant, every=every)
         scores = _measured(per_realisation, scored_mean)
-        clipping, ranks = policy_summary(scored_mean, paper_ranges, ideal_vals, clip, realisations=scored_real,
+        clipping, ranks = policy_summary(scored_mean, paper_ranges, setup.ideal, clip,
+                                         realisations=values_for_scoring(scored_real, ranges),
                                          scored=(ranges, constant, per_realisation))
         clipping["scope"] = "clipping"
         ranks["scope"] = "rank"
         save("policies.csv", pd.concat([clipping, ranks], ignore_index=True))
+        alternatives = score_alternatives(setup, scored_real, scored_mean, own=(ranges, constant, every))
     save("scores.csv", scores)
     if len(scored_real) and len(scores):
         from .decisions import write_decisions
 
-        write_decisions(out_dir, realisations, scored_real, scores, ranges, clip=clip, constant=constant)
+        write_decisions(out_dir, realisations, alternatives, ranges)
     return metrics, scores, ranges, constant
