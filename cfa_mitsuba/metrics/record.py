@@ -69,6 +69,9 @@ class MetricRecord:
         ``function`` unless its ``[metrics.<name>]`` table sets them (S-CIELAB's
         ``fft_precision = 'single'``: the same numbers to 1e-5 dE00 in about half
         the filtering time); a direct call gets the function's own defaults.
+    decibels : the value is an amplitude ratio (an SNR): tables give
+        ``20 log10`` of it in dB beside the ratio (metrics.csv's
+        ``value_db``, ``ci_low_db``, ``ci_high_db``).
     summary_options : ``((keyword, value), ...)``: options that leave out of
         the details what only the details files read, passed by a study for
         every camera output whose details it does not keep (the realisations
@@ -100,6 +103,7 @@ class MetricRecord:
     reference_cache: tuple[str, Callable[..., Any]] | None = None
     study_options: tuple[tuple[str, Any], ...] = ()
     summary_options: tuple[tuple[str, Any], ...] = ()
+    decibels: bool = False
 
     def __post_init__(self):
         if self.inputs not in INPUT_KINDS:
