@@ -14,6 +14,9 @@ luminance, CFA, demosaic), write the tables.  The report is the next stage
       timing.json     where the time went
       config.json     the validated config, as run
       sensor_curves.csv  each compared CFA's QE curves as captured (sensor_curves.py)
+      mtf.csv, patches.csv, steps.csv  each edge's MTF curve, each ColorChecker
+                      patch's error, each gray step's SNR and the dynamic range
+                      (detail_tables.py; from the first realisation's details)
       details/        per evaluation: curves and tables (JSON), reduced
                       S-CIELAB maps (.npy), thumbnails (.png)
       figures/, report.html   (cfa_mitsuba.report, built after the runner)
@@ -46,6 +49,7 @@ from .cfa_facts import write_cfa_facts
 from .sensor_curves import write_sensor_curves
 from .tables import mean_table, order_rows, write_tables
 from .snr import write_snr_tables
+from .detail_tables import write_detail_tables
 from .render_seeds import is_3d as _is_3d, path_traced, render_seeded
 from .tasks import EvaluationTask, evaluate_group, evaluate_task, render_task
 
@@ -326,6 +330,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         policy=config.range_policy, clip=config.clip_scores, builtin_scenes=builtin)
     write_cfa_facts(out, config.cfas, order["cfa"], config.chain_settings(), config.base_condition())
     write_snr_tables(out, metrics)
+    write_detail_tables(out, tasks, details)  # mtf.csv, patches.csv, steps.csv: the curves behind the values
     with atomic_output(out / "ranges.json") as tmp:
         tmp.write_text(json.dumps({**{k: _range_pair(v) for k, v in ranges.items()},
                                    "_policy": config.range_policy, "_constant": constant}, indent=1))

@@ -259,7 +259,9 @@ def _capture_columns(raw) -> dict:
     st = raw.settings or {}
     return {"exposure_s": float(raw.exposure_s), "analog_gain": float(st.get("analog_gain") or 1.0),
             "digital_gain": float(st.get("digital_gain") or 1.0),
-            "clipped_fraction": raw.meta.get("clipped_fraction", raw.meta.get("saturated_fraction"))}
+            "clipped_fraction": raw.meta.get("clipped_fraction", raw.meta.get("saturated_fraction")),
+            "scene_illuminance_lux": raw.meta.get("scene_illuminance_lux"),
+            "sensor_exposure_lux_s": raw.meta.get("sensor_exposure_lux_s")}
 
 
 def _grey_electrons(raw, grey: float = 0.18) -> dict:
@@ -275,6 +277,7 @@ def _details_extra(ev, raw, seed) -> dict:
         "mean_match_scale": ev.mean_match_scale, "condition_number": isp_meta.get("condition_number"),
         "noise_gain_xyz": isp_meta.get("noise_gain_xyz"), "fit_rank": isp_meta.get("fit_rank"),
         "exposure_s": float(raw.exposure_s), "saturated_fraction": raw.meta.get("saturated_fraction"), "seed": seed,
+        "saturation_rel": raw.meta.get("saturation_rel"),  # the top of the gray steps' dynamic range (steps.py)
     }
 
 
