@@ -51,6 +51,9 @@ def _figure_functions(res: Results, thumbnails: bool):
             return fsw.axis_sweep(r, axis)
         by_axis.__name__ = f"axis_sweep[{axis}]"
         yield by_axis
+    from .crops import crop_sheets
+
+    yield crop_sheets
     if thumbnails and res.primary_luminance is not None:
         for scene in res.scenes:
             def sheet(r, scene=scene):
@@ -179,7 +182,7 @@ def _check_workers(workers) -> int:
 
 
 def _section_of(name: str) -> str:
-    for key, sec in (("radar", "scores"), ("heatmap", "scores"), ("rank", "scores"), ("patch", "colour"), ("scielab", "scielab"),
+    for key, sec in (("crop", "crops"), ("radar", "scores"), ("heatmap", "scores"), ("rank", "scores"), ("patch", "colour"), ("scielab", "scielab"),
                      ("mtf", "mtf"), ("moire", "moire"), ("gray", "achromatic"), ("sweep", "sweep"),
                      ("thumb", "outputs"), ("sensor", "sensor")):
         if key in name:
@@ -197,7 +200,7 @@ def _encode(fig: ReportFigure, formats) -> tuple[dict, tuple[bytes, str]]:
     if fig.image is not None:
         png = _png_of(fig.image)
         files = {"png": png} if formats else {}
-        if len(png) > _MAX_EMBED_PNG:
+        if len(png) > _MAX_EMBED_PNG and not fig.lossless:
             return files, (_jpeg(fig.image), _MIME["jpeg"])
         return files, (png, _MIME["png"])
     files = {fmt: figure_bytes(fig.figure, fmt) for fmt in formats}
