@@ -101,7 +101,7 @@ def run_design(config, out_dir, *, workers=None, scheduler=None, progress=True, 
         f"{' '.join(config.alphabet)} ({config.spectra_set}"
         + (f"; {config.spectra.family} spectra for {' '.join(config.spectra.letters)}" if config.spectra else "")
         + f"); {len(config.objectives)} objective(s), {len(config.constraints)} constraint(s)")
-    res = run_search(config, out, log=log)
+    res = run_search(config, out, log=log, progress=progress)
     cands = res.candidates
     timing["search_s"] = time.perf_counter() - t0
     log(f"proxy: {len(cands):,} candidates ({res.evaluated:,} evaluated now, {res.reused:,} taken from saved state) "

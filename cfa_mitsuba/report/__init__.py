@@ -19,10 +19,11 @@ from .build import FIGURE_FORMATS, build_report, report_workers  # noqa: F401
 from .results import Results, load_results  # noqa: F401
 
 
-def _study_report(out_dir, output: dict, timing: dict, workers):
+def _study_report(out_dir, output: dict, timing: dict, workers, progress: bool = False):
     """The report of ``cm.study.run`` (study/api.py), as ``cfa-mitsuba study`` builds it."""
     return build_report(out_dir, formats=output.get("figures", ("png", "svg")),
-                        thumbnails=output.get("thumbnails", True), timing=timing, workers=report_workers(workers))
+                        thumbnails=output.get("thumbnails", True), timing=timing, workers=report_workers(workers),
+                        progress=progress)
 
 
 def _register() -> None:

@@ -112,19 +112,27 @@ def _worker_draw(job: tuple) -> tuple:
         return _draw_one(res, fn, formats)
 
 
-def _draw(res: Results, thumbnails: bool, formats, workers: int, timing: dict | None, log) -> tuple:
+def _draw(res: Results, thumbnails: bool, formats, workers: int, timing: dict | None, log,
+          progress: bool = False) -> tuple:
     """(figures, absents, files, embeds) of every figure function, in their
     order; drawn and encoded in ``workers`` processes when more than one
     (each loads the results once and takes the next figure function as it
     comes free; drawing and encoding are single-threaded matplotlib and
     Pillow work, and they are most of a large report's time)."""
+    from ..io.progress import progress_bar
+
     fns = list(_figure_functions(res, thumbnails))
     parts: dict = {}
-    if workers > 1 and len(fns) > 1:
-        parts = _draw_in_processes(res, len(fns), thumbnails, formats, min(workers, len(fns)), timing, log)
-    for i, fn in enumerate(fns):  # sequentially: everything, or what the processes did not return
-        if i not in parts:
-            parts[i] = _draw_one(res, fn, formats)
+    bar = progress_bar(len(fns), "report", enabled=progress, unit="figure")
+    try:
+        if workers > 1 and len(fns) > 1:
+            parts = _draw_in_processes(res, len(fns), thumbnails, formats, min(workers, len(fns)), timing, log, bar)
+        for i, fn in enumerate(fns):  # sequentially: everything, or what the processes did not return
+            if i not in parts:
+                parts[i] = _draw_one(res, fn, formats)
+                bar.update(1)
+    finally:
+        bar.close()
     figures, absents, files, embeds = [], [], {}, {}
     for i in range(len(fns)):
         f, a, fl, e, lines = parts[i]
@@ -139,7 +147,7 @@ def _draw(res: Results, thumbnails: bool, formats, workers: int, timing: dict | 
     return figures, absents, files, embeds
 
 
-def _draw_in_processes(res: Results, n: int, thumbnails: bool, formats, workers: int, timing, log) -> dict:
+def _draw_in_processes(res: Results, n: int, thumbnails: bool, formats, workers: int, timing, log, bar) -> dict:
     """{figure function index: :func:`_draw_one`'s result} from ``workers``
     processes (the study's local executor: spawned, their thread budget
     set, ended with this process); whatever they could not return (a
@@ -153,6 +161,7 @@ def _draw_in_processes(res: Results, n: int, thumbnails: bool, formats, workers:
         with LocalExecutor(workers) as pool:
             for job, got in pool.map_unordered(_worker_draw, jobs):
                 parts[job[0]] = got
+                bar.update(1)
     except Exception as exc:  # noqa: BLE001 - a lost process costs time, never the report
         log(f"  report worker processes failed ({type(exc).__name__}: {exc}); drawing the rest here")
     return parts
@@ -305,7 +314,7 @@ def _facts(res: Results) -> dict:
 
 
 def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, timing: dict | None = None,
-                 log=None, workers: int = 1) -> Path:
+                 log=None, workers: int = 1, progress: bool = False) -> Path:
     """Build ``out_dir/report.html`` and ``out_dir/figures/*`` from a study's
     results directory (see :mod:`cfa_mitsuba.report`).
 
@@ -324,6 +333,7 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
     workers : processes that draw and encode the figures (default 1: this
         one; more: spawned processes, each loading the results once; the
         files and the page are the same bytes either way).
+    progress : a bar on a terminal, one step per figure function.
 
     Returns
     -------
@@ -351,7 +361,7 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
     fig_dir = root / "figures"
     with matplotlib.rc_context(RC):
         t = time.perf_counter()
-        figures, absents, files, embeds = _draw(res, thumbnails, formats, workers, timing, log)
+        figures, absents, files, embeds = _draw(res, thumbnails, formats, workers, timing, log, progress)
         log(f"  figures drawn and encoded in {time.perf_counter() - t:.2f} s ({workers} process(es))")
     from . import page, tables
     from .low_light import low_light_tables

@@ -29,8 +29,8 @@ from pathlib import Path
 
 from ..errors import CfaMitsubaError
 
-#: The report's builder, ``f(out_dir, output_config, timing, workers) ->
-#: Path``, registered by the report package (module doc).
+#: The report's builder, ``f(out_dir, output_config, timing, workers,
+#: progress) -> Path``, registered by the report package (module doc).
 _REPORT_BUILDER: list = []
 
 #: Tables read into :class:`Results`: attribute -> file (None when the study wrote none).
@@ -155,7 +155,8 @@ def run(config_or_path, out=None, *, workers: int | None = None, scheduler: str 
             raise CfaMitsubaError("the report stage is not loaded: import cfa_mitsuba.report first (cm.study does), "
                                   "or run(..., report=False)")
         t = time.perf_counter()
-        _REPORT_BUILDER[0](result.out_dir, dict(config.output), result.timing, workers or config.workers)
+        _REPORT_BUILDER[0](result.out_dir, dict(config.output), result.timing, workers or config.workers,
+                           progress and not quiet)
         phases = result.timing["phases"]
         phases["report_s"] = time.perf_counter() - t
         phases["total_s"] += phases["report_s"]

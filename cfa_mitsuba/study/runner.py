@@ -162,10 +162,9 @@ def _task_id(task) -> str:
 
 
 def _progress(total: int, desc: str, enabled: bool):
-    from tqdm import tqdm
+    from ..io.progress import progress_bar  # on a terminal only (issue 50)
 
-    return tqdm(total=total, desc=desc, unit="task", file=sys.stderr, disable=not enabled, dynamic_ncols=True,
-                smoothing=0.1)
+    return progress_bar(total, desc, enabled=enabled, unit="task")
 
 
 def _render_label(src: dict) -> str:
@@ -247,7 +246,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     log = log or (lambda msg: print(msg, file=sys.stderr))
     # issue 27: the study's size stated and checked before anything is written
     workers = None if scheduler else resolve_workers(workers, config.workers, log)
-    check_study_size(config, workers, scheduler=scheduler, force=force, log=log)
+    size = check_study_size(config, workers, scheduler=scheduler, force=force, log=log)
     out = check_writable_dir(out_dir)
     work = out / ".work"
     details = out / "details"
@@ -275,7 +274,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
                                       indent=1, default=str))
         write_sensor_curves(config, out)  # the compared sensors' QE curves, for the report
         log(f"study {config.name!r}: {len(config.scenes)} scene(s), {len(config.cfas)} CFA(s), "
-            f"{len(config.demosaics)} demosaic(s); {len(tasks)} evaluation task(s)"
+            f"{len(config.demosaics)} demosaic(s); {len(tasks)} evaluation task(s)" + _counted_twice(size, tasks)
             + (f", {reused} already done" if reused else "") + f"; running on {executor.description}")
         t = time.perf_counter()
 
@@ -339,6 +338,17 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     result = StudyResult(out, metrics, scores, timing, len(tasks), reused)
     write_timing(result)
     return result
+
+
+def _counted_twice(size, tasks: list) -> str:
+    """Why the size line's task count (an upper bound, study/sizing.py) can
+    exceed the plan's: a condition that two tables of the config reach (the
+    base luminances and a sweep's) runs once."""
+    extra = int(getattr(size, "tasks", len(tasks))) - len(tasks)
+    if extra <= 0:
+        return ""
+    return (f" (the size line's {size.tasks:,} counts {extra:,} twice: conditions that the base luminances and "
+            "a sweep both reach run once)")
 
 
 def write_timing(result: StudyResult) -> None:
