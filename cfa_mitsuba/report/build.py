@@ -37,12 +37,17 @@ def _figure_functions(res: Results, thumbnails: bool):
         yield fs.radar_per_cfa
     yield fr.rank_chart
     yield tiles.tiles_by_family
+    from .noise_steps import noise_figures
+    from .patch_errors import patch_error_sheet
+
+    yield patch_error_sheet
     yield fd.patch_ab
     yield fd.patch_xy
     yield fd.scielab_maps
     yield fd.mtf_curves
     yield fd.moire_curves
     yield fd.gray_bar_profiles
+    yield noise_figures
     yield fs.luminance_sweep
     yield low_light.snr_figure
     yield fsen.sensor_curves
@@ -191,7 +196,7 @@ def _check_workers(workers) -> int:
 
 
 def _section_of(name: str) -> str:
-    for key, sec in (("crop", "crops"), ("radar", "scores"), ("heatmap", "scores"), ("rank", "scores"), ("patch", "colour"), ("scielab", "scielab"),
+    for key, sec in (("crop", "crops"), ("noise", "noise"), ("radar", "scores"), ("heatmap", "scores"), ("rank", "scores"), ("patch", "colour"), ("scielab", "scielab"),
                      ("mtf", "mtf"), ("moire", "moire"), ("gray", "achromatic"), ("sweep", "sweep"),
                      ("thumb", "outputs"), ("sensor", "sensor")):
         if key in name:

@@ -32,6 +32,8 @@ SECTIONS = (
      "False colour on a black-and-white chirp and the frequency where it starts."),
     ("achromatic", "Achromatic reproduction: gray bar", "Fig 14",
      "Lightness along the gray bar and its error per step."),
+    ("noise", "Noise per gray step and dynamic range", "ISO 15739",
+     "The luminance SNR on each step of the gray bar, and the dynamic range read from it."),
     ("sweep", "Low light: metrics against luminance", "s. 3: S-CIELAB, SSIM at 3-400 cd/m²",
      "How the image metrics degrade as the scene gets darker."),
     ("crops", "Crops: 1:1 and 4:1", "issue 50",
@@ -265,9 +267,14 @@ def _conventions(res: Results) -> str:
         "<b>Colours</b>: each CFA keeps one colour and marker in every figure (Paul Tol's colour-blind-safe "
         "schemes; markers and line styles tell CFAs apart where colours are close).",
         "<b>Files</b>: every figure is also in <code>figures/</code> next to this report (PNG and SVG); the "
-        "numbers are in <code>metrics.csv</code> and <code>scores.csv</code>, the curves and patch tables in "
-        "<code>details/</code>. Rebuild with <code>cfa-mitsuba report RESULTS_DIR</code>.",
+        "numbers are in <code>metrics.csv</code> and <code>scores.csv</code>, each edge's MTF curve in "
+        "<code>mtf.csv</code>, each patch's error in <code>patches.csv</code>, each gray step's SNR in "
+        "<code>steps.csv</code>, the rest of the curves, maps and crops in <code>details/</code>. Rebuild with "
+        "<code>cfa-mitsuba report RESULTS_DIR</code>.",
     ]
+    from .field_units import unit_items
+
+    items[4:4] = unit_items(res)  # after MTF50 and MSP
     return '<ul class="tight">' + "".join(f"<li>{i}</li>" for i in items) + "</ul>"
 
 
