@@ -39,12 +39,14 @@ report = false
 """
 
 
-def _cmd(config: Path, out: Path, *extra) -> list[str]:
-    return [sys.executable, "-m", "cfa_mitsuba", "study", str(config), "--out", str(out), "--quiet", *map(str, extra)]
+def _cmd(config: Path, out: Path, *extra, quiet: bool = True) -> list[str]:
+    return [sys.executable, "-m", "cfa_mitsuba", "study", str(config), "--out", str(out), *(["--quiet"] if quiet else []),
+            *map(str, extra)]
 
 
-def _study(config: Path, out: Path, *extra, **kw) -> subprocess.CompletedProcess:
-    return subprocess.run(_cmd(config, out, *extra), cwd=REPO, capture_output=True, text=True, **kw)
+def _study(config: Path, out: Path, *extra, quiet: bool = True, **kw) -> subprocess.CompletedProcess:
+    """The study command (``quiet``: --quiet, which prints the result path alone)."""
+    return subprocess.run(_cmd(config, out, *extra, quiet=quiet), cwd=REPO, capture_output=True, text=True, **kw)
 
 
 @pytest.fixture(scope="module")
@@ -120,7 +122,7 @@ def test_a_stopped_study_leaves_no_process_and_resumes(small, tmp_path, sig):
     assert proc.returncode == -sig
     assert not (out / "metrics.csv").exists()
     finished = len(list((out / ".work").glob("*.json")))
-    again = _study(config, out, "--workers", 2)
+    again = _study(config, out, "--workers", 2, quiet=False)  # its log says what was reused
     assert again.returncode == 0, again.stderr
     m = re.search(r"(\d+) task\(s\) run, (\d+) reused", again.stderr)
     assert m and int(m.group(2)) == finished and int(m.group(1)) == 6 - finished, again.stderr

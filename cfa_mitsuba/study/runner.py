@@ -389,9 +389,13 @@ def _write_failures(out: Path, failures: list[dict], log) -> None:
 
     with atomic_output(target) as tmp:
         pd.DataFrame(failures).to_csv(tmp, index=False)
-    log(f"warning: {len(failures)} metric value(s) could not be measured; see {target}")
+    # a warning, not progress: on stderr even under --quiet (the log may be silent)
+    def warn(msg):
+        print(msg, file=sys.stderr)
+
+    warn(f"warning: {len(failures)} metric value(s) could not be measured; see {target}")
     for f in failures[:5]:
-        log(f"  {f['scene']}/{f['cfa']}/{f['demosaic']}/L{float(f.get('luminance', 0)):g} {f['metric']}: {f['error']}")
+        warn(f"  {f['scene']}/{f['cfa']}/{f['demosaic']}/L{float(f.get('luminance', 0)):g} {f['metric']}: {f['error']}")
 
 
 def _range_pair(r) -> list[float]:
