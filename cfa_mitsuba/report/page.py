@@ -36,7 +36,7 @@ SECTIONS = (
      "The luminance SNR on each step of the gray bar, and the dynamic range read from it."),
     ("sweep", "Low light: metrics against luminance", "s. 3: S-CIELAB, SSIM at 3-400 cd/m²",
      "How the image metrics degrade as the scene gets darker."),
-    ("crops", "Crops: 1:1 and 4:1", "issue 50",
+    ("crops", "Crops: 1:1 and 4:1", "beyond the paper",
      "The same pixels of the chirp, the slanted edge and the puppy from every CFA and demosaicing method, at the "
      "sensor's pixels and magnified by nearest neighbour: where demosaicing artefacts can be judged."),
     ("outputs", "Camera outputs", "Figs 10, 12, 14 (images)",
