@@ -111,8 +111,8 @@ def dynamic_range_figure(res: Results, t):
     top = ax.secondary_xaxis("top", functions=(lambda db: db / (20 * math.log10(2)),
                                                lambda ev: ev * 20 * math.log10(2)))
     top.set_xlabel("stops (EV)")
-    ax.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 1.3), ncol=min(len(handles), 4), fontsize=7,
-              frameon=False)
+    fig.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, 0.995), ncol=min(len(handles), 4),
+               fontsize=7, frameon=False)
     n_ext = int(per["snr1_extrapolated"].astype(str).str.lower().isin(("true", "1")).sum())
     lum = float(t["luminance"].iloc[0])
     cap = (f"ISO 15739's dynamic range of each camera at {lum:g} cd/m² (its exposure program's time and gain there): "
