@@ -28,9 +28,9 @@ def _steps(res: Results):
             return None, Absent("noise", _TITLE_SNR, "the gray bar's SNR (ysnr)", not_in_study=True)
         return None, Absent("noise", _TITLE_SNR, "steps.csv is absent (results written before the study kept "
                             "each gray step's SNR): rerun the study to write it")
-    t = t[np.isclose(t["luminance"].astype(float), lum)]
-    if not len(t):
-        return None, Absent("noise", _TITLE_SNR, f"steps.csv has no rows at {lum:g} cd/m²")
+    t = t[np.isclose(t["luminance"].astype(float), lum) & t["cfa"].isin(res.cfas) & t["demosaic"].isin(res.demosaics)]
+    if not len(t):  # (a results directory whose metrics.csv was cut to fewer CFAs keeps only theirs)
+        return None, Absent("noise", _TITLE_SNR, f"steps.csv has no rows at {lum:g} cd/m² for these CFAs")
     return t[t["condition"] == t["condition"].iloc[0]], None
 
 

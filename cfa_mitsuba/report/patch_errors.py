@@ -81,7 +81,7 @@ def patch_error_sheet(res: Results):
             return Absent("colour", title, "the ColorChecker (macbeth)", not_in_study=True)
         return Absent("colour", title, "patches.csv is absent (results written before the study kept each "
                       "patch's error): rerun the study to write it")
-    t = t[np.isclose(t["luminance"].astype(float), lum)]
+    t = t[np.isclose(t["luminance"].astype(float), lum) & t["cfa"].isin(res.cfas) & t["demosaic"].isin(res.demosaics)]
     t = t[t["condition"] == t["condition"].iloc[0]] if len(t) else t
     if not len(t):
         return Absent("colour", title, f"patches.csv has no rows at {lum:g} cd/m²")
