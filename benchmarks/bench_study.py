@@ -58,6 +58,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
+from cfa_mitsuba.io.portable import relative_command  # noqa: E402
 from cfa_mitsuba.study.chain import NO_MEMO_ENV  # noqa: E402
 from cfa_mitsuba.study.executors import _cpu_count  # noqa: E402
 
@@ -216,7 +217,9 @@ def phases_main(args) -> int:
         record["against"] = names[1]
         record["ratio"] = {k: runs[names[1]][m][k] / runs[names[0]][m][k] for k in runs[names[0]][m]
                            if runs[names[0]][m][k] > 0}
-    record["command"] = "python3 benchmarks/bench_study.py " + " ".join(sys.argv[1:])
+    # paths in the record relative to the folder it is written to (io/portable.py)
+    record["command"] = "python3 benchmarks/bench_study.py " + relative_command(
+        sys.argv[1:], Path(args.json).parent if args.json else Path.cwd())
     record["all_evaluate_s"] = all_evaluate
     print(json.dumps(record))
     if args.json:

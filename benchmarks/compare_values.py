@@ -30,6 +30,9 @@ import json
 import sys
 
 import pandas as pd
+from pathlib import Path
+
+from cfa_mitsuba.io.portable import relative_command, relative_path
 
 KEYS = ["scene", "cfa", "demosaic", "luminance", "metric"]
 
@@ -112,9 +115,11 @@ def main(argv=None) -> int:
         whole["within_tolerance"] = all(v["within_tolerance"] for v in per_metric.values())
     if args.json:
         with open(args.json, "w") as f:
-            json.dump({"new": args.new, "old": args.old, "all": whole,
+            base = Path(args.json).resolve().parent  # paths relative to the record's folder (io/portable.py)
+            json.dump({"new": relative_path(args.new, base), "old": relative_path(args.old, base), "all": whole,
                        "per_metric": per_metric,
-                       "command": "python3 benchmarks/compare_values.py " + " ".join(sys.argv[1:] if argv is None else argv)},
+                       "command": "python3 benchmarks/compare_values.py "
+                       + relative_command(sys.argv[1:] if argv is None else argv, base)},
                       f, indent=1)
     print(f"{'all':<18}{len(both):>6}{both['abs'].max():>13.3g}{both['rel'].max():>13.3g}"
           + (f"{both['frac'].max():>13.3g}" if args.expected else ""))

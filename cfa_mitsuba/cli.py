@@ -31,6 +31,7 @@ COMMANDS = (
     "report",
     "convergence",
     "design",
+    "league",
     "sensor",
     "parity",
 )

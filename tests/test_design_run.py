@@ -117,7 +117,7 @@ def test_the_emitted_tomls_reproduce_the_values_in_cfa_mitsuba_study(brute, tmp_
     pareto = pd.read_csv(d / "out" / "pareto.csv")
     row = pareto.iloc[0]
     study = textwrap.dedent(STUDY).replace("[study]\n", "").replace("[study.", "[")
-    study = study.replace('cfas = ["bayer", "rgb2"]', f'cfas = [{json.dumps(row["toml"])}]')
+    study = study.replace('cfas = ["bayer", "rgb2"]', f'cfas = [{json.dumps(str((d / "out" / row["toml"]).resolve()))}]')
     cfg = tmp_path / "s.toml"
     cfg.write_text('name = "repro"\nseed = 3\nluminances = [100]\n' + study)
     proc = run_cli("study", cfg, "--out", tmp_path / "s", "--quiet", "--no-report", "--workers", "1")
@@ -128,6 +128,18 @@ def test_the_emitted_tomls_reproduce_the_values_in_cfa_mitsuba_study(brute, tmp_
         got = m[(m["metric"] == metric) & (m["scene"] == scene)].iloc[0]
         assert row[f"{label} low"] - 1e-9 <= got["value"] <= row[f"{label} high"] + 1e-9, (label, got["value"])
         assert got["value"] == pytest.approx(row[label], rel=1e-7)  # same TOML path: the same noise seeds (csv: 8 digits)
+
+
+def test_results_record_paths_relative_to_their_output_folder(brute):
+    from cfa_mitsuba.io.portable import ABSOLUTE_PATH
+
+    d, _ = brute
+    out = d / "out"
+    for name in ("fullchain.csv", "pareto.csv", "candidates.csv", "agreement.json", "study/config.json"):
+        text = (out / name).read_text()
+        assert not ABSOLUTE_PATH.search(text), (name, ABSOLUTE_PATH.search(text).group(0))
+    for toml in pd.read_csv(out / "fullchain.csv")["toml"].dropna():
+        assert (out / toml).is_file(), toml
 
 
 def test_a_rerun_evaluates_nothing_again(brute):

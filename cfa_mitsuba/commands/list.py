@@ -1,10 +1,11 @@
-"""``cfa-mitsuba list scenes|cfas|spectra|sensors|demosaics|metrics``."""
+"""``cfa-mitsuba list scenes|cfas|spectra|sensors|demosaics|denoise|sharpen|metrics``."""
 
 from __future__ import annotations
 
-HELP = "list the built-in scenes, CFAs, spectra sets, sensor presets, demosaicing methods or metrics"
+HELP = ("list the built-in scenes, CFAs, spectra sets, sensor presets, demosaicing methods, denoisers and "
+        "sharpeners (denoise), sharpeners alone (sharpen) or metrics")
 
-KINDS = ("scenes", "cfas", "spectra", "sensors", "demosaics", "metrics")
+KINDS = ("scenes", "cfas", "spectra", "sensors", "demosaics", "denoise", "sharpen", "metrics")
 
 
 def add_arguments(parser) -> None:
@@ -71,6 +72,13 @@ def _rows(kind: str) -> list[tuple[str, str]]:
                     text += " (read them with readout remosaic or bin: a Bayer mosaic)"
             rows.append((name, text))
         return rows
+    if kind in ("denoise", "sharpen"):
+        from ..isp import list_denoisers, list_sharpeners
+
+        # 'denoise' lists both ISP stages, each row naming its stage; 'sharpen' the sharpeners alone
+        sharp = [(n, f"sharpen: {d}") for n, d in list_sharpeners()]
+        return sharp if kind == "sharpen" else [(n, f"denoise: {d}") for n, d in list_denoisers()] + [
+            (n, d) for n, d in sharp if n != "none"]
     from ..metrics import list_metrics
 
     return list_metrics()

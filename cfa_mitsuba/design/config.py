@@ -22,7 +22,7 @@ A config has five parts (docs/design.md lists every key):
 from __future__ import annotations
 
 __all__ = ["DesignConfig", "Objective", "SpectraSpec", "load_design", "parse_design", "PROXIES_OF",
-           "MAX_EXHAUSTIVE", "ENGINES", "FAMILIES", "SNR10", "SNR10_SWEEP", "SNR10_BASES", "BEST", "ORIENTATIONS",
+           "MAX_EXHAUSTIVE", "ENGINES", "FAMILIES", "METHODS", "SNR10", "SNR10_SWEEP", "SNR10_BASES", "BEST", "ORIENTATIONS",
            "EDGE_METRICS"]
 
 import dataclasses
@@ -61,7 +61,10 @@ ENGINES = ("auto", "exhaustive", "nsga2")
 ORIENTATIONS = ("vertical", "both")
 #: The metrics measured across the slanted edge, which ``orientation`` applies to.
 EDGE_METRICS = ("mtf", "info-capacity")
-FAMILIES = ("bandpass", "mixture")
+FAMILIES = ("bandpass", "mixture", "spline")
+#: ``[design] method``: layouts (and parametric spectra) by the proxy's
+#: search, or the spectra of one fixed layout by gradient (design/gradient_search.py).
+METHODS = ("search", "gradient")
 
 
 @dataclass(frozen=True)
@@ -129,8 +132,9 @@ class SpectraSpec:
     centre_nm: tuple[float, float] = (400.0, 700.0)
     width_nm: tuple[float, float] = (30.0, 200.0)
     peak: tuple[float, float] = (0.2, 1.0)
-    basis: str = ""
+    basis: object = ""      # mixture: a spectra set's name, or a tuple of names (a dye library)
     weight: tuple[float, float] = (0.0, 1.0)
+    knots: int = 12         # spline: cubic B-spline functions per letter
 
 
 @dataclass(frozen=True)
@@ -154,6 +158,8 @@ class DesignConfig:
     constraints: tuple[Objective, ...]
     study: object            # a StudyConfig; its cfas are the named CFAs compared with
     workers: int | None
+    method: str = "search"   # [design] method (METHODS)
+    gradient: object = None  # method = "gradient": its GradientSpec (design/gradient_search.py)
 
 
 def _tiles(ck: _Checker, value) -> tuple:
@@ -231,7 +237,7 @@ def _spectra(ck: _Checker, data, alphabet, sset) -> SpectraSpec | None:
                                        f"(it has {', '.join(sset.letters)}); give it under [spectra]")
         return None
     ck.table(data, "spectra", {"family": None, "letters": None, "centre_nm": None, "width_nm": None, "peak": None,
-                               "basis": None, "weight": None})
+                               "basis": None, "weight": None, "knots": None})
     family = ck.string(data.get("family", ""), "spectra.family", FAMILIES)
     letters = ck.string_list(data.get("letters", list(alphabet)), "spectra.letters")
     for i, a in enumerate(letters):
@@ -240,6 +246,16 @@ def _spectra(ck: _Checker, data, alphabet, sset) -> SpectraSpec | None:
     fixed = [a for a in alphabet if a not in letters and a not in sset.curves]
     if fixed:
         ck.fail("spectra.letters", f"letter {fixed[0]!r} has no curve in spectra set {sset.name!r}: make it free")
+    if family == "spline":
+        extra = [k for k in ("centre_nm", "width_nm", "peak", "basis", "weight") if k in data]
+        if extra:
+            ck.fail(f"spectra.{extra[0]}", "does not apply to family 'spline' (its curves are B-spline coefficients)")
+        knots = ck.integer(data.get("knots", 12), "spectra.knots", 4)
+        if knots > 60:
+            ck.fail("spectra.knots", f"at most 60 functions over 380-720 nm (got {knots})")
+        return SpectraSpec(family, letters, knots=knots)
+    if "knots" in data:
+        ck.fail("spectra.knots", "applies to family 'spline' only")
     if family == "bandpass":
         extra = [k for k in ("basis", "weight") if k in data]
         if extra:
@@ -250,7 +266,13 @@ def _spectra(ck: _Checker, data, alphabet, sset) -> SpectraSpec | None:
     extra = [k for k in ("centre_nm", "width_nm", "peak") if k in data]
     if extra:
         ck.fail(f"spectra.{extra[0]}", "applies to family 'bandpass' only")
-    basis = ck.string(data.get("basis", sset.name), "spectra.basis", tuple(list_spectra_sets()))
+    raw = data.get("basis", sset.name)
+    if isinstance(raw, list):  # a dye library: several spectra sets' curves
+        if not raw:
+            ck.fail("spectra.basis", "must name at least one spectra set")
+        basis = tuple(ck.string(b, f"spectra.basis[{i}]", tuple(list_spectra_sets())) for i, b in enumerate(raw))
+    else:
+        basis = ck.string(raw, "spectra.basis", tuple(list_spectra_sets()))
     weight = _pair(ck, data.get("weight", [0.0, 1.0]), "spectra.weight", 0.0, 10.0)
     if weight[1] <= 0:
         ck.fail("spectra.weight", "the largest weight must be positive")
@@ -333,7 +355,12 @@ def parse_design(data: dict, *, where: str = "design", base: Path | None = None)
     ck = _Checker(where)
     base = base or Path(".")
     ck.table(data, "", {"name": None, "description": None, "seed": None, "layout": None, "spectra": None,
-                        "search": None, "objective": None, "constraint": None, "study": None, "workers": None})
+                        "search": None, "objective": None, "constraint": None, "study": None, "workers": None,
+                        "design": None, "gradient": None})
+    design = ck.table(data.get("design", {}), "design", {"method": None})
+    method = ck.string(design.get("method", "search"), "design.method", METHODS)
+    if "gradient" in data and method != "gradient":
+        ck.fail("gradient", "applies to [design] method = \"gradient\" only")
     for required in ("layout", "objective", "study"):
         if required not in data:
             ck.fail(required, "missing (required)")
@@ -350,7 +377,7 @@ def parse_design(data: dict, *, where: str = "design", base: Path | None = None)
     engines = {}
     for h, w in tiles:
         raw = len(alphabet) ** (h * w)
-        fits = raw <= limit and spectra is None
+        fits = raw <= limit and spectra is None and method == "search"
         if engine == "exhaustive" and not fits:
             why = ("continuous spectra need the stochastic engine" if spectra is not None else
                    f"{h}x{w} tiles of {len(alphabet)} letters are {raw:.3g} raw layouts, above the exhaustive "
@@ -358,6 +385,8 @@ def parse_design(data: dict, *, where: str = "design", base: Path | None = None)
             ck.fail("search.engine", f"'exhaustive' cannot search this space: {why}; use engine = \"nsga2\" "
                                      "(or \"auto\")")
         engines[(h, w)] = "exhaustive" if (engine == "exhaustive" or (engine == "auto" and fits)) else "nsga2"
+        if method == "gradient":  # one fixed layout, its spectra by L-BFGS-B (design/gradient_search.py)
+            engines[(h, w)] = "gradient"
     population = ck.integer(search.get("population", 40), "search.population", 4)
     generations = ck.integer(search.get("generations", 20), "search.generations", 1)
     full_chain = ck.integer(search.get("full_chain", 6), "search.full_chain", 1)
@@ -407,11 +436,16 @@ def parse_design(data: dict, *, where: str = "design", base: Path | None = None)
     if len({o.label for o in objectives}) != len(objectives):
         ck.fail("objective", "lists the same objective twice")
     constraints = tuple(_objective(ck, o, f"constraint[{i}]", study, True) for i, o in enumerate(cons_in))
+    gradient = None
+    if method == "gradient":
+        from .gradient_search import parse_gradient
+
+        gradient = parse_gradient(ck, data.get("gradient"), tiles, alphabet, spectra, objectives)
     return DesignConfig(name=name, description=description, path=None, seed=seed, tiles=tiles, alphabet=alphabet,
                         spectra_set=set_name, density=density, mirrors=mirrors, spectra=spectra, engine=engines,
                         population=population, generations=generations, full_chain=full_chain,
                         agreement_sample=sample, objectives=objectives, constraints=constraints, study=study,
-                        workers=workers)
+                        workers=workers, method=method, gradient=gradient)
 
 
 def load_design(path) -> DesignConfig:

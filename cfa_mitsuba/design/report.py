@@ -175,7 +175,7 @@ def build_design_report(out: Path, config, cands, table, agree, named_proxies, s
         spec = next(c for c in config.study.cfas if get_cfa(c).name == best_named)
         show.append((f"best named: {best_named}", get_cfa(spec)))
     for _, r in pareto.head(4).iterrows():
-        show.append((r["cfa"], get_cfa(r["toml"])))
+        show.append((r["cfa"], get_cfa(str(Path(out) / r["toml"]))))  # recorded relative to the output folder
     for title, cfa in show:
         key = "card-" + "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in cfa.name)
         src = _save(out, key, F.card_figure(cfa, title))
@@ -189,6 +189,11 @@ def build_design_report(out: Path, config, cands, table, agree, named_proxies, s
                     f"<span class=note>{_e(cfa.tile_text())}</span><br>{vals}"
                     f"{_thumb(Path(study_dir), out, config, cfa.name)}</div>")
     agree_txt = _agreement_html(agree)
+    grad_txt = ""
+    if getattr(config, "method", "search") == "gradient":
+        from .gradient_report import gradient_html
+
+        grad_txt = gradient_html(config, cands, table, lambda key, fig: _save(out, key, fig))
     n_best = int((cands["chosen"] == "best").sum())
     page = f"""<!doctype html><html><head><meta charset=utf-8><title>design {_e(config.name)}</title>
 <style>{_CSS}</style></head><body>
@@ -203,6 +208,7 @@ alphabet {' '.join(config.alphabet)}, spectra {_e(config.spectra_set)}{'; ' + _e
 <p class=note>A CFA is dominated when another CFA's interval is wholly better on one objective and wholly worse
 on none; the front is the feasible candidates nobody dominates so.</p>
 {_values_table(table, objectives, constraints)}
+{grad_txt}
 <h2>Side by side: Bayer, the best named CFA, the best Pareto candidates</h2><div class=side>{''.join(side)}</div>
 <h2>The proxy</h2><img src='{figs['proxy']}' style='width:640px'>
 <h2>Proxy against full chain</h2>{agree_txt}<img src='{figs['agreement']}' style='width:460px'>

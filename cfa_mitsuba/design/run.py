@@ -49,9 +49,12 @@ def _bound(c, table_row, values) -> float:
     return float(values[c.bound][c.label][0]) if isinstance(c.bound, str) else float(c.bound)
 
 
-def _fullchain_table(config, search, values, names, named_proxies):
-    """fullchain.csv: one row per CFA run through the full chain."""
+def _fullchain_table(config, search, values, names, named_proxies, out):
+    """fullchain.csv: one row per CFA run through the full chain; a
+    candidate's ``toml`` relative to the output folder ``out``."""
     import pandas as pd
+
+    from ..io.portable import relative_path
 
     cands = search.set_index("key")
     rows = []
@@ -60,8 +63,9 @@ def _fullchain_table(config, search, values, names, named_proxies):
                      **{p: named_proxies[cfa].get(p) for p in PROXY_NAMES}, "proxy_score": np.nan})
     for key, (name, path) in names.items():
         c = cands.loc[key]
-        rows.append({"cfa": name, "kind": "candidate", "key": key, "toml": path, "tile_text": c["tile_text"],
-                     **{p: c[p] for p in PROXY_NAMES},
+        extra = {k: c[k] for k in ("gradient_colour", "gradient_noise") if k in c}  # the gradient method's
+        rows.append({"cfa": name, "kind": "candidate", "key": key, "toml": relative_path(path, out),
+                     "tile_text": c["tile_text"], **{p: c[p] for p in PROXY_NAMES}, **extra,
                      "proxy_score": c["proxy_score"], "proxy_rank": int(c["proxy_rank"]), "chosen": c["chosen"]})
     table = pd.DataFrame(rows)
     for o in (*config.objectives, *config.constraints):
@@ -101,18 +105,27 @@ def run_design(config, out_dir, *, workers=None, scheduler=None, progress=True, 
         f"{' '.join(config.alphabet)} ({config.spectra_set}"
         + (f"; {config.spectra.family} spectra for {' '.join(config.spectra.letters)}" if config.spectra else "")
         + f"); {len(config.objectives)} objective(s), {len(config.constraints)} constraint(s)")
-    res = run_search(config, out, log=log, progress=progress)
+    if config.method == "gradient":
+        from .gradient_search import gradient_selection, run_gradient
+
+        res = run_gradient(config, out, log=log)
+    else:
+        res = run_search(config, out, log=log, progress=progress)
     cands = res.candidates
     timing["search_s"] = time.perf_counter() - t0
     log(f"proxy: {len(cands):,} candidates ({res.evaluated:,} evaluated now, {res.reused:,} taken from saved state) "
         f"in {timing['search_s']:.1f} s")
 
-    cands["proxy_score"] = front.proxy_scores(cands, config.objectives)
+    selection = used_proxies(config)
+    if config.method == "gradient":  # the front of the gradient's own two objectives
+        cands["proxy_score"], selection = gradient_selection(cands)
+    else:
+        cands["proxy_score"] = front.proxy_scores(cands, config.objectives)
     order = np.argsort(cands["proxy_score"].to_numpy(), kind="stable")
     rank = np.empty(len(cands), int)
     rank[order] = np.arange(1, len(cands) + 1)
     cands["proxy_rank"] = rank
-    best, sample = front.select(cands, used_proxies(config), config.full_chain, config.agreement_sample, config.seed)
+    best, sample = front.select(cands, selection, config.full_chain, config.agreement_sample, config.seed)
     chosen = np.array([""] * len(cands), dtype=object)
     chosen[best], chosen[sample] = "best", "sample"
     cands["chosen"] = chosen
@@ -130,11 +143,16 @@ def run_design(config, out_dir, *, workers=None, scheduler=None, progress=True, 
     values, names, study = run_fullchain(config, picked, out, workers=workers, scheduler=scheduler,
                                          progress=progress, log=log)
     timing["fullchain_s"] = time.perf_counter() - t1
-    table = _fullchain_table(config, cands, values, names, named_proxies)
+    table = _fullchain_table(config, cands, values, names, named_proxies, out)
     table["dominated_by"] = front.pareto(table, config.objectives)
     table["pareto"] = (table["kind"] == "candidate") & table["feasible"] & (table["dominated_by"] == "")
     table["score"] = front.fullchain_scores(table, config.objectives)
-    agree = front.agreement(table, config.objectives)
+    if config.method == "gradient":  # predicted by what the gradient optimised
+        from .gradient_search import gradient_objectives
+
+        agree = front.agreement(table, gradient_objectives(config))
+    else:
+        agree = front.agreement(table, config.objectives)
     n_cand = int((table["kind"] == "candidate").sum())
     agree["fullchain_s_per_candidate"] = timing["fullchain_s"] / max(1, n_cand + len(config.study.cfas))
     _save_csv(out / "fullchain.csv", table)

@@ -32,6 +32,10 @@ NSGA2_S_PER_EVALUATION = 1 / 7238
 #: responses (issue 26: 28 ms measured for 4x4 tiles, 19 ms for 3x3, at a
 #: load average of 11 on 2 cores; an upper bound on an idle machine).
 IMPULSE_S_PER_CANDIDATE = 0.028
+#: Seconds per L-BFGS-B iteration of the gradient method (about 1.3 evaluations
+#: of the differentiable proxy and its gradient, 3 channels; measured on this
+#: 2-core machine, loaded).
+GRADIENT_S_PER_ITERATION = 0.03
 #: Bytes per NSGA-II population member (1.7 kB per individual x 3 populations).
 NSGA2_BYTES_PER_INDIVIDUAL = 3 * 1700
 _FIXED_BYTES = 400 * 2**20
@@ -41,6 +45,11 @@ def design_size(config) -> tuple[int, float, int, str]:
     """(candidates, estimated search seconds, peak bytes, per-tile text)."""
     from .search import proxy_settings
 
+    if config.method == "gradient":  # weights x starts L-BFGS-B runs of at most max_iter iterations
+        g = config.gradient
+        n = len(g.weights) * g.starts * g.max_iter
+        return (n, n * GRADIENT_S_PER_ITERATION, _FIXED_BYTES,
+                f"gradient: {len(g.weights)} weights x {g.starts} starts x at most {g.max_iter} L-BFGS-B iterations")
     per_candidate = IMPULSE_S_PER_CANDIDATE * len(proxy_settings(config).demosaics)
     candidates, seconds, peak, parts = 0, 0.0, _FIXED_BYTES, []
     for h, w in config.tiles:

@@ -3,7 +3,9 @@
 ``cm.isp.demosaic(raw, cfa, method)`` demosaics a white-balanced mosaic of
 any periodic CFA with one of the registered methods (``list_demosaics()``;
 add one with ``register_demosaic``); ``cm.isp.process(raw_image, method)``
-runs the whole processor, RawImage -> RenderedImage.  docs/isp.md has the
+runs the whole processor, RawImage -> RenderedImage, with optional noise
+reduction (``denoise=``, ``list_denoisers()``) and sharpening
+(``sharpen=``, ``list_sharpeners()``).  docs/isp.md has the
 definitions, the generalisations and the measured numbers.
 """
 
@@ -21,5 +23,9 @@ from .colour_matrix import (  # noqa: F401
 from .pipeline import (PREPARE_KEYWORDS, WHITE_BALANCE_MODES, PreparedRaw, prepare, process,  # noqa: F401
                        process_prepared)
 from .synthetic import channels_from_rgb, mosaic_image  # noqa: F401
+from .denoise import (DenoiseMethod, denoise_channels, denoise_mosaic, get_denoiser, list_denoisers,  # noqa: F401
+                      register_denoiser)
+from .noise_profile import NoiseProfile, noise_profile  # noqa: F401
+from .sharpen import SharpenMethod, get_sharpener, list_sharpeners, register_sharpener, sharpen_image  # noqa: F401
 
 collect_demosaics(__name__)  # each method module declares DEMOSAICS

@@ -25,7 +25,10 @@ from .colour_matrix import (channel_noise, colour_fit_reflectances, fit_colour_m
                      white_balance_gains, white_response, xyz_to_srgb)
 from .demosaic import check_mosaic, check_precision, demosaic as _demosaic, get_demosaic
 from .mosaic import geometry
+from .denoise import check_denoise_options, denoise_channels, denoise_mosaic
+from .noise_profile import NoiseProfile, noise_profile
 from .remosaic import channel_gain_divisors, readout_of, remosaic, upsample_blocks
+from .sharpen import get_sharpener, sharpen_image
 
 #: ``illuminant``: gains from the sensor's response to the scene's white
 #: (known illuminant); ``gray-world``: the image's channel means made equal.
@@ -153,7 +156,8 @@ def _check_white_signal(raw: RawImage, epr: np.ndarray, white: np.ndarray) -> No
 def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: str = "illuminant",
             white_preserving: bool = True, regularise: bool = True, clip_highlights: bool = True,
             colour_fit: str = "training", demosaic_precision: str = "double", gamut_check: bool = True,
-            **options) -> RenderedImage:
+            denoise: str = "none", denoise_options: dict | None = None, sharpen: str = "none",
+            sharpen_options: dict | None = None, **options) -> RenderedImage:
     """Process a raw capture into XYZ (absolute, cd/m^2) and display sRGB.
 
     Parameters
@@ -193,6 +197,17 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
         720 image on average, and 13 ms of a 25 ms 'bilinear' processing of
         the puppy at 3 cd/m^2, where noise puts many pixels past sRGB's
         triangle and each goes to the spectral-locus test).
+    denoise : a registered denoiser (``cfa-mitsuba list denoise``; default
+        'none'), run in the raw domain before demosaicing or the rgb domain
+        after it (``denoise_options={'domain': ...}``), its strength the
+        capture's predicted noise times the method's tuning constant
+        (:mod:`cfa_mitsuba.isp.denoise`).
+    denoise_options : the denoiser's options: ``domain`` ('raw' or 'rgb'),
+        ``scale`` (times its tuning constant, default 1) and its own.
+    sharpen : a registered sharpener (default 'none'; 'unsharp'), applied
+        to the XYZ image after the colour matrix
+        (:mod:`cfa_mitsuba.isp.sharpen`).
+    sharpen_options : its options (``radius``, ``amount`` for 'unsharp').
     **options : passed to the demosaicing method (e.g. ``iterations=``).
         Methods that take ``luminance_weights`` receive the channels'
         luminance weights under this illuminant unless given.
@@ -233,7 +248,8 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
     prepared = prepare(raw_image, white_balance=white_balance, white_preserving=white_preserving,
                        regularise=regularise, clip_highlights=clip_highlights, colour_fit=colour_fit)
     return process_prepared(prepared, demosaic, demosaic_precision=demosaic_precision, gamut_check=gamut_check,
-                            **options)
+                            denoise=denoise, denoise_options=denoise_options, sharpen=sharpen,
+                            sharpen_options=sharpen_options, **options)
 
 
 def _check_white_balance(white_balance) -> None:
@@ -354,12 +370,26 @@ def prepare(raw_image: RawImage, *, white_balance: str = "illuminant", white_pre
                        _saturated_fraction(raw_image), settings)
 
 
+def _profile(prepared: PreparedRaw) -> NoiseProfile:
+    """The noise profile of the prepared mosaic's channels (:mod:`.noise_profile`):
+    each channel's white-balance gain and analogue gain looked up by name, so
+    that a re-mosaicked capture's channels get their own."""
+    raw = prepared.raw_image
+    native = tuple(raw.channels)
+    gains = dict(zip(native, np.asarray(prepared.gains, dtype=np.float64)))
+    divisors = channel_gain_divisors(raw, native)
+    div = dict(zip(native, divisors)) if divisors is not None else {}
+    chans = prepared.cfa.channels
+    return noise_profile(raw, [gains[c] for c in chans], chans, [div.get(c, 1.0) for c in chans] if div else None)
+
+
 #: the keywords of :func:`process` that :func:`prepare` takes (the rest go to the demosaic)
 PREPARE_KEYWORDS = tuple(p for p in inspect.signature(prepare).parameters if p != "raw_image")
 
 
 def process_prepared(prepared: PreparedRaw, demosaic: str = "bilinear", *, demosaic_precision: str = "double",
-                     gamut_check: bool = True, **options) -> RenderedImage:
+                     gamut_check: bool = True, denoise: str = "none", denoise_options: dict | None = None,
+                     sharpen: str = "none", sharpen_options: dict | None = None, **options) -> RenderedImage:
     """:func:`process` from the demosaic on, for a capture made ready by
     :func:`prepare` (the same keywords and result as :func:`process`; the
     white balance, highlight clip and colour fit are the preparation's)."""
@@ -373,8 +403,17 @@ def process_prepared(prepared: PreparedRaw, demosaic: str = "bilinear", *, demos
     fn = get_demosaic(demosaic)
     if "luminance_weights" in inspect.signature(fn).parameters and "luminance_weights" not in options:
         options["luminance_weights"] = prepared.luminance_weights
-    channels = _demosaic(prepared.balanced, cfa, demosaic, precision=demosaic_precision, **options)
+    domain = check_denoise_options(denoise, denoise_options)[1]
+    get_sharpener(sharpen)
+    balanced, noise_record = prepared.balanced, None
+    if domain == "raw" and denoise != "none":
+        balanced, noise_record = denoise_mosaic(balanced, geometry(cfa).index, _profile(prepared), denoise,
+                                                denoise_options)
+    channels = _demosaic(balanced, cfa, demosaic, precision=demosaic_precision, **options)
+    if domain == "rgb" and denoise != "none":
+        channels, noise_record = denoise_channels(channels, _profile(prepared), denoise, denoise_options)
     xyz = fit.apply(channels)
+    xyz, sharpen_record = sharpen_image(xyz, sharpen, sharpen_options)
     readout = prepared.readout
     if readout.get("mode") == "bin":  # back on the full pixel grid (isp/remosaic.py)
         xyz = upsample_blocks(xyz, int(readout["block"]), readout["full_shape"])
@@ -400,6 +439,8 @@ def process_prepared(prepared: PreparedRaw, demosaic: str = "bilinear", *, demos
         "highlight_clipped_fraction": prepared.clipped,
         "colour_fit_noise": None if prepared.fit_noise is None else prepared.fit_noise.tolist(),
         "out_of_gamut_fraction": out_of_gamut,
+        "denoise": noise_record or {"method": "none"},
+        "sharpen": sharpen_record,
         **fit.as_meta(),
     }
     return _DisplayOnDemand(xyz=xyz, srgb=None, white_xyz=fit.white_xyz.copy(), meta=meta)

@@ -40,7 +40,9 @@ def scene_geometry(sidecar: dict, image_shape) -> dict:
     ``(y0, x0, y1, x1)`` patch interiors, for :func:`delta_e`), ``roi``
     (for :func:`mtf`), ``frequency_cy_per_deg`` and ``frequency_cy_per_px``
     (per image column, for :func:`moire`), ``row``, ``steps`` (gray-bar
-    ``(x0, x1)``, for :func:`achromatic`), ``samples_per_degree`` (image
+    ``(x0, x1)``, for :func:`achromatic`), ``texture_roi``, ``flat_roi``
+    and ``dead_leaves`` (the dead-leaves chart's square, flat patch and
+    pattern record, for the texture metrics), ``samples_per_degree`` (image
     width / horizontal field of view, for :func:`scielab`).
 
     Examples
@@ -77,6 +79,11 @@ def scene_geometry(sidecar: dict, image_shape) -> dict:
             out[key] = binned * (k if key == "frequency_cy_per_px" else 1)  # cycles per *image* pixel
     if "row" in geo:
         out["row"] = min(int(geo["row"]) // k, h - 1)
+    for key, name in (("texture_rect", "texture_roi"), ("flat_rect", "flat_roi")):  # the dead-leaves chart
+        if key in geo:
+            out[name] = _inward(geo[key], k)
+    if isinstance(geo.get("dead_leaves"), dict):
+        out["dead_leaves"] = geo["dead_leaves"]
     if "steps" in geo:
         out["steps"] = [(math.ceil(float(s["x0"]) / k), math.floor(float(s["x1"]) / k)) for s in geo["steps"]]
     fov = sidecar.get("fov_deg") or geo.get("fov_deg")

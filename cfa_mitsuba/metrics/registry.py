@@ -37,6 +37,8 @@ GEOMETRY_KEYWORDS = {
     "roi": "the edge's region of interest", "row": "the chart's measuring row", "steps": "the gray bar's steps",
     "frequency_cy_per_deg": "the chirp's frequency per column", "samples_per_degree": "the field of view (fov_deg)",
     "pixel_pitch_um": "the sensor's pixel pitch", "reference": "the ideal sensor's image",
+    "texture_roi": "the dead-leaves chart's texture square", "flat_roi": "the dead-leaves chart's flat patch",
+    "dead_leaves": "the dead-leaves chart's pattern record",
 }
 
 #: Of those, the ones a study may still set (ISETCam's S-CIELAB settings name

@@ -370,8 +370,11 @@ def _render_canonical(sc: Scene, cfg: RenderConfig, progress=None) -> SpectralIm
     stages = renders + (built.white_radiance is None)  # the render (or each band's); a 3D scene's white panels
     if progress is not None:
         progress(f"render ({cfg.width} x {cfg.height}, {cfg.spp} spp)", 0, stages)
-    bands, scene = _render_boxes(mi, built, cfg, sc, boxes, width=cfg.width, height=cfg.height, spp=cfg.spp,
-                                 step=None if progress is None else lambda t, i: progress(t, i, stages))
+    if built.radiance is not None:  # computed exactly by the builder (a flat chart seen directly)
+        bands, scene, achromatic = np.asarray(built.radiance, dtype=np.float64), None, False
+    else:
+        bands, scene = _render_boxes(mi, built, cfg, sc, boxes, width=cfg.width, height=cfg.height, spp=cfg.spp,
+                                     step=None if progress is None else lambda t, i: progress(t, i, stages))
     if achromatic:
         data = bands[..., :1].astype(np.float64) * np.asarray(built.pattern_spectrum)[None, None, :]
     else:
@@ -425,7 +428,8 @@ def _render_canonical(sc: Scene, cfg: RenderConfig, progress=None) -> SpectralIm
         "render_time_s": round(elapsed, 3),
         "cache_key": key,
         "kind": sc.kind,
-        "renderer": f"mitsuba {mi.__version__}",
+        "renderer": (f"mitsuba {mi.__version__}" if built.radiance is None
+                     else "exact cell means (no Mitsuba: a flat chart seen directly)"),
         **meta_extra,
         **built.meta,
     }

@@ -102,6 +102,11 @@ class Built:
     (a user's scene with participating media, :mod:`.media`); the engine
     then renders it band by band with a single-band ``specfilm``, in any
     variant.  None: the engine's usual route.
+
+    ``radiance``: (H, W, B) band-mean radiance, W/(m^2 sr nm), at the
+    canonical scale, computed exactly by the builder for a flat chart seen
+    directly that Mitsuba would only sample (the dead-leaves chart's 10^5
+    discs, :mod:`.dead_leaves`); the engine then renders nothing.
     """
 
     meta: dict[str, Any]
@@ -112,6 +117,7 @@ class Built:
     pattern_spectrum: np.ndarray | None = None
     white_radiance: np.ndarray | None = None
     stock_integrator: str | None = None
+    radiance: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

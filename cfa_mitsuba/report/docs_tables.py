@@ -171,6 +171,58 @@ def design_front(repo: Path, results: str) -> str:
             f"{', '.join(named['cfa'])}" + (f"; candidates dominated by {', '.join(beaten)}" if beaten else ""))
 
 
+def design_manufacturability(repo: Path, results: str) -> str:
+    """A gradient design's chosen candidates (candidates.csv ``chosen`` best)
+    as Markdown: per candidate its proxy values and, per free letter, the
+    curve's largest change per 10 nm, peak and nearest measured curve."""
+    import pandas as pd
+
+    c = pd.read_csv(repo / results / "candidates.csv", keep_default_na=False)
+    f = pd.read_csv(repo / results / "fullchain.csv", keep_default_na=False)
+    names = dict(zip(f["key"], f["cfa"]))
+    lines = ["| CFA | w | proxy ΔE00 | proxy noise | letter | curve | max change per 10 nm | peak | nearest measured "
+             "curve (spectral angle) | nearest set (mean angle) |", "|" + "---|" * 10]
+    for r in c[c["chosen"] == "best"].sort_values("proxy_rank").to_dict("records"):
+        for a, v in json.loads(r["manufacturability"]).items():
+            lines.append(f"| {names.get(r['key'], r['key'][:20])} | {r['weight']:g} | {r['gradient_colour']:.3f} | "
+                         f"{r['gradient_noise']:.3g} | {a} | {v['curve']} | {v['max_slope_per_10nm']:.2f} | "
+                         f"{v['peak']:.2f} | {v['nearest']} ({v['angle_deg']:.1f}°) | {r['nearest_set']} "
+                         f"({float(r['nearest_set_angle_deg']):.1f}°) |")
+    return "\n\n" + "\n".join(lines) + "\n\n"
+
+
+def league_table(repo: Path, results: str) -> str:
+    """A league's league.csv (design/league.py) as Markdown: each (CFA, kept
+    demosaic) with its aspects' means and 95 % intervals and the CFA's source."""
+    import pandas as pd
+
+    path = repo / results / "league.csv"
+    if not path.is_file():
+        raise CfaMitsubaError(f"{results}/league.csv not found (cfa-mitsuba league configs/league.toml --out {results})")
+    f = pd.read_csv(path, keep_default_na=False)
+    skip = ("cfa", "demosaic", "tile", "spectra", "source", "demosaic_kept")
+    cols = [c for c in f.columns if c not in skip and not c.endswith((" low", " high", "_censored"))]
+    head = ["CFA", "demosaic", *cols, "source"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in f.to_dict("records"):
+        cells = [(f"{_fmt(r[c], '.3g')} [{_fmt(r[c + ' low'], '.3g')}, {_fmt(r[c + ' high'], '.3g')}]"
+                  + (" (bound)" if str(r.get(c + "_censored", "")) == "True" else "")) if r[c] != "" else "—"
+                 for c in cols]
+        lines.append("| " + " | ".join([r["cfa"], r["demosaic"], *cells, str(r["source"]).replace("|", "/")]) + " |")
+    return "\n\n" + "\n".join(lines) + "\n\n"
+
+
+def league_decisions(repo: Path, results: str) -> str:
+    """A league's league_decisions.csv as Markdown: per aspect the entries whose rank interval contains 1."""
+    import pandas as pd
+
+    f = pd.read_csv(repo / results / "league_decisions.csv", keep_default_na=False)
+    lines = ["| aspect | league.csv column | entries whose rank interval contains 1 | verdict |", "|---|---|---|---|"]
+    lines += [f"| {r['aspect']} | {r['metric']} | {', '.join(r['entries'].split()) or '—'} | {r['verdict']} |"
+              for r in f.to_dict("records")]
+    return "\n\n" + "\n".join(lines) + "\n\n"
+
+
 def monotone_table(repo: Path, *texts: str) -> str:
     """The colour-matrix rule before and after (docs/isp.md), from the committed
     output of ``benchmarks/monotone_colour_matrix.py`` (one text file per
@@ -276,6 +328,9 @@ GENERATORS = {
     "claims": claims_sentence,
     "design-table": design_table,
     "design-front": design_front,
+    "league-table": league_table,
+    "design-manufacturability": design_manufacturability,
+    "league-decisions": league_decisions,
     "monotone-table": monotone_table,
     "low-light-table": low_light_table,
     "axis-table": axis_table,

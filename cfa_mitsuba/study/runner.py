@@ -270,8 +270,8 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         # reached leaves nothing behind).
         work.mkdir(exist_ok=True)
         with atomic_output(out / "config.json") as tmp:
-            tmp.write_text(json.dumps({**config.to_dict(), "base_condition": config.base_condition().to_dict()},
-                                      indent=1, default=str))
+            tmp.write_text(json.dumps({**_portable_config(config, out),
+                                       "base_condition": config.base_condition().to_dict()}, indent=1, default=str))
         write_sensor_curves(config, out)  # the compared sensors' QE curves, for the report
         log(f"study {config.name!r}: {len(config.scenes)} scene(s), {len(config.cfas)} CFA(s), "
             f"{len(config.demosaics)} demosaic(s); {len(tasks)} evaluation task(s)" + _counted_twice(size, tasks)
@@ -349,6 +349,24 @@ def _counted_twice(size, tasks: list) -> str:
         return ""
     return (f" (the size line's {size.tasks:,} counts {extra:,} twice: conditions that the base luminances and "
             "a sweep both reach run once)")
+
+
+def _portable_config(config: StudyConfig, out: Path) -> dict:
+    """config.json's content: the config with its own path, and the CFA and
+    scene files it names by absolute path, relative to the output folder
+    (io/portable.py), so a committed study records no machine's layout."""
+    import os
+
+    from ..io.portable import relative_path
+
+    d = config.to_dict()
+    if d.get("path"):
+        d["path"] = relative_path(d["path"], out)
+    d["cfas"] = [relative_path(c, out) if isinstance(c, str) and os.path.isabs(c) else c for c in d.get("cfas", [])]
+    for sc in d.get("scenes", []):
+        if isinstance(sc, dict) and isinstance(sc.get("file"), str) and os.path.isabs(sc["file"]):
+            sc["file"] = relative_path(sc["file"], out)
+    return d
 
 
 def write_timing(result: StudyResult) -> None:
