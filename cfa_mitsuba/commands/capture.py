@@ -253,7 +253,7 @@ def run(args) -> int:
             f"{st['exposure_policy']}: analogue gain {st['analog_gain']:.3g}, digital gain {st['digital_gain']:.3g}")
         clipped = 100.0 * meta["saturated_fraction"]
         lines.append(f"  luminance {meta['luminance_cd_m2']:.4g} cd/m^2{_lux(meta)}, exposure {raw.exposure_s * 1e3:.4g} "
-                     f"ms ({mode}; {meta['sensor_exposure_lux_s']:.4g} lux s on the sensor), noise {args.noise}, "
+                     f"ms ({mode}), {meta['sensor_exposure_lux_s']:.4g} lux s on the sensor, noise {args.noise}, "
                      f"seed {raw.seed}")
         lines.append(f"  raw {raw.raw.min():.6g}..{raw.raw.max():.6g} DN (black level {raw.black_level_dn:g}, "
                      f"{raw.dn_per_electron:.4g} DN/e-), {clipped:.2f} % of wells full")
