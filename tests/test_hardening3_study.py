@@ -148,7 +148,7 @@ def test_untrusted_resume_files_are_recomputed_with_one_notice(small, tmp_path):
     assert len(files) == 6
     for f, text in zip(files, DAMAGE.values()):
         f.write_text(text)
-    again = _study(config, out, "--workers", 1)
+    again = _study(config, out, "--workers", 1, quiet=False)  # its log says what was recomputed
     assert again.returncode == 0, again.stderr
     assert "Traceback" not in again.stderr
     notices = [line for line in again.stderr.splitlines() if "could not be trusted" in line]
@@ -156,7 +156,7 @@ def test_untrusted_resume_files_are_recomputed_with_one_notice(small, tmp_path):
     assert "6 task(s) run, 0 reused" in again.stderr
     assert _tables(out) == _tables(reference)
     # and the rewritten files are trusted by the next run
-    third = _study(config, out, "--workers", 1)
+    third = _study(config, out, "--workers", 1, quiet=False)
     assert third.returncode == 0 and "0 task(s) run, 6 reused" in third.stderr, third.stderr
 
 

@@ -232,7 +232,7 @@ def test_dask_cluster_gives_identical_results_despite_a_killed_worker(quick, das
     ref, _ = quick
     address, procs = dask_cluster
     out = tmp_path / "dask"
-    proc = study("--out", out, "--no-report", "--scheduler", address, start_new_session=True)
+    proc = study("--out", out, "--no-report", "--scheduler", address, start_new_session=True, quiet=False)
     _wait_for_tasks(out, 3, proc)
     os.killpg(procs[1].pid, signal.SIGKILL)  # one worker (its nanny too) dies mid-study
     stdout, stderr = proc.communicate(timeout=600)
