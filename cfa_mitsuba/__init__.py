@@ -27,7 +27,10 @@ def __getattr__(name):
     import importlib
 
     if name in _SUBMODULES:
-        return importlib.import_module(f".{name}", __name__)
+        module = importlib.import_module(f".{name}", __name__)
+        if name == "study":  # the report registers its builder with cm.study.run (study/api.py)
+            importlib.import_module(".report", __name__)
+        return module
     if name in _VALUES:
         from . import values
 

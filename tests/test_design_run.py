@@ -144,7 +144,7 @@ def test_results_record_paths_relative_to_their_output_folder(brute):
 
 def test_a_rerun_evaluates_nothing_again(brute):
     d, first = brute
-    proc = run_cli("design", d / "d.toml", "--out", d / "out", "--quiet", "--workers", "1")
+    proc = run_cli("design", d / "d.toml", "--out", d / "out", "--workers", "1")  # not --quiet: its log counts
     assert proc.returncode == 0, proc.stderr
     assert "(0 evaluated now, 9 taken from saved state)" in proc.stderr
     assert "22 evaluation task(s), 22 already done" in proc.stderr  # 11 CFAs x 2 scenes, all saved

@@ -39,12 +39,14 @@ report = false
 """
 
 
-def _cmd(config: Path, out: Path, *extra) -> list[str]:
-    return [sys.executable, "-m", "cfa_mitsuba", "study", str(config), "--out", str(out), "--quiet", *map(str, extra)]
+def _cmd(config: Path, out: Path, *extra, quiet: bool = True) -> list[str]:
+    return [sys.executable, "-m", "cfa_mitsuba", "study", str(config), "--out", str(out), *(["--quiet"] if quiet else []),
+            *map(str, extra)]
 
 
-def _study(config: Path, out: Path, *extra, **kw) -> subprocess.CompletedProcess:
-    return subprocess.run(_cmd(config, out, *extra), cwd=REPO, capture_output=True, text=True, **kw)
+def _study(config: Path, out: Path, *extra, quiet: bool = True, **kw) -> subprocess.CompletedProcess:
+    """The study command (``quiet``: --quiet, which prints the result path alone)."""
+    return subprocess.run(_cmd(config, out, *extra, quiet=quiet), cwd=REPO, capture_output=True, text=True, **kw)
 
 
 @pytest.fixture(scope="module")
@@ -120,7 +122,7 @@ def test_a_stopped_study_leaves_no_process_and_resumes(small, tmp_path, sig):
     assert proc.returncode == -sig
     assert not (out / "metrics.csv").exists()
     finished = len(list((out / ".work").glob("*.json")))
-    again = _study(config, out, "--workers", 2)
+    again = _study(config, out, "--workers", 2, quiet=False)  # its log says what was reused
     assert again.returncode == 0, again.stderr
     m = re.search(r"(\d+) task\(s\) run, (\d+) reused", again.stderr)
     assert m and int(m.group(2)) == finished and int(m.group(1)) == 6 - finished, again.stderr
@@ -146,7 +148,7 @@ def test_untrusted_resume_files_are_recomputed_with_one_notice(small, tmp_path):
     assert len(files) == 6
     for f, text in zip(files, DAMAGE.values()):
         f.write_text(text)
-    again = _study(config, out, "--workers", 1)
+    again = _study(config, out, "--workers", 1, quiet=False)  # its log says what was recomputed
     assert again.returncode == 0, again.stderr
     assert "Traceback" not in again.stderr
     notices = [line for line in again.stderr.splitlines() if "could not be trusted" in line]
@@ -154,7 +156,7 @@ def test_untrusted_resume_files_are_recomputed_with_one_notice(small, tmp_path):
     assert "6 task(s) run, 0 reused" in again.stderr
     assert _tables(out) == _tables(reference)
     # and the rewritten files are trusted by the next run
-    third = _study(config, out, "--workers", 1)
+    third = _study(config, out, "--workers", 1, quiet=False)
     assert third.returncode == 0 and "0 task(s) run, 6 reused" in third.stderr, third.stderr
 
 

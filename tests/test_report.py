@@ -43,6 +43,9 @@ EXPECTED_FIGURES = {
     "luminance-sweep": True, "scielab-maps": False, "sensor-curves": True,
     **{f"ab-{d}": True for d in DEMOSAICS}, **{f"xy-{d}": True for d in DEMOSAICS},
     **{f"outputs-{s}": False for s in SCENES},
+    # issue 50: each patch's error, the gray steps' SNR and dynamic range, the crop grids
+    "patch-errors": False, "step-snr": True, "dynamic-range": True,
+    **{f"crops-{s}": False for s in ("slanted-edge", "chirp", "puppy")},
 }
 
 

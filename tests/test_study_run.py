@@ -29,8 +29,8 @@ QUICK_DEMOSAICS = ("bilinear", "laplacian", "adaptive-laplacian", "pocs")
 KEYS = ["scene", "cfa", "demosaic", "luminance", "metric"]
 
 
-def study(*args, **popen):
-    cmd = [sys.executable, "-m", "cfa_mitsuba", "study", str(QUICK), "--quiet", *map(str, args)]
+def study(*args, quiet: bool = True, **popen):
+    cmd = [sys.executable, "-m", "cfa_mitsuba", "study", str(QUICK), *(["--quiet"] if quiet else []), *map(str, args)]
     if popen:
         return subprocess.Popen(cmd, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **popen)
     return subprocess.run(cmd, cwd=REPO, capture_output=True, text=True)
@@ -194,7 +194,7 @@ def test_killed_study_resumes_and_gives_the_same_tables(quick, tmp_path):
     assert 4 <= finished < total, (finished, total)
     assert not (out / "metrics.csv").exists()
 
-    again = study("--out", out, "--no-report")
+    again = study("--out", out, "--no-report", quiet=False)  # its log says what was reused
     assert again.returncode == 0, again.stderr
     m = re.search(r"(\d+) task\(s\) run, (\d+) reused", again.stderr)
     assert m and int(m.group(2)) == finished and int(m.group(1)) == total - finished, again.stderr
@@ -240,7 +240,7 @@ def test_dask_cluster_gives_identical_results_despite_a_killed_worker(quick, das
     ref, _ = quick
     address, procs = dask_cluster
     out = tmp_path / "dask"
-    proc = study("--out", out, "--no-report", "--scheduler", address, start_new_session=True)
+    proc = study("--out", out, "--no-report", "--scheduler", address, start_new_session=True, quiet=False)
     _wait_for_tasks(out, 3, proc)
     os.killpg(procs[1].pid, signal.SIGKILL)  # one worker (its nanny too) dies mid-study
     stdout, stderr = proc.communicate(timeout=600)

@@ -245,16 +245,24 @@ def run(args) -> int:
                      f"read noise {sensor.read_noise_e:.3g} e-, {sensor.adc_bits} bit")
     if ideal:
         y = raw.raw[..., 1]
-        lines.append(f"  luminance {meta['luminance_cd_m2']:.4g} cd/m^2; XYZ absolute (Y cd/m^2): "
+        lines.append(f"  luminance {meta['luminance_cd_m2']:.4g} cd/m^2{_lux(meta)}; XYZ absolute (Y cd/m^2): "
                      f"mean Y {y.mean():.4g}, max Y {y.max():.4g}")
     else:
         mode = "fixed" if st["exposure_mode"] != "auto" else (
             f"auto at {st['reference_luminance_cd_m2']:g} cd/m^2" if st["exposure_policy"] == "reference" else
             f"{st['exposure_policy']}: analogue gain {st['analog_gain']:.3g}, digital gain {st['digital_gain']:.3g}")
         clipped = 100.0 * meta["saturated_fraction"]
-        lines.append(f"  luminance {meta['luminance_cd_m2']:.4g} cd/m^2, exposure {raw.exposure_s * 1e3:.4g} ms "
-                     f"({mode}), noise {args.noise}, seed {raw.seed}")
+        lines.append(f"  luminance {meta['luminance_cd_m2']:.4g} cd/m^2{_lux(meta)}, exposure {raw.exposure_s * 1e3:.4g} "
+                     f"ms ({mode}), {meta['sensor_exposure_lux_s']:.4g} lux s on the sensor, noise {args.noise}, "
+                     f"seed {raw.seed}")
         lines.append(f"  raw {raw.raw.min():.6g}..{raw.raw.max():.6g} DN (black level {raw.black_level_dn:g}, "
                      f"{raw.dn_per_electron:.4g} DN/e-), {clipped:.2f} % of wells full")
     print("\n".join(lines))
     return 0
+
+
+def _lux(meta: dict) -> str:
+    """The scene's illuminance beside its luminance: pi x the white's
+    luminance (sensor/photometry.py)."""
+    lux = meta.get("scene_illuminance_lux")
+    return f" (scene illuminance {lux:.4g} lux)" if lux else ""

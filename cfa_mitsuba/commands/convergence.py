@@ -96,6 +96,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--variant", metavar="V", help="Mitsuba variant (default: the best available)")
     parser.add_argument("--formats", type=_name_list, default=["png", "svg"], metavar="png,svg",
                         help="plot formats (default png,svg)")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress bar, log lines or table: print only the paths written")
 
 
 def run(args) -> int:
@@ -115,9 +117,12 @@ def run(args) -> int:
         noise_seeds=args.noise_seeds, default_seeds=args.default_seeds, variant=args.variant,
     )
     check_writable_dir(args.out)  # before minutes of rendering, not after
-    result = run_convergence(plan)
+    from ..io.progress import stderr_log
+
+    result = run_convergence(plan, log=stderr_log(args.quiet), progress=not args.quiet)
     paths = write_convergence(result, args.out, formats=tuple(args.formats))
-    print(format_table(result))
+    if not args.quiet:
+        print(format_table(result))
     for kind in ("csv", "json", *args.formats):
         print(paths[kind])
     return 0

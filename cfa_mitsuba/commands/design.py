@@ -29,21 +29,22 @@ def add_arguments(parser) -> None:
     parser.add_argument("--workers", type=positive_int, metavar="N",
                         help="local worker processes for the full chain (default: the config's, else 2)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="run the full chain on a Dask cluster")
-    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    parser.add_argument("--quiet", action="store_true", help="no progress bars or log lines: print only the report's path")
     parser.add_argument("--force", action="store_true", help="start a search estimated above 24 h")
 
 
 def run(args) -> int:
-    import sys
     from pathlib import Path
 
     from ..design.config import load_design
     from ..design.run import run_design
     from ..io.validate import safe_name
 
+    from ..io.progress import stderr_log
+
     config = load_design(args.config)
     out = Path(args.out) if args.out else Path("results") / safe_name(config.name)
     result = run_design(config, out, workers=args.workers, scheduler=args.scheduler, progress=not args.quiet,
-                        log=lambda msg: print(msg, file=sys.stderr), force=args.force)
+                        log=stderr_log(args.quiet), force=args.force)
     print(result.out_dir / "design.html")
     return 0

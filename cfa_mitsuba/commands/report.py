@@ -28,6 +28,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--workers", type=int, default=None, metavar="N",
                         help="processes that draw and encode the figures (default: 2, at most the cores)")
     parser.add_argument("--verbose", action="store_true", help="print the time each figure takes (stderr)")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar: print only the report's path")
 
 
 def run(args) -> int:
@@ -39,6 +40,7 @@ def run(args) -> int:
     formats = () if text in ("", "none") else tuple(f.strip() for f in text.split(",") if f.strip())
     log = (lambda msg: print(msg, file=sys.stderr)) if args.verbose else None
     path = build_report(args.results_dir, formats=formats, thumbnails=args.thumbnails, log=log,
-                        workers=args.workers if args.workers is not None else report_workers(None))
+                        workers=args.workers if args.workers is not None else report_workers(None),
+                        progress=not args.quiet)
     print(path)
     return 0

@@ -72,6 +72,8 @@ def _emva_arguments(parser) -> None:
     parser.add_argument("--sensor-seed", type=non_negative_int, default=None,
                         help="fixed-pattern (DSNU/PRNU) seed (default: the sensor's)")
     parser.add_argument("--no-report", action="store_true", help="skip emva1288's LaTeX report and plots")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress bar or table: print only the parameters table's path")
     add_sensor_options(parser)
 
 
@@ -82,13 +84,12 @@ def run(args) -> int:
 
 
 def _run_emva(args) -> int:
-    import sys
     from pathlib import Path
 
     from ..errors import CfaMitsubaError
     from ..sensor.emva import EmvaSettings, simulate_emva
-    from ..sensor.emva_analysis import (PARAMETERS, analyse_channel, parameter_rows, require_emva1288,
-                                        write_parameters_csv, write_report)
+    from ..sensor.emva_analysis import (PARAMETERS, UNRESOLVED, analyse_channel, parameter_rows,
+                                        require_emva1288, write_parameters_csv, write_report)
     from .argtypes import check_out_dir
     from .capture import resolve_sensor
 
@@ -103,13 +104,18 @@ def _run_emva(args) -> int:
                             wavelength_nm=args.wavelength_nm, analog_gain=sensor.analog_gain if args.keep_gain
                             else None, seed=args.seed)
 
-    def progress(channel, done, total):
-        if done == total or done % 10 == 0:
-            sys.stderr.write(f"\r{args._prog}: channel {channel}: {done}/{total} exposures")
-            if done == total:
-                sys.stderr.write("\n")
+    from ..io.progress import progress_bar
 
-    series = simulate_emva(sensor, cfa, out, settings, progress=progress if sys.stderr.isatty() else None)
+    bar = progress_bar(len(settings.ramp()) * len(cfa.channels), "emva", enabled=not args.quiet, unit="exposure")
+
+    def progress(channel, done, total):
+        bar.set_postfix_str(f"channel {channel}")
+        bar.update(1)
+
+    try:
+        series = simulate_emva(sensor, cfa, out, settings, progress=progress)
+    finally:
+        bar.close()
     rows, measured = [], []
     for s in series:
         results, data = analyse_channel(s.folder, pixel_area_um2=sensor.pixel_pitch_um**2)
@@ -117,20 +123,32 @@ def _run_emva(args) -> int:
         measured.append((s, results, data))
     csv_path = write_parameters_csv(rows, out / "emva_parameters.csv")
     name = args.sensor or cfa.name
+    if args.quiet:
+        if not args.no_report:
+            write_report(out / "report", measured, name, sensor.pixel_pitch_um)
+        print(csv_path)
+        return 0
     lines = [f"wrote {csv_path} and {len(series)} image series ({', '.join(s.channel for s in series)}) "
              f"under {out}"]
     if not args.no_report:
         tex = write_report(out / "report", measured, name, sensor.pixel_pitch_um)
         lines.append(f"wrote {tex} (emva1288's LaTeX report with its PDF plots; pdflatex makes the PDF)")
     lines.append(f"{'channel':<8}{'nm':>6}  " + "  ".join(f"{k:>22}" for k in PARAMETERS))
+    unresolved = False
     for s in series:
         got = {r["parameter"]: r for r in rows if r["channel"] == s.channel}
         cells = []
         for k in PARAMETERS:
             r = got.get(k)
+            if r and r["set_value"] != "" and r["measured"] == "":  # not resolved (emva_analysis.UNRESOLVED)
+                unresolved = True
+                cells.append(f"{'< noise':>10} ({r['set_value']:.4g})")
+                continue
             cells.append(f"{r['measured']:>10.4g} ({r['set_value']:.4g})" if r and r["set_value"] != ""
                          else f"{'':>22}")
         lines.append(f"{s.channel:<8}{s.wavelength_nm:>6g}  " + "  ".join(f"{c:>22}" for c in cells))
     lines.append("measured (model's set value): " + ", ".join(f"{k} {u}" for k, (_, u) in PARAMETERS.items()))
+    if unresolved:
+        lines.append(f"< noise: {UNRESOLVED} (emva1288 gives no value; the CSV leaves it empty)")
     print("\n".join(lines))
     return 0

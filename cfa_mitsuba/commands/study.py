@@ -30,13 +30,13 @@ def add_arguments(parser) -> None:
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="run on a Dask cluster, e.g. tcp://HOST:8786 (needs the 'dask' extra)")
     parser.add_argument("--no-report", action="store_true", help="write the tables only, no HTML report")
-    parser.add_argument("--quiet", action="store_true", help="no progress bars")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress bars or log lines: print only the result path (warnings still go to stderr)")
     parser.add_argument("--force", action="store_true",
                         help="start a study above the size limits (estimated time over 24 h, over 100,000 tasks)")
 
 
 def run(args) -> int:
-    import sys
     import time
     from pathlib import Path
 
@@ -45,23 +45,25 @@ def run(args) -> int:
     from ..study.runner import run_study, timing_summary, write_timing
 
     config = load_config(args.config)
+    from ..io.progress import stderr_log
     from ..io.validate import safe_name
 
     # the config's name is a label, never a path: '../../x' must not leave results/
     out = Path(args.out) if args.out else Path("results") / safe_name(config.name)
+    log = stderr_log(args.quiet)
     result = run_study(config, out, workers=args.workers, scheduler=args.scheduler, progress=not args.quiet,
-                       force=args.force)
+                       force=args.force, log=log)
     report = not args.no_report and config.output.get("report", True)
     if report:
         t = time.perf_counter()
         # the figures drawn in as many processes as the study's local workers (at most the cores)
         build_report(result.out_dir, formats=config.output.get("figures", ("png", "svg")),
                      thumbnails=config.output.get("thumbnails", True), timing=result.timing,
-                     workers=report_workers(args.workers or config.workers))
+                     workers=report_workers(args.workers or config.workers), progress=not args.quiet)
         phases = result.timing["phases"]
         phases["report_s"] = time.perf_counter() - t
         phases["total_s"] += phases["report_s"]
         write_timing(result)
-    print(timing_summary(result), file=sys.stderr)
+    log(timing_summary(result))
     print(result.out_dir / ("report.html" if report else "metrics.csv"))
     return 0

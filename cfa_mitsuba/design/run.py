@@ -110,7 +110,7 @@ def run_design(config, out_dir, *, workers=None, scheduler=None, progress=True, 
 
         res = run_gradient(config, out, log=log)
     else:
-        res = run_search(config, out, log=log)
+        res = run_search(config, out, log=log, progress=progress)
     cands = res.candidates
     timing["search_s"] = time.perf_counter() - t0
     log(f"proxy: {len(cands):,} candidates ({res.evaluated:,} evaluated now, {res.reused:,} taken from saved state) "

@@ -142,7 +142,7 @@ def _save_npz(path: Path, **arrays) -> None:
             np.savez(fh, **arrays)
 
 
-def _exhaustive(config, h, w, state: Path, settings, models, log) -> tuple[list[dict], int, int]:
+def _exhaustive(config, h, w, state: Path, settings, models, log, bar=None) -> tuple[list[dict], int, int]:
     k = len(config.alphabet)
     lo, hi = L.density_limits(config.density, config.alphabet, h * w)
     rows, evaluated, reused = [], 0, 0
@@ -160,6 +160,8 @@ def _exhaustive(config, h, w, state: Path, settings, models, log) -> tuple[list[
             _save_npz(f, layouts=lay, **{n: got[n] for n in names})
             evaluated += len(lay)
         rows.append(_rows(lay, h, w, config.alphabet, {n: got[n] for n in names}))
+        if bar is not None:
+            bar.update(1)
     import pandas as pd
 
     df = pd.concat(rows, ignore_index=True)
@@ -181,7 +183,7 @@ class _Archive:
             tmp.write_text(json.dumps(self.rows))
 
 
-def _nsga2(config, h, w, state: Path, settings, models, objectives, log) -> tuple[list[dict], int, int]:
+def _nsga2(config, h, w, state: Path, settings, models, objectives, log, bar=None) -> tuple[list[dict], int, int]:
     from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.core.problem import Problem
     from pymoo.optimize import minimize
@@ -227,8 +229,15 @@ def _nsga2(config, h, w, state: Path, settings, models, objectives, log) -> tupl
             out["G"] = np.concatenate([lo[None, :] - counts, counts - hi[None, :]], axis=1).astype(float)
             archive.save()
 
+    from pymoo.core.callback import Callback
+
+    class Tick(Callback):  # one step of the progress bar per generation
+        def notify(self, algorithm):
+            if bar is not None:
+                bar.update(1)
+
     minimize(Design(), NSGA2(pop_size=config.population), ("n_gen", config.generations), seed=config.seed,
-             verbose=False)
+             verbose=False, callback=Tick())
     rows = list(archive.rows.values())
     counts = np.array([[r[f"density_{a}"] * n for a in config.alphabet] for r in rows]).round()
     ok = np.all((counts >= lo) & (counts <= hi), axis=1) if rows else np.zeros(0, bool)
@@ -242,10 +251,13 @@ def _nsga2(config, h, w, state: Path, settings, models, objectives, log) -> tupl
     return pd.DataFrame(rows), archive.evaluated, archive.reused
 
 
-def run_search(config, out_dir, *, log=print) -> SearchResult:
+def run_search(config, out_dir, *, log=print, progress: bool = False) -> SearchResult:
     """Search every tile size of ``config`` (a DesignConfig); keeps its state
-    under ``out_dir/.design`` (module doc)."""
+    under ``out_dir/.design`` (module doc).  ``progress``: a bar on a
+    terminal, one step per exhaustive chunk or NSGA-II generation."""
     import pandas as pd
+
+    from ..io.progress import progress_bar
 
     state = Path(out_dir) / ".design"
     state.mkdir(parents=True, exist_ok=True)
@@ -254,13 +266,19 @@ def run_search(config, out_dir, *, log=print) -> SearchResult:
     curves = letter_curves(config.alphabet, config.spectra_set) if config.spectra is None else None
     models = fixed_models(curves, config.alphabet, settings) if curves else None
     rows, evaluated, reused = [], 0, 0
-    for h, w in config.tiles:
-        if config.engine[(h, w)] == "exhaustive":
-            got, e, r = _exhaustive(config, h, w, state, settings, models, log)
-        else:
-            got, e, r = _nsga2(config, h, w, state, settings, models, objectives, log)
-        rows.append(got)
-        evaluated += e
-        reused += r
+    steps = sum(L.n_chunks(h, w, len(config.alphabet)) if config.engine[(h, w)] == "exhaustive"
+                else config.generations for h, w in config.tiles)
+    bar = progress_bar(steps, "search", enabled=progress)
+    try:
+        for h, w in config.tiles:
+            if config.engine[(h, w)] == "exhaustive":
+                got, e, r = _exhaustive(config, h, w, state, settings, models, log, bar)
+            else:
+                got, e, r = _nsga2(config, h, w, state, settings, models, objectives, log, bar)
+            rows.append(got)
+            evaluated += e
+            reused += r
+    finally:
+        bar.close()
     df = pd.concat(rows, ignore_index=True).drop_duplicates("key").reset_index(drop=True)
     return SearchResult(df, evaluated, reused, dict(config.engine))

@@ -275,7 +275,8 @@ def _reference_edge(reference, bounds, weights, transposed: bool, sign: float):
 
 
 def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEIGHTS,
-        nbin: int = NBIN, reference=None, convention: str = "sfrmat3") -> MetricResult:
+        nbin: int = NBIN, reference=None, convention: str = "sfrmat3",
+        picture_height_px: int | None = None) -> MetricResult:
     """Slanted-edge MTF50, MTF at Nyquist and percent alias of a linear image.
 
     Parameters
@@ -301,30 +302,29 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
     convention : ``"sfrmat3"`` (default: frequencies normal to the edge,
         derivative corrected, MTF50 the interpolated crossing) or
         ``"isetcam"`` (ISETCam's ISO12233, module doc).
+    picture_height_px : the height (px) MTF50 in line widths per picture
+        height refers to (a sensor's rows, say); default the image's height.
 
     Returns
     -------
     MetricResult
         Headline: luminance (or gray) MTF50, unit ``'cy/px'`` or ``'cy/mm'``.
-        Details: ``records`` {name: {freq_cy_px, mtf, mtf50_cy_px,
-        mtf50_cy_mm, mtf_at_nyquist, mtf50_found, mtf50p_cy_px,
-        mtf50p_cy_mm, mtf50p_found, mtf_peak, mtf_peak_cy_px}} for R, G, B and lum (or
-        gray; a colour channel without an edge gets ``None`` values and an
-        ``error`` text instead of failing the luminance result); ``mtf50_cy_px``, ``mtf50_cy_mm``, ``mtf_at_nyquist``,
-        the luminance ``mtf_peak`` (the MTF's maximum up to Nyquist, 1 at DC
-        without overshoot; unitless) at ``mtf_peak_cy_px``, ``mtf50p_cy_px``
-        / ``mtf50p_cy_mm`` (the first frequency above the peak where the MTF
-        falls below half the peak, Imatest's MTF50P; MTF50 when the peak is
-        the DC value),
-        ``percent_alias`` (100 x sum of the luminance MTF above Nyquist over
-        its sum, up to 1 cy/px, as ISETCam's ISO12233 but on luminance as the
-        paper says), ``edge_angle_deg``, ``orientation``, ``roi``,
-        ``edge_fit_rms_px``, ``contrast`` ((bright - dark) / (bright + dark),
-        a dark side below 0 counted as 0, so 0..1;
-        ISO 12233 recommends no less than 0.2... and warns below it:
-        ``low_contrast``).  An MTF that never falls below 0.5 up to the
-        highest analysed frequency reports that frequency with
-        ``mtf50_found = False``.
+        Details: ``records`` {name: {freq_cy_px, mtf, mtf50_cy_px, mtf50_cy_mm, mtf_at_nyquist,
+        mtf50_found, mtf50p_cy_px, mtf50p_cy_mm, mtf50p_found, mtf_peak, mtf_peak_cy_px}} for R, G,
+        B and lum (or gray; a colour channel without an edge gets ``None`` values and an ``error``
+        text instead of failing the luminance result); ``mtf50_cy_px``, ``mtf50_cy_mm``,
+        ``mtf_at_nyquist``, the luminance ``mtf_peak`` (the MTF's maximum up to Nyquist, 1 at DC
+        without overshoot; unitless) at ``mtf_peak_cy_px``, ``mtf50p_cy_px`` / ``mtf50p_cy_mm``
+        (the first frequency above the peak where the MTF falls below half the peak, Imatest's
+        MTF50P; MTF50 when the peak is the DC value), ``percent_alias`` (100 x sum of the
+        luminance MTF above Nyquist over its sum up to 1 cy/px, ISETCam's ISO12233 on luminance
+        as the paper says; a box pixel behind a perfect lens reads 25.2 %, its sinc times the
+        sinc of the ESF's 1/``nbin`` px bins, which the e-SFR does not correct:
+        tests/metrics/test_mtf_alias.py), ``mtf50_lw_ph`` (2 x cy/px x ``picture_height_px``),
+        ``picture_height_px``, ``edge_angle_deg``, ``orientation``, ``roi``, ``edge_fit_rms_px``,
+        ``contrast`` ((bright - dark) / (bright + dark), a dark side below 0 counted as 0; below
+        ISO 12233's 0.2, ``low_contrast``).  An MTF that never falls below 0.5 up to the highest
+        analysed frequency reports that frequency with ``mtf50_found = False``.
 
     References
     ----------
@@ -360,6 +360,9 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
     above = band & (lum["freq_cy_px"] > 0.5)
     alias = 100.0 * lum["mtf"][above].sum() / lum["mtf"][band].sum()
     contrast = _contrast(records[main])
+    height = a.shape[0] if picture_height_px is None else picture_height_px
+    require(isinstance(height, (int, np.integer)) and not isinstance(height, bool) and height >= 1,
+            f"picture_height_px must be a whole number of pixels >= 1, got {height!r}")
     details = {
         "records": out,
         "mtf50_cy_px": lum["mtf50_cy_px"], "mtf50_cy_mm": lum["mtf50_cy_mm"],
@@ -367,6 +370,7 @@ def mtf(image, *, roi=None, pixel_pitch_um: float | None = None, weights=LUM_WEI
         "mtf50p_cy_px": lum["mtf50p_cy_px"], "mtf50p_cy_mm": lum["mtf50p_cy_mm"],
         "mtf50p_found": lum["mtf50p_found"], "mtf_peak": lum["mtf_peak"], "mtf_peak_cy_px": lum["mtf_peak_cy_px"],
         "mtf_at_nyquist": lum["mtf_at_nyquist"], "percent_alias": float(alias),
+        "mtf50_lw_ph": 2.0 * lum["mtf50_cy_px"] * int(height), "picture_height_px": int(height),
         "nyquist_cy_px": 0.5,
         "nyquist_cy_mm": 0.5 / (pixel_pitch_um * 1e-3) if pixel_pitch_um else None,
         "edge_angle_deg": edge["angle"], "orientation": "horizontal" if transposed else "vertical",
@@ -487,4 +491,14 @@ RECORDS = (
                 description="luminance MTF50P: where the MTF falls to half its peak (Imatest; not raised by overshoot)"),
     _MTF.detail("mtf_peak", name="mtf-peak", unit="", label="MTF peak", order=104, decimals=3,
                 description="peak of the luminance MTF up to Nyquist (1 without overshoot; above 1: sharpening)"),
+    _MTF.detail("mtf50_cy_px", name="mtf50-cy-px", unit="cy/px", label="MTF50 (cy/px)", order=105, decimals=3,
+                higher_is_better=True, description="luminance MTF50 in cycles per pixel (0.5 is Nyquist)"),
+    _MTF.detail("mtf50_lw_ph", name="mtf50-lw-ph", unit="LW/PH", label="MTF50 (LW/PH)", order=106, decimals=0,
+                higher_is_better=True,
+                description="luminance MTF50 in line widths per picture height (the captured image's height unless "
+                            "[metrics.mtf] picture_height_px gives a sensor's)"),
+    _MTF.detail("percent_alias", name="mtf-alias", unit="%", label="aliasing (ISO 12233)", order=107, decimals=1,
+                description="ISO 12233 aliasing percentage: the luminance MTF's area above Nyquist over its area "
+                            "up to 1 cy/px (ISETCam's ISO12233 aliasingPercentage)"),
 )
+

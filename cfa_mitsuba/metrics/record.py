@@ -75,6 +75,9 @@ class MetricRecord:
         best CFA only when its lead is at least this large
         (study/decisions.py).  ``practical_source`` says where each amount
         comes from (a published threshold, or our choice and why).
+    decibels : the value is an amplitude ratio (an SNR): tables give
+        ``20 log10`` of it in dB beside the ratio (metrics.csv's
+        ``value_db``, ``ci_low_db``, ``ci_high_db``).
     summary_options : ``((keyword, value), ...)``: options that leave out of
         the details what only the details files read, passed by a study for
         every camera output whose details it does not keep (the realisations
@@ -108,6 +111,7 @@ class MetricRecord:
     summary_options: tuple[tuple[str, Any], ...] = ()
     practical_difference: tuple[tuple[str, float], ...] = ()
     practical_source: str = ""
+    decibels: bool = False
 
     def __post_init__(self):
         if self.inputs not in INPUT_KINDS:

@@ -129,7 +129,9 @@ def ysnr(reference_xyz, test_xyz, white_xyz, *, steps=None, margin: int = 3,
         ``mean_y_rel`` (the region's Y / Yw of the ideal) and ``noise_y``,
         ``noise_chroma`` (rms, in units of the region's mean Y);
         ``ysnr_area`` (the noise referred to an area, module doc; None when
-        the region is not 4 L + 1 pixels in both sides) and ``correlation_px``.
+        the region is not 4 L + 1 pixels in both sides) and ``correlation_px``;
+        ``steps`` (with ``steps`` given): the SNR of every step, the ISO 15739
+        grey-scale reading (:func:`_step_snrs`), else None.
 
     Examples
     --------
@@ -163,22 +165,47 @@ def ysnr(reference_xyz, test_xyz, white_xyz, *, steps=None, margin: int = 3,
     details = {"chroma_snr": float(chroma), "ysnr_db": float(20 * np.log10(value)),
                "region": [y0, x0, y1, x1], "mean_y_rel": float(r[:, 1].mean() / white[1]),
                "noise_y": sd_y / mean_y, "noise_chroma": float(np.sqrt(chroma_var)) / mean_y,
-               "ysnr_area": mean_y / float(np.sqrt(nps0)) if nps0 else None, "correlation_px": int(correlation_px)}
+               "ysnr_area": mean_y / float(np.sqrt(nps0)) if nps0 else None, "correlation_px": int(correlation_px),
+               "steps": _step_snrs(ref, test, float(white[1]), steps, int(margin)) if steps else None}
     return MetricResult(value, name="ysnr", unit="", details=details)
+
+
+def _step_snrs(ref: np.ndarray, test: np.ndarray, white_y: float, steps, margin: int) -> list[dict]:
+    """The luminance SNR of every gray-bar step (ISO 15739 reads the SNR on
+    each step of a grey scale): per step its columns ``x0``, ``x1`` (before
+    the ``margin`` inset), the ideal's ``reflectance`` (mean Y / Yw), the
+    camera's ``signal_rel`` (mean Y / Yw) and ``noise_rel`` (the rms of its Y
+    noise / Yw, the noise as :func:`ysnr` defines it) and ``snr`` =
+    signal / noise (None where the step is too narrow after the inset, or
+    has no noise or no signal)."""
+    h, w = ref.shape[:2]
+    out = []
+    for a, b in steps:
+        y0, y1, x0, x1 = margin, h - margin, max(int(a), 0) + margin, min(int(b), w) - margin
+        row = {"x0": int(a), "x1": int(b), "reflectance": None, "signal_rel": None, "noise_rel": None, "snr": None}
+        if y1 - y0 >= 2 and x1 - x0 >= 2:
+            r = ref[y0:y1, x0:x1, 1].ravel()
+            t = test[y0:y1, x0:x1, 1].ravel()
+            r_mean, t_mean = float(r.mean()), float(t.mean())
+            sd = float((t - r * (t_mean / r_mean if r_mean > 0 else 0.0)).std(ddof=1))
+            row.update(reflectance=r_mean / white_y, signal_rel=t_mean / white_y, noise_rel=sd / white_y,
+                       snr=t_mean / sd if sd > 0 and t_mean > 0 else None)
+        out.append(row)
+    return out
 
 
 _YSNR = MetricRecord(
     name="ysnr", function=ysnr, scenes=("gray-bar",), inputs="xyz", unit="", higher_is_better=True, scored=False,
-    label="YSNR", order=40, decimals=2,
+    label="YSNR", order=40, decimals=2, decibels=True,
     description="luminance SNR on the gray bar's mid-grey step after demosaic and colour matrix (ISO 15739 region SNR)")
 
 #: This module's metric records (collected by :mod:`.registry`).
 RECORDS = (
     _YSNR,
     _YSNR.detail("chroma_snr", name="chroma_snr", unit="", higher_is_better=True, label="chroma SNR", order=41,
-                 decimals=2, description="chroma SNR on the same mid-grey: mean Y over the rms of the white-normalised "
+                 decimals=2, decibels=True, description="chroma SNR on the same mid-grey: mean Y over the rms of the white-normalised "
                                          "opponent noise (x' - y', z' - y')"),
     _YSNR.detail("ysnr_area", name="ysnr-area", unit="", higher_is_better=True, label="YSNR (area)", order=42,
-                 decimals=2, description="YSNR with the noise referred to an area (the noise power spectrum at zero "
+                 decimals=2, decibels=True, description="YSNR with the noise referred to an area (the noise power spectrum at zero "
                                          "frequency): smoothing by the demosaic does not raise it"),
 )

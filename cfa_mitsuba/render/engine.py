@@ -273,7 +273,7 @@ def _band_boxes(cfg: RenderConfig, achromatic: bool) -> list[tuple[float, float]
 
 
 def _render_boxes(mi, built: Built, cfg: RenderConfig, sc: Scene, boxes, *, width, height, spp,
-                  sensor: dict | None = None, extra: dict | None = None):
+                  sensor: dict | None = None, extra: dict | None = None, step=None):
     """Render band means over ``boxes`` ((lo, hi) nm each): (height, width,
     len(boxes)) float32, and the (last) loaded Mitsuba scene.  ``sensor``
     and ``extra`` replace the camera and add shapes (the white panels)."""
@@ -281,7 +281,9 @@ def _render_boxes(mi, built: Built, cfg: RenderConfig, sc: Scene, boxes, *, widt
     if _per_band(cfg, built):
         stock = {"type": built.stock_integrator or "path", "max_depth": cfg.max_depth}
         planes = []
-        for lo, hi in boxes:
+        for i, (lo, hi) in enumerate(boxes):
+            if step is not None:
+                step(f"band {i + 1}/{len(boxes)}", i)
             # The same sampled range as the JIT route (light.BAND_INSET).
             lo, hi = lo + BAND_INSET * (hi - lo), hi - BAND_INSET * (hi - lo)
             film = {"type": "specfilm", "width": width, "height": height, "rfilter": {"type": "box"},
@@ -351,7 +353,11 @@ def render_canonical(scene, **settings) -> SpectralImage:
     return _render_canonical(sc, cfg)
 
 
-def _render_canonical(sc: Scene, cfg: RenderConfig) -> SpectralImage:
+def _render_canonical(sc: Scene, cfg: RenderConfig, progress=None) -> SpectralImage:
+    """The canonical render (:func:`render_canonical`); ``progress``, when
+    given, is called as ``progress(stage, done, total)`` before each stage
+    (the render, or each band of a band-by-band render; the white panels of
+    a 3D scene) and once at the end (done = total)."""
     from ..io.cache import hash_key
 
     mi = _variant.load(cfg.variant)
@@ -359,11 +365,16 @@ def _render_canonical(sc: Scene, cfg: RenderConfig) -> SpectralImage:
     built = sc.build(cfg)
     start = time.perf_counter()
     achromatic = built.pattern_spectrum is not None
+    boxes = _band_boxes(cfg, achromatic)
+    renders = len(boxes) if _per_band(cfg, built) else 1
+    stages = renders + (built.white_radiance is None)  # the render (or each band's); a 3D scene's white panels
+    if progress is not None:
+        progress(f"render ({cfg.width} x {cfg.height}, {cfg.spp} spp)", 0, stages)
     if built.radiance is not None:  # computed exactly by the builder (a flat chart seen directly)
         bands, scene, achromatic = np.asarray(built.radiance, dtype=np.float64), None, False
     else:
-        bands, scene = _render_boxes(mi, built, cfg, sc, _band_boxes(cfg, achromatic), width=cfg.width,
-                                     height=cfg.height, spp=cfg.spp)
+        bands, scene = _render_boxes(mi, built, cfg, sc, boxes, width=cfg.width, height=cfg.height, spp=cfg.spp,
+                                     step=None if progress is None else lambda t, i: progress(t, i, stages))
     if achromatic:
         data = bands[..., :1].astype(np.float64) * np.asarray(built.pattern_spectrum)[None, None, :]
     else:
@@ -379,12 +390,16 @@ def _render_canonical(sc: Scene, cfg: RenderConfig) -> SpectralImage:
         white = np.asarray(built.white_radiance, dtype=np.float64)
         meta_extra["white_reference"] = {"rule": "exact: a perfect white diffuser under the chart's light"}
     else:
+        if progress is not None:
+            progress("white panels", renders, stages)
         white, info = _white_of_3d_scene(mi, built, cfg, sc, scene, data)
         meta_extra["white_reference"] = info
         if "scene_distance_m" not in built.meta:
             central = [p for p in info["panels"] if p["grid"] == [0.5, 0.5]] or info["panels"]
             meta_extra["scene_distance_m"] = float(np.median([p["distance_m"] for p in central])) if central else None
     elapsed = time.perf_counter() - start
+    if progress is not None:
+        progress("done", stages, stages)
     if sc.path is not None and not _userxml.files_unchanged(sc):
         raise CfaMitsubaError(f"the files of scene {sc.name!r} changed while it rendered: render it again")
     wl = cfg.wl
@@ -421,19 +436,20 @@ def _render_canonical(sc: Scene, cfg: RenderConfig) -> SpectralImage:
     return SpectralImage(data, wl, meta)
 
 
-def render(scene, **settings) -> SpectralImage:
+def render(scene, *, progress=None, **settings) -> SpectralImage:
     """Render ``scene`` (a built-in name, a path to a Mitsuba 3 XML file, or
     a :class:`Scene`) to band-mean spectral radiance in W/(m^2 sr nm).
 
     Pure: writes no files and does not use the cache (see
     :func:`render_cached`).  ``settings`` are the keywords of
-    :func:`resolve_settings`.  Returns a :class:`SpectralImage` whose
-    ``meta`` is the sidecar (docs/scenes.md lists its keys).
+    :func:`resolve_settings`; ``progress`` as :func:`_render_canonical`'s.
+    Returns a :class:`SpectralImage` whose ``meta`` is the sidecar
+    (docs/scenes.md lists its keys).
     """
     if is_measured_image(scene):  # a measured spectral image: converted, not rendered
         return measured_image(scene, **settings)
     sc, cfg = resolve_settings(scene, **settings)
-    return scale_to_luminance(_render_canonical(_current(sc), cfg), cfg.luminance_cd_m2,
+    return scale_to_luminance(_render_canonical(_current(sc), cfg, progress), cfg.luminance_cd_m2,
                               white_from=cfg.white_from, f_number=cfg.f_number)
 
 
@@ -446,13 +462,14 @@ def _current(sc: Scene) -> Scene:
     return sc
 
 
-def render_cached(scene, *, cache=None, **settings) -> SpectralImage:
+def render_cached(scene, *, cache=None, progress=None, **settings) -> SpectralImage:
     """:func:`render` through the render cache: reuse the cached canonical
     render for these settings if there is one, else render and store it.
 
     ``cache``: a :class:`~cfa_mitsuba.io.cache.RenderCache`, a directory, or
     None for the default (``$CFA_MITSUBA_CACHE`` or ``~/.cache/cfa-mitsuba``).
     The result's ``meta["cache_reused"]`` says whether this call reused a render.
+    ``progress``: as :func:`render`'s (not called for a reused render).
     Concurrent callers with the same settings render once (a per-key lock).
     """
     from ..io.cache import RenderCache, hash_key
@@ -463,7 +480,7 @@ def render_cached(scene, *, cache=None, **settings) -> SpectralImage:
     sc = _current(sc)
     store = cache if isinstance(cache, RenderCache) else RenderCache(cache)
     key = hash_key(_key_fields(sc, cfg))
-    canonical, hit = store.get_or_create(key, lambda: _render_canonical(sc, cfg))
+    canonical, hit = store.get_or_create(key, lambda: _render_canonical(sc, cfg, progress))
     out = scale_to_luminance(canonical, cfg.luminance_cd_m2, white_from=cfg.white_from, f_number=cfg.f_number)
     out.meta["cache_reused"] = hit
     return out

@@ -18,4 +18,20 @@ convergence``).
 from .build import FIGURE_FORMATS, build_report, report_workers  # noqa: F401
 from .results import Results, load_results  # noqa: F401
 
+
+def _study_report(out_dir, output: dict, timing: dict, workers, progress: bool = False):
+    """The report of ``cm.study.run`` (study/api.py), as ``cfa-mitsuba study`` builds it."""
+    return build_report(out_dir, formats=output.get("figures", ("png", "svg")),
+                        thumbnails=output.get("thumbnails", True), timing=timing, workers=report_workers(workers),
+                        progress=progress)
+
+
+def _register() -> None:
+    from ..study.api import register_report_builder
+
+    register_report_builder(_study_report)
+
+
+_register()
+
 __all__ = ["build_report", "report_workers", "load_results", "Results", "FIGURE_FORMATS"]

@@ -37,12 +37,17 @@ def _figure_functions(res: Results, thumbnails: bool):
         yield fs.radar_per_cfa
     yield fr.rank_chart
     yield tiles.tiles_by_family
+    from .noise_steps import noise_figures
+    from .patch_errors import patch_error_sheet
+
+    yield patch_error_sheet
     yield fd.patch_ab
     yield fd.patch_xy
     yield fd.scielab_maps
     yield fd.mtf_curves
     yield fd.moire_curves
     yield fd.gray_bar_profiles
+    yield noise_figures
     yield fs.luminance_sweep
     yield low_light.snr_figure
     yield fsen.sensor_curves
@@ -51,6 +56,9 @@ def _figure_functions(res: Results, thumbnails: bool):
             return fsw.axis_sweep(r, axis)
         by_axis.__name__ = f"axis_sweep[{axis}]"
         yield by_axis
+    from .crops import crop_sheets
+
+    yield crop_sheets
     if thumbnails and res.primary_luminance is not None:
         for scene in res.scenes:
             def sheet(r, scene=scene):
@@ -109,19 +117,27 @@ def _worker_draw(job: tuple) -> tuple:
         return _draw_one(res, fn, formats)
 
 
-def _draw(res: Results, thumbnails: bool, formats, workers: int, timing: dict | None, log) -> tuple:
+def _draw(res: Results, thumbnails: bool, formats, workers: int, timing: dict | None, log,
+          progress: bool = False) -> tuple:
     """(figures, absents, files, embeds) of every figure function, in their
     order; drawn and encoded in ``workers`` processes when more than one
     (each loads the results once and takes the next figure function as it
     comes free; drawing and encoding are single-threaded matplotlib and
     Pillow work, and they are most of a large report's time)."""
+    from ..io.progress import progress_bar
+
     fns = list(_figure_functions(res, thumbnails))
     parts: dict = {}
-    if workers > 1 and len(fns) > 1:
-        parts = _draw_in_processes(res, len(fns), thumbnails, formats, min(workers, len(fns)), timing, log)
-    for i, fn in enumerate(fns):  # sequentially: everything, or what the processes did not return
-        if i not in parts:
-            parts[i] = _draw_one(res, fn, formats)
+    bar = progress_bar(len(fns), "report", enabled=progress, unit="figure")
+    try:
+        if workers > 1 and len(fns) > 1:
+            parts = _draw_in_processes(res, len(fns), thumbnails, formats, min(workers, len(fns)), timing, log, bar)
+        for i, fn in enumerate(fns):  # sequentially: everything, or what the processes did not return
+            if i not in parts:
+                parts[i] = _draw_one(res, fn, formats)
+                bar.update(1)
+    finally:
+        bar.close()
     figures, absents, files, embeds = [], [], {}, {}
     for i in range(len(fns)):
         f, a, fl, e, lines = parts[i]
@@ -136,7 +152,7 @@ def _draw(res: Results, thumbnails: bool, formats, workers: int, timing: dict | 
     return figures, absents, files, embeds
 
 
-def _draw_in_processes(res: Results, n: int, thumbnails: bool, formats, workers: int, timing, log) -> dict:
+def _draw_in_processes(res: Results, n: int, thumbnails: bool, formats, workers: int, timing, log, bar) -> dict:
     """{figure function index: :func:`_draw_one`'s result} from ``workers``
     processes (the study's local executor: spawned, their thread budget
     set, ended with this process); whatever they could not return (a
@@ -150,6 +166,7 @@ def _draw_in_processes(res: Results, n: int, thumbnails: bool, formats, workers:
         with LocalExecutor(workers) as pool:
             for job, got in pool.map_unordered(_worker_draw, jobs):
                 parts[job[0]] = got
+                bar.update(1)
     except Exception as exc:  # noqa: BLE001 - a lost process costs time, never the report
         log(f"  report worker processes failed ({type(exc).__name__}: {exc}); drawing the rest here")
     return parts
@@ -179,7 +196,7 @@ def _check_workers(workers) -> int:
 
 
 def _section_of(name: str) -> str:
-    for key, sec in (("radar", "scores"), ("heatmap", "scores"), ("rank", "scores"), ("patch", "colour"), ("scielab", "scielab"),
+    for key, sec in (("crop", "crops"), ("noise", "noise"), ("radar", "scores"), ("heatmap", "scores"), ("rank", "scores"), ("patch", "colour"), ("scielab", "scielab"),
                      ("mtf", "mtf"), ("moire", "moire"), ("gray", "achromatic"), ("sweep", "sweep"),
                      ("thumb", "outputs"), ("sensor", "sensor")):
         if key in name:
@@ -197,7 +214,7 @@ def _encode(fig: ReportFigure, formats) -> tuple[dict, tuple[bytes, str]]:
     if fig.image is not None:
         png = _png_of(fig.image)
         files = {"png": png} if formats else {}
-        if len(png) > _MAX_EMBED_PNG:
+        if len(png) > _MAX_EMBED_PNG and not fig.lossless:
             return files, (_jpeg(fig.image), _MIME["jpeg"])
         return files, (png, _MIME["png"])
     files = {fmt: figure_bytes(fig.figure, fmt) for fmt in formats}
@@ -302,7 +319,7 @@ def _facts(res: Results) -> dict:
 
 
 def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, timing: dict | None = None,
-                 log=None, workers: int = 1) -> Path:
+                 log=None, workers: int = 1, progress: bool = False) -> Path:
     """Build ``out_dir/report.html`` and ``out_dir/figures/*`` from a study's
     results directory (see :mod:`cfa_mitsuba.report`).
 
@@ -321,6 +338,7 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
     workers : processes that draw and encode the figures (default 1: this
         one; more: spawned processes, each loading the results once; the
         files and the page are the same bytes either way).
+    progress : a bar on a terminal, one step per figure function.
 
     Returns
     -------
@@ -348,7 +366,7 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
     fig_dir = root / "figures"
     with matplotlib.rc_context(RC):
         t = time.perf_counter()
-        figures, absents, files, embeds = _draw(res, thumbnails, formats, workers, timing, log)
+        figures, absents, files, embeds = _draw(res, thumbnails, formats, workers, timing, log, progress)
         log(f"  figures drawn and encoded in {time.perf_counter() - t:.2f} s ({workers} process(es))")
     from . import page, tables
     from .low_light import low_light_tables

@@ -25,7 +25,7 @@ def convention_items(res) -> list[str]:
     """The list's items as HTML strings."""
     from ..study.censored import DEFAULT_CONVENTION
 
-    return [
+    items = [
         "<b>Ideal sensor</b>: the same optics and pixel with CIE 1931 colour-matching functions at every pixel, "
         "no mosaic and no noise (ISETCam's 'idealxyz'); every metric compares the camera's output with it. "
         "The camera output is mean-matched to the ideal before comparison (its scale factor is in the details).",
@@ -63,6 +63,12 @@ def convention_items(res) -> list[str]:
         "<b>Colours</b>: each CFA keeps one colour and marker in every figure (Paul Tol's colour-blind-safe "
         "schemes; markers and line styles tell CFAs apart where colours are close).",
         "<b>Files</b>: every figure is also in <code>figures/</code> next to this report (PNG and SVG); the "
-        "numbers are in <code>metrics.csv</code>, <code>scores.csv</code> and <code>decisions.csv</code>, the "
-        "curves and patch tables in <code>details/</code>. Rebuild with <code>cfa-mitsuba report RESULTS_DIR</code>.",
+        "numbers are in <code>metrics.csv</code>, <code>scores.csv</code> and <code>decisions.csv</code>, each "
+        "edge's MTF curve in <code>mtf.csv</code>, each patch's error in <code>patches.csv</code>, each gray "
+        "step's SNR in <code>steps.csv</code>, the rest of the curves, maps and crops in <code>details/</code>. "
+        "Rebuild with <code>cfa-mitsuba report RESULTS_DIR</code>.",
     ]
+    from .field_units import unit_items
+
+    items[5:5] = unit_items(res)  # after MTF50 and MSP
+    return items

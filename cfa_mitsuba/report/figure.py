@@ -56,6 +56,7 @@ class ReportFigure:
     image: object = None         # a Pillow image instead of a matplotlib figure (image sheets; PNG only)
     inches: tuple | None = None  # the matplotlib figure's size (width, height), kept by release()
     pixels: tuple | None = None  # the image's size (width, height), kept by release()
+    lossless: bool = False       # an image embedded as PNG whatever its size, shown pixelated (the crops)
 
     def release(self) -> None:
         """Keep the sizes the page needs and drop the matplotlib figure and

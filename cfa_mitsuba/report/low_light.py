@@ -51,8 +51,8 @@ def snr_figure(res: Results):
     ncol = min(len(cfas), 7)
     lo = float(np.nanmin(snr[["ysnr", "ysnr_low"]].to_numpy(float)))
     hi = float(np.nanmax(snr[["ysnr", "ysnr_high"]].to_numpy(float)))
-    fig, axes = panel_grid(1, len(dems), 2.7, 2.4, left=0.7, right=0.15,
-                           top=0.35 + 0.2 * legend_rows(len(cfas), ncol), bottom=0.55, wspace=0.12, width=6.0)
+    fig, axes = panel_grid(1, len(dems), 2.7, 2.4, left=0.7, right=0.55,
+                           top=0.85 + 0.2 * legend_rows(len(cfas), ncol), bottom=0.55, wspace=0.12, width=6.0)
     for i, d in enumerate(dems):
         ax = axes[i]
         for c in cfas:
@@ -72,19 +72,40 @@ def snr_figure(res: Results):
             axis.set_major_locator(LogLocator(base=10, subs=(1.0, 3.0)))
             axis.set_major_formatter(plain)
             axis.set_minor_formatter(NullFormatter())
-        ax.set_title(d, fontsize=8)
+        ax.set_title(d, fontsize=8, pad=26 if "scene_illuminance_lux" in snr.columns else 5)
         ax.set_xlabel("scene luminance (cd/m²)", fontsize=7)
         if i == 0:
             ax.set_ylabel("YSNR", fontsize=7)
         else:
             ax.tick_params(labelleft=False)
         ax.tick_params(labelsize=6.5)
+        _field_axes(ax, snr, i == len(dems) - 1, plain)
     cfa_legend(fig, cst, cfas, ncol=ncol)
     cap = ("YSNR (mean over rms of the luminance noise) on the gray bar's mid-grey step after the whole image "
            "processor, the mean of the noise realisations with its 95 % interval; the dotted line is YSNR 10, "
            "whose luminance (SNR10) the table 'Low light' gives.  Exposure as the study's policy chose it "
            f"({_policy(res)}).")
     return ReportFigure("snr-luminance", "sweep", title, cap, fig)
+
+
+def _field_axes(ax, snr, last: bool, plain) -> None:
+    """The field's units on a YSNR panel (issue 50): the scene's illuminance
+    in lux along the top (snr.csv's lux per cd/m^2, the gray bar's white) and,
+    on the last panel, YSNR in dB at the right."""
+    if "scene_illuminance_lux" in snr.columns:
+        ratio = (snr["scene_illuminance_lux"].astype(float) / snr["luminance"].astype(float)).median()
+        if np.isfinite(ratio) and ratio > 0:
+            top = ax.secondary_xaxis("top", functions=(lambda v: v * ratio, lambda v: v / ratio))
+            top.set_xlabel("illuminance (lux)", fontsize=6.5)
+            top.xaxis.set_major_formatter(plain)
+            top.tick_params(labelsize=6)
+    if last:  # a linear dB axis whose limits are the log axis's: 20 log10 maps one onto the other
+        right = ax.twinx()
+        lo, hi = ax.get_ylim()
+        right.set_ylim(20 * np.log10(lo), 20 * np.log10(hi))
+        right.set_ylabel("YSNR (dB)", fontsize=7)
+        right.grid(False)
+        right.tick_params(labelsize=6)
 
 
 def _policy(res: Results) -> str:
@@ -104,12 +125,14 @@ def _snr10_html(res: Results) -> str | None:
     s10 = read_snr(res, "snr10.csv")
     if s10 is None:
         return None
+    lux = "snr10_lux" in s10.columns
     rows = ['<table class="data"><thead><tr><th>CFA</th><th>demosaic</th><th>SNR10 (cd/m²)</th>'
-            "<th>95 % interval</th><th>note</th></tr></thead><tbody>"]
+            + ("<th>SNR10 (lux)</th>" if lux else "") + "<th>95 % interval</th><th>note</th></tr></thead><tbody>"]
     for r in s10.itertuples(index=False):
         note = "" if not isinstance(r.note, str) else r.note
         rows.append(f"<tr><th>{_e(r.cfa)}</th><td>{_e(r.demosaic)}</td><td>{_fmt(r.snr10_cd_m2, '.3g')}</td>"
-                    f"<td>{_fmt(r.ci_low, '.3g')} – {_fmt(r.ci_high, '.3g')}</td><td>{_e(note)}</td></tr>")
+                    + (f"<td>{_fmt(r.snr10_lux, '.3g')}</td>" if lux else "")
+                    + f"<td>{_fmt(r.ci_low, '.3g')} – {_fmt(r.ci_high, '.3g')}</td><td>{_e(note)}</td></tr>")
     rows.append("</tbody></table>")
     return "".join(rows)
 

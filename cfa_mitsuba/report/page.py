@@ -32,8 +32,13 @@ SECTIONS = (
      "False colour on a black-and-white chirp and the frequency where it starts."),
     ("achromatic", "Achromatic reproduction: gray bar", "Fig 14",
      "Lightness along the gray bar and its error per step."),
+    ("noise", "Noise per gray step and dynamic range", "ISO 15739",
+     "The luminance SNR on each step of the gray bar, and the dynamic range read from it."),
     ("sweep", "Low light: metrics against luminance", "s. 3: S-CIELAB, SSIM at 3-400 cd/m²",
      "How the image metrics degrade as the scene gets darker."),
+    ("crops", "Crops: 1:1 and 4:1", "beyond the paper",
+     "The same pixels of the chirp, the slanted edge and the puppy from every CFA and demosaicing method, at the "
+     "sensor's pixels and magnified by nearest neighbour: where demosaicing artefacts can be judged."),
     ("outputs", "Camera outputs", "Figs 10, 12, 14 (images)",
      "The rendered sRGB images, every CFA and demosaicing method next to the ideal sensor."),
     ("sensor", "Sensors: spectra of the compared CFAs", "sensor_curves.csv",
@@ -91,6 +96,8 @@ td.tie .rank{font-style:italic;color:#aa3377}
 figure{margin:10px 0 6px}
 figure img{max-width:100%;height:auto;display:block;border:1px solid #eef0f2}
 figure img.raster{image-rendering:auto}
+figure img.pixels{image-rendering:pixelated;max-width:none}
+.pixelwrap{overflow-x:auto}
 .absent{border-left:4px solid var(--warn);background:#fff8f0;padding:6px 12px;margin:8px 0;font-size:13px}
 .absent b{color:var(--warn)}
 .tabs{margin:8px 0}
@@ -124,7 +131,7 @@ _SVG_PX_PER_INCH = 125
 
 def _img(fig, data: bytes, mime: str) -> str:
     b64 = base64.b64encode(data).decode("ascii")
-    klass = ' class="raster"' if fig.raster else ""
+    klass = ' class="raster pixels"' if getattr(fig, "lossless", False) else ' class="raster"' if fig.raster else ""
     size = ""
     inches, pixels = fig.size_inches(), fig.size_pixels()
     if inches is not None and mime == "image/svg+xml":
@@ -137,7 +144,10 @@ def _img(fig, data: bytes, mime: str) -> str:
 
 
 def _figure_html(fig, data: bytes, mime: str, show_title: bool = True) -> str:
-    return (f'<figure id="fig-{_e(fig.key)}">{_img(fig, data, mime)}'
+    img = _img(fig, data, mime)
+    if getattr(fig, "lossless", False):  # at its own pixels: a narrow window scrolls it, never scales it
+        img = f'<div class="pixelwrap">{img}</div>'
+    return (f'<figure id="fig-{_e(fig.key)}">{img}'
             f'<figcaption class="caption">{_e(fig.caption)}</figcaption></figure>')
 
 

@@ -32,18 +32,32 @@ def _fmt(v, digits=4) -> str:
     return f"{v:.{digits}g}"
 
 
+def _diff(r: dict) -> str:
+    """The difference from ISETCam's value: in dB for a result in dB (a
+    percentage of a logarithm means nothing), else in percent."""
+    if r.get("unit") == "dB":
+        return f"{r['value'] - r['expected']:+.3f} dB"
+    return f"{100 * r['relative_difference']:+.1f} %"
+
+
+def _tolerance(r: dict) -> str:
+    allowed = r["tolerance"] * abs(r["expected"])
+    return f"±{allowed:.2g} dB" if r.get("unit") == "dB" else f"±{100 * r['tolerance']:.2g} %"
+
+
 def _case_table(results: list[dict]) -> list[str]:
     by = {r["name"]: r for r in results}
-    lines = ["| case | source | ISETCam | ours, mode isetcam | verdict | ours, mode default | verdict | unit |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = ["| case | source | ISETCam | tolerance (isetcam; default) | ours, mode isetcam | verdict | ours, mode default "
+             "| verdict | unit |", "|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         if r["mode"] != "isetcam":
             continue
         d = by.get(r["name"] + "-default")
         verdict = r["verdict"] + (" (known cause)" if r.get("known_difference") else "")
-        lines.append(f"| {r['name']} | {r['source'].split(' (')[0]} | {_fmt(r['expected'], 6)} | "
-                     f"{_fmt(r['value'], 5)} ({100 * r['relative_difference']:+.1f} %) | {verdict} | "
-                     f"{_fmt(d['value'], 5) if d else '-'} ({100 * d['relative_difference']:+.1f} %) | "
+        lines.append(f"| {r['name']} | {r['source'].split(' (')[0]} | {_fmt(r['expected'], 6)} | {_tolerance(r)}"
+                     f"{'; ' + _tolerance(d) if d else ''} | "
+                     f"{_fmt(r['value'], 5)} ({_diff(r)}) | {verdict} | "
+                     f"{_fmt(d['value'], 5) if d else '-'} ({_diff(d) if d else '-'}) | "
                      f"{d['verdict'] if d else '-'} | {r['unit']} |")
     return lines
 

@@ -338,11 +338,21 @@ def other_table(res: Results) -> str | None:
             for c in cfas:
                 v = res.value(scene, c, d, lum, k)
                 row.append('<td class="na">—</td>' if v is None else
-                           f'<td data-value="{_num(v)}">{fmt_value(k, v)}</td>')
+                           f'<td data-value="{_num(v)}">{fmt_value(k, v)}{_db(k, v)}</td>')
             row.append("</tr>")
             out.append("".join(row))
     out.append("</tbody></table>")
     return "".join(out)
+
+
+def _db(metric: str, value: float) -> str:
+    """An SNR's value in dB beside the ratio (records with ``decibels``)."""
+    from ..metrics import METRICS
+
+    rec = METRICS.get(metric)
+    if rec is None or not getattr(rec, "decibels", False) or not value > 0:
+        return ""
+    return f' <span class="unit">({20 * np.log10(value):.1f} dB)</span>'
 
 
 def sweep_table(res: Results) -> str | None:

@@ -43,6 +43,7 @@ from .exposure_program import (DEFAULT_MAX_ANALOG_GAIN, DEFAULT_MAX_EXPOSURE_S, 
                                PEDESTAL_SIGMAS, ExposureChoice, run_program)
 from .noise import collect_electrons, read_out, temporal_rng
 from .params import NOISE_MODES, SensorParams
+from .photometry import add_photometry as _photometry, saturation_rel as _saturation_rel
 from .physics import apply_crosstalk, channel_map, crosstalk_fractions, with_ir_cut
 from .readout import binned_pattern, read_binned, require_block_layout
 
@@ -386,12 +387,16 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
         raw = read_out(electrons, sensor=sensor, noise=noise, rng=rng, gain=gain)
 
     meta = _scaled_meta(oi, s)
+    _photometry(meta, _pixel_irradiance(oi, sensor.fill_factor), wl, s, exposure)
     # wells that were full before read-out (read noise then spreads their codes)
     full = sensor.well_capacity_e if well is None else well
     meta["saturated_fraction"] = float(np.count_nonzero(electrons >= full)) / electrons.size
     top = raw >= sensor.max_dn if noise == "all" else np.zeros(raw.shape, dtype=bool)  # the ADC's top code
     meta["clipped_fraction"] = (float(np.mean((electrons >= full) | top)) if top.shape == electrons.shape
                                 else max(meta["saturated_fraction"], float(np.mean(top))))
+    clip_e = min(float(np.min(full)), (sensor.max_dn - (sensor.black_level_dn if noise == "all" else 0.0))
+                 / dn_per_electron)
+    meta["saturation_rel"] = _saturation_rel(epr, meta["white_radiance"], clip_e)
     meta["readout"] = {"mode": sensor.readout, "block": block, "binning": sensor.binning if sensor.readout == "bin"
                        else None, "native_tile": cfa.tile_text(), "full_shape": [h, w],
                        "pixel_pitch_um": sensor.pixel_pitch_um * (block if sensor.readout == "bin" else 1)}
@@ -455,6 +460,7 @@ def capture_ideal(image, *, luminance_cd_m2: float | None = None, exposure_s="au
         xyz = (pix.reshape(-1, nb) @ (per_radiance * (s / factor)[:, None])).reshape(h, w, 3)
     _require_representable(xyz, exposure=exposure, scale=s, what="XYZ image")
     meta = _scaled_meta(oi, s)
+    _photometry(meta, pix, wl, s, exposure)
     settings = {
         "cfa": {"name": "ideal", "description": "CIE 1931 XYZ at every pixel, no noise, no mosaic",
                 "tile": "XYZ"},

@@ -39,6 +39,12 @@ PARAMETERS = {
     "u_I_mean": ("dark current (from the mean)", "e-/s"),
     "u_I_var": ("dark current (from the variance)", "e-/s"),
 }
+#: What a non-uniformity emva1288 returns as NaN is: its spatial variance,
+#: less the temporal noise's share (sigma^2 / L), came out negative, so
+#: the square root has no value: the non-uniformity is below what the L
+#: frames of the spatial stack resolve (EMVA 1288 4.0 s. 8.2).
+UNRESOLVED = "below what the spatial stack resolves: its variance estimate, less the temporal noise's share, is negative"
+
 CSV_COLUMNS = ("channel", "wavelength_nm", "parameter", "description", "unit", "measured", "set_value",
                "relative_error", "section")
 _QUIET = logging.WARNING
@@ -117,6 +123,8 @@ def parameter_rows(series, results) -> list[dict]:
             err = ""
             if expected is not None and expected != 0 and math.isfinite(measured):
                 err = (measured - expected) / expected
+            if not math.isfinite(measured):  # never a silent NaN: emva1288's estimate had no root
+                measured, desc = "", f"{desc} ({UNRESOLVED})"
             rows.append({"channel": series.channel, "wavelength_nm": series.wavelength_nm, "parameter": name,
                          "description": desc, "unit": _plain_unit(unit), "measured": measured,
                          "set_value": "" if expected is None else expected, "relative_error": err,

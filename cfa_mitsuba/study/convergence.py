@@ -60,7 +60,6 @@ __all__ = [
     "rate_text",
 ]
 
-import sys
 import time
 from pathlib import Path
 
@@ -276,14 +275,35 @@ def _context_step(p, chain, out: _Rows, log, oi, ideal, study_seed, ref, ref_val
     return noise_std, cfa_values
 
 
-def run_convergence(plan: ConvergencePlan, *, log=None) -> ConvergenceResult:
+def _steps(p) -> int:
+    """How many progress lines :func:`run_convergence` logs for ``p`` (one per unit of work)."""
+    return (6 + len(p.spp_levels) + (p.default_seeds or 0) + 1 + len(p.pocs_iterations) + (1 if p.noise_seeds else 0)
+            + (2 if p.compare_cfas and len(p.compare_cfas) >= 2 else 1 if p.compare_cfas else 0))
+
+
+def run_convergence(plan: ConvergencePlan, *, log=None, progress: bool = False) -> ConvergenceResult:
     """Measure error against run time for ``plan`` (module docstring), in
     four steps: the reference, the spp levels, POCS iterations, and the
     context (sensor noise, CFA spread).  ``log``: a callable for progress
-    lines (default: stderr)."""
+    lines (default: stderr); ``progress``: a bar on a terminal, advanced by
+    each of those lines."""
+    from ..io.progress import progress_bar, stderr_log
     from .tasks import task_seed
 
-    log = log or (lambda msg: print(msg, file=sys.stderr, flush=True))
+    bar = progress_bar(_steps(plan), "convergence", enabled=progress)
+    write = log or stderr_log()
+
+    def log(msg):
+        write(msg)
+        bar.update(1)
+
+    try:
+        return _run(plan, log, task_seed)
+    finally:
+        bar.close()
+
+
+def _run(plan: ConvergencePlan, log, task_seed) -> ConvergenceResult:
     p = plan
     chain = _Chain(p)
     out = _Rows(p.name)

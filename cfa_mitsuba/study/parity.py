@@ -21,13 +21,17 @@ Kinds of case (``kind``, default ``"image"``):
   (:mod:`.parity_image`).
 
 The verdict is ``agrees`` when |value - expected| <= tolerance x |expected|,
-else ``differs``.  A case may carry ``known_difference``: the measured
+else ``differs``.  A result in dB (an SNR) is compared in dB: the allowance
+tolerance x |expected| is a number of dB, and the command line prints the
+difference and the allowance in dB (a percentage of a logarithm means
+nothing); other results in percent.  A case may carry ``known_difference``: the measured
 cause of a difference not yet removed (docs/isetcam-parity.md).
 """
 
 from __future__ import annotations
 
-__all__ = ["ParityCase", "load_case", "find_cases", "run_case", "run_parity", "KINDS", "MODES"]
+__all__ = ["ParityCase", "load_case", "find_cases", "run_case", "run_parity", "describe_difference", "KINDS",
+           "MODES"]
 
 import math
 from dataclasses import dataclass, field
@@ -128,19 +132,44 @@ def run_case(case: ParityCase) -> dict:
         from .parity_image import run_image_case as run
     value, unit, details = run(case)
     rel = (value - case.expected) / abs(case.expected) if case.expected else value - case.expected
-    agrees = abs(value - case.expected) <= case.tolerance * abs(case.expected) + 1e-12
+    allowed = case.tolerance * abs(case.expected)  # in the result's unit
+    agrees = abs(value - case.expected) <= allowed + 1e-12
     return {"name": case.name, "expected": case.expected, "value": float(value), "tolerance": case.tolerance,
             "verdict": "agrees" if agrees else "differs", "mode": case.mode, "kind": case.kind,
-            "unit": unit, "relative_difference": float(rel), "source": case.source,
+            "unit": unit, "relative_difference": float(rel), "difference": float(value - case.expected),
+            "tolerance_abs": float(allowed), "source": case.source,
             "file": case.path, "known_difference": case.known_difference, "details": details}
 
 
-def run_parity(paths) -> list[dict]:
+def describe_difference(result: dict) -> tuple[str, str]:
+    """(difference, tolerance) of a :func:`run_case` result as text: a
+    result in dB (an SNR) in dB, its tolerance the case's relative one times
+    the expected value (the allowance :func:`run_case` applies); any other
+    result in percent of the expected value."""
+    if result.get("unit") == "dB":
+        allowed = result.get("tolerance_abs", result["tolerance"] * abs(result["expected"]))
+        return f"{result['value'] - result['expected']:+.3f} dB", f"±{allowed:.3g} dB"
+    return f"{100 * result['relative_difference']:+.2f} %", f"±{100 * result['tolerance']:.3g} %"
+
+
+def run_parity(paths, *, progress: bool = False) -> list[dict]:
     """Load every case first (so a bad file fails before any work), then run
-    them in order; returns :func:`run_case`'s results."""
+    them in order; returns :func:`run_case`'s results.  ``progress``: a bar
+    on a terminal, one step per case."""
+    from ..io.progress import progress_bar
+
     cases = [load_case(p) for p in find_cases(paths)]
     names = [c.name for c in cases]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise CfaMitsubaError(f"parity case name {dup[0]!r} is used by more than one file")
-    return [run_case(c) for c in cases]
+    bar = progress_bar(len(cases), "parity", enabled=progress, unit="case")
+    out = []
+    try:
+        for c in cases:
+            bar.set_postfix_str(c.name)
+            out.append(run_case(c))
+            bar.update(1)
+    finally:
+        bar.close()
+    return out

@@ -14,6 +14,9 @@ luminance, CFA, demosaic), write the tables.  The report is the next stage
       timing.json     where the time went
       config.json     the validated config, as run
       sensor_curves.csv  each compared CFA's QE curves as captured (sensor_curves.py)
+      mtf.csv, patches.csv, steps.csv  each edge's MTF curve, each ColorChecker
+                      patch's error, each gray step's SNR and the dynamic range
+                      (detail_tables.py; from the first realisation's details)
       details/        per evaluation: curves and tables (JSON), reduced
                       S-CIELAB maps (.npy), thumbnails (.png)
       figures/, report.html   (cfa_mitsuba.report, built after the runner)
@@ -46,6 +49,7 @@ from .cfa_facts import write_cfa_facts
 from .sensor_curves import write_sensor_curves
 from .tables import mean_table, order_rows, write_tables
 from .snr import write_snr_tables
+from .detail_tables import write_detail_tables
 from .render_seeds import is_3d as _is_3d, path_traced, render_seeded
 from .tasks import EvaluationTask, evaluate_group, evaluate_task, render_task
 
@@ -158,10 +162,9 @@ def _task_id(task) -> str:
 
 
 def _progress(total: int, desc: str, enabled: bool):
-    from tqdm import tqdm
+    from ..io.progress import progress_bar  # on a terminal only (issue 50)
 
-    return tqdm(total=total, desc=desc, unit="task", file=sys.stderr, disable=not enabled, dynamic_ncols=True,
-                smoothing=0.1)
+    return progress_bar(total, desc, enabled=enabled, unit="task")
 
 
 def _render_label(src: dict) -> str:
@@ -243,7 +246,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     log = log or (lambda msg: print(msg, file=sys.stderr))
     # issue 27: the study's size stated and checked before anything is written
     workers = None if scheduler else resolve_workers(workers, config.workers, log)
-    check_study_size(config, workers, scheduler=scheduler, force=force, log=log)
+    size = check_study_size(config, workers, scheduler=scheduler, force=force, log=log)
     out = check_writable_dir(out_dir)
     work = out / ".work"
     details = out / "details"
@@ -271,7 +274,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
                                        "base_condition": config.base_condition().to_dict()}, indent=1, default=str))
         write_sensor_curves(config, out)  # the compared sensors' QE curves, for the report
         log(f"study {config.name!r}: {len(config.scenes)} scene(s), {len(config.cfas)} CFA(s), "
-            f"{len(config.demosaics)} demosaic(s); {len(tasks)} evaluation task(s)"
+            f"{len(config.demosaics)} demosaic(s); {len(tasks)} evaluation task(s)" + _counted_twice(size, tasks)
             + (f", {reused} already done" if reused else "") + f"; running on {executor.description}")
         t = time.perf_counter()
 
@@ -326,6 +329,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         policy=config.range_policy, clip=config.clip_scores, builtin_scenes=builtin)
     write_cfa_facts(out, config.cfas, order["cfa"], config.chain_settings(), config.base_condition())
     write_snr_tables(out, metrics)
+    write_detail_tables(out, tasks, details)  # mtf.csv, patches.csv, steps.csv: the curves behind the values
     with atomic_output(out / "ranges.json") as tmp:
         tmp.write_text(json.dumps({**{k: _range_pair(v) for k, v in ranges.items()},
                                    "_policy": config.range_policy, "_constant": constant}, indent=1))
@@ -334,6 +338,17 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     result = StudyResult(out, metrics, scores, timing, len(tasks), reused)
     write_timing(result)
     return result
+
+
+def _counted_twice(size, tasks: list) -> str:
+    """Why the size line's task count (an upper bound, study/sizing.py) can
+    exceed the plan's: a condition that two tables of the config reach (the
+    base luminances and a sweep's) runs once."""
+    extra = int(getattr(size, "tasks", len(tasks))) - len(tasks)
+    if extra <= 0:
+        return ""
+    return (f" (the size line's {size.tasks:,} counts {extra:,} twice: conditions that the base luminances and "
+            "a sweep both reach run once)")
 
 
 def _portable_config(config: StudyConfig, out: Path) -> dict:
@@ -392,9 +407,13 @@ def _write_failures(out: Path, failures: list[dict], log) -> None:
 
     with atomic_output(target) as tmp:
         pd.DataFrame(failures).to_csv(tmp, index=False)
-    log(f"warning: {len(failures)} metric value(s) could not be measured; see {target}")
+    # a warning, not progress: on stderr even under --quiet (the log may be silent)
+    def warn(msg):
+        print(msg, file=sys.stderr)
+
+    warn(f"warning: {len(failures)} metric value(s) could not be measured; see {target}")
     for f in failures[:5]:
-        log(f"  {f['scene']}/{f['cfa']}/{f['demosaic']}/L{float(f.get('luminance', 0)):g} {f['metric']}: {f['error']}")
+        warn(f"  {f['scene']}/{f['cfa']}/{f['demosaic']}/L{float(f.get('luminance', 0)):g} {f['metric']}: {f['error']}")
 
 
 def _range_pair(r) -> list[float]:

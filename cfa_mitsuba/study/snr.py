@@ -20,7 +20,8 @@ interval):
     that bracket it; ``ci_low`` and ``ci_high`` the same crossing of the
     interval's upper and lower curves (more SNR reaches 10 at less light);
     ``note`` says why a value is missing (the sweep never reaches, or starts
-    above, YSNR 10), so an empty cell is never silent.
+    above, YSNR 10), so an empty cell is never silent; ``snr10_lux`` the
+    same crossing as the scene's illuminance (lux per cd/m^2 of the sweep).
 
 References
 ----------
@@ -39,8 +40,8 @@ from pathlib import Path
 import numpy as np
 
 SNR_COLUMNS = ["cfa", "demosaic", "luminance", "ysnr", "ysnr_low", "ysnr_high", "chroma_snr",
-               "chroma_snr_low", "chroma_snr_high"]
-SNR10_COLUMNS = ["cfa", "demosaic", "snr10_cd_m2", "ci_low", "ci_high", "note"]
+               "chroma_snr_low", "chroma_snr_high", "ysnr_db", "chroma_snr_db", "scene_illuminance_lux"]
+SNR10_COLUMNS = ["cfa", "demosaic", "snr10_cd_m2", "ci_low", "ci_high", "note", "snr10_lux"]
 #: The YSNR whose luminance ``snr10.csv`` gives.
 SNR_TARGET = 10.0
 
@@ -61,9 +62,14 @@ def snr_table(metrics, metric: str = "ysnr"):
     c = metrics[metrics["metric"] == "chroma_snr"].drop_duplicates(keys, keep="first")
     c = c[keys + ["value", "ci_low", "ci_high"]].rename(
         columns={"value": "chroma_snr", "ci_low": "chroma_snr_low", "ci_high": "chroma_snr_high"})
-    out = y[keys + ["value", "ci_low", "ci_high"]].rename(
+    lux = y["scene_illuminance_lux"] if "scene_illuminance_lux" in y.columns else np.nan
+    out = y[keys + ["value", "ci_low", "ci_high"]].assign(scene_illuminance_lux=lux).rename(
         columns={"value": "ysnr", "ci_low": "ysnr_low", "ci_high": "ysnr_high"}).merge(c, on=keys, how="left")
     out["luminance"] = out["luminance"].astype(float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for col in ("ysnr", "chroma_snr"):
+            v = out[col].to_numpy(dtype=float)
+            out[f"{col}_db"] = np.where(v > 0, 20.0 * np.log10(np.where(v > 0, v, 1.0)), np.nan)
     rank = {col: {v: i for i, v in enumerate(dict.fromkeys(y[col]))} for col in ("cfa", "demosaic")}
     out["_c"], out["_d"] = out["cfa"].map(rank["cfa"]), out["demosaic"].map(rank["demosaic"])
     return out.sort_values(["_c", "_d", "luminance"], kind="stable")[SNR_COLUMNS].reset_index(drop=True)
@@ -110,8 +116,11 @@ def snr10_table(snr):
     for (cfa, dem), g in snr.groupby(["cfa", "demosaic"], sort=False):
         lum = g["luminance"].to_numpy(float)
         mid, lo, hi = (crossing(lum, g[col]) for col in ("ysnr", "ysnr_high", "ysnr_low"))
+        per = (g["scene_illuminance_lux"].to_numpy(float) / lum) if "scene_illuminance_lux" in g.columns else None
+        lux_per = float(np.nanmean(per)) if per is not None and np.isfinite(per).any() else None
         rows.append({"cfa": cfa, "demosaic": dem, "snr10_cd_m2": mid, "ci_low": lo, "ci_high": hi,
-                     "note": "" if mid is not None else _note(lum, g["ysnr"].to_numpy(float))})
+                     "note": "" if mid is not None else _note(lum, g["ysnr"].to_numpy(float)),
+                     "snr10_lux": mid * lux_per if mid is not None and lux_per else None})
     return pd.DataFrame(rows, columns=SNR10_COLUMNS)
 
 

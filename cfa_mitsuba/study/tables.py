@@ -32,8 +32,15 @@ from .axes import AXES
 #: What each evaluation's capture was (issue 22): its exposure time (s), the
 #: exposure program's analogue and digital gains, and the fraction of its
 #: pixels clipped at the full well or the ADC's top code (the mean over the
-#: realisations in metrics.csv).
-CAPTURE_COLUMNS = ("exposure_s", "analog_gain", "digital_gain", "clipped_fraction")
+#: realisations in metrics.csv); in the field's units (issue 50), the
+#: scene's illuminance (lux: pi x its white's luminance) and the
+#: sensor-plane exposure (lux s: the pixels' mean illuminance x the
+#: exposure time), sensor/photometry.py.
+CAPTURE_COLUMNS = ("exposure_s", "analog_gain", "digital_gain", "clipped_fraction", "scene_illuminance_lux",
+                   "sensor_exposure_lux_s")
+#: SNRs (records with ``decibels``) in dB beside the ratio: 20 log10 of the
+#: value and of its interval's ends (empty for other metrics).
+DB_COLUMNS = ("value_db", "ci_low_db", "ci_high_db")
 
 
 #: The columns that identify a value (one per condition axis included).
@@ -58,7 +65,7 @@ def metric_columns(*, realisations: bool = False) -> list[str]:
     if realisations:
         return [*keys[:-1], "realisation", "metric", "value", "unit", "censored", *CAPTURE_COLUMNS, "render_seed"]
     return [*keys, "value", "ci_low", "ci_high", "n", "unit", "censored", "censored_count", *CAPTURE_COLUMNS,
-            "render_seeds", "sensor_half_width"]
+            "render_seeds", "sensor_half_width", *DB_COLUMNS]
 
 
 #: The key columns a value's render component is not pooled over: the
@@ -126,7 +133,23 @@ def mean_table(realisations):
         caps = keyed[keys + have].copy()
         caps[have] = caps[have].apply(pd.to_numeric, errors="coerce")
         out = out.merge(caps.groupby(keys, sort=False, dropna=False)[have].mean().reset_index(), on=keys, how="left")
-    return out.reindex(columns=metric_columns())
+    return _with_decibels(out).reindex(columns=metric_columns())
+
+
+def _with_decibels(table):
+    """:data:`DB_COLUMNS` filled for the metrics whose records are SNRs
+    (amplitude ratios: 20 log10; a ratio <= 0 has no dB value)."""
+    import numpy as np
+
+    from ..metrics import METRICS
+
+    snr = table["metric"].map(lambda m: bool(getattr(METRICS.get(m), "decibels", False))).astype(bool)
+    for src, dst in zip(("value", "ci_low", "ci_high"), DB_COLUMNS):
+        v = np.asarray(table[src], dtype=float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            db = np.where(snr & (v > 0), 20.0 * np.log10(np.where(v > 0, v, 1.0)), np.nan)
+        table[dst] = db
+    return table
 
 
 def _censored_values(out, keyed, keys):

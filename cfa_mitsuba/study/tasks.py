@@ -235,8 +235,9 @@ def _thumbnail(rendered, path: Path, longest: int = 240) -> None:
     write_image(path, codes / 255.0)
 
 
-def _save_details(folder: Path, stem: str, results: dict, rendered, extra: dict) -> None:
-    """Curves and tables as JSON, S-CIELAB map (reduced) as .npy, thumbnail PNG."""
+def _save_details(folder: Path, stem: str, results: dict, rendered, extra: dict, crop=None) -> None:
+    """Curves and tables as JSON, S-CIELAB map (reduced) as .npy, thumbnail PNG
+    and, given a ``crop`` box, the 1:1 crop PNG (:mod:`.crops`)."""
     from ..io import atomic_output
 
     folder.mkdir(parents=True, exist_ok=True)
@@ -252,6 +253,10 @@ def _save_details(folder: Path, stem: str, results: dict, rendered, extra: dict)
         tmp.write_text(json.dumps(payload, allow_nan=False, default=json_default))
     if rendered is not None:
         _thumbnail(rendered, folder / f"{stem}.png")
+        if crop is not None:
+            from .crops import save_crop
+
+            save_crop(folder / f"{stem}.crop.png", rendered, crop)
 
 
 def _capture_columns(raw) -> dict:
@@ -259,7 +264,9 @@ def _capture_columns(raw) -> dict:
     st = raw.settings or {}
     return {"exposure_s": float(raw.exposure_s), "analog_gain": float(st.get("analog_gain") or 1.0),
             "digital_gain": float(st.get("digital_gain") or 1.0),
-            "clipped_fraction": raw.meta.get("clipped_fraction", raw.meta.get("saturated_fraction"))}
+            "clipped_fraction": raw.meta.get("clipped_fraction", raw.meta.get("saturated_fraction")),
+            "scene_illuminance_lux": raw.meta.get("scene_illuminance_lux"),
+            "sensor_exposure_lux_s": raw.meta.get("sensor_exposure_lux_s")}
 
 
 def _grey_electrons(raw, grey: float = 0.18) -> dict:
@@ -275,6 +282,7 @@ def _details_extra(ev, raw, seed) -> dict:
         "mean_match_scale": ev.mean_match_scale, "condition_number": isp_meta.get("condition_number"),
         "noise_gain_xyz": isp_meta.get("noise_gain_xyz"), "fit_rank": isp_meta.get("fit_rank"),
         "exposure_s": float(raw.exposure_s), "saturated_fraction": raw.meta.get("saturated_fraction"), "seed": seed,
+        "saturation_rel": raw.meta.get("saturation_rel"),  # the top of the gray steps' dynamic range (steps.py)
     }
 
 
@@ -332,7 +340,7 @@ def evaluate_task(task) -> dict:
             failures.extend({**base, **f} for f in ev.failures)
             if keep:
                 _save_details(details_dir / t.scene / safe_label(cfa_label) / method, tag, ev.results,
-                              ev.processed, _details_extra(ev, raw, seed))
+                              ev.processed, _details_extra(ev, raw, seed), crop=_crop(t.scene, ideal))
     return {"rows": rows, "timing": chain.timing, "failures": failures,
             "ideal_rows": _ideal_rows(t, chain, ideal, details_dir, tag)}
 
@@ -357,8 +365,16 @@ def _ideal_rows(t: EvaluationTask, chain, ideal, details_dir, tag) -> list[dict]
             kept = [n for n in t.metrics if m.get_metric(n).ideal_details]
             ideal_results = m.evaluate_many(kept, chain.inputs(ideal, ideal.xyz, cond),
                                             options=chain.settings.metric_options_for(cond))
-            _save_details(ideal_dir, tag, ideal_results, ideal, {"white_xyz": list(map(float, ideal.white_xyz))})
+            _save_details(ideal_dir, tag, ideal_results, ideal, {"white_xyz": list(map(float, ideal.white_xyz))},
+                          crop=_crop(t.scene, ideal))
     return rows
+
+
+def _crop(scene: str, ideal):
+    """The crop box of ``scene`` on the ideal's grid (the camera's too), or None (:mod:`.crops`)."""
+    from .crops import crop_box
+
+    return crop_box(scene, ideal.meta, ideal.xyz.shape)
 
 
 def _result_rows(results: dict) -> list[dict]:
