@@ -56,7 +56,6 @@ __all__ = ["read_sensor_file", "is_sensor_file", "sensor_file_curves", "volts_to
 
 import math
 import numbers
-import tomllib
 from dataclasses import fields
 from pathlib import Path
 
@@ -100,9 +99,11 @@ def volts_to_electrons(values: dict, where: str) -> dict:
 def is_sensor_file(path) -> bool:
     """Whether a ``.toml`` path is a sensor file (it has a ``qe`` key) rather
     than a CFA file; False for anything unreadable (the CFA reader then says why)."""
-    try:
-        return "qe" in tomllib.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+    from ..io.guard import read_toml
+
+    try:  # regular file, bounded: a FIFO named as a CFA file must not block here (issue 51)
+        return "qe" in read_toml(path, "sensor file")
+    except CfaMitsubaError:
         return False
 
 
@@ -224,12 +225,9 @@ def sensor_file_curves(data: dict, base: Path, where: str, channels) -> dict:
 
 
 def _read(path: Path) -> dict:
-    try:
-        return tomllib.loads(path.read_text())
-    except OSError as exc:
-        raise CfaMitsubaError(f"cannot read sensor file {str(path)!r}: {exc.strerror}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise CfaMitsubaError(f"{path}: invalid TOML: {exc}") from None
+    from ..io.guard import read_toml
+
+    return read_toml(path, "sensor file")  # regular file, bounded, UTF-8, nesting the parser survives
 
 
 def read_sensor_file(path) -> dict:

@@ -40,7 +40,6 @@ __all__ = ["StudySize", "study_size", "scene_units", "check_study_size", "resolv
 
 import functools
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -60,7 +59,9 @@ _UNKNOWN_SIZE = (512, 512, 1)
 def unit_costs() -> dict:
     """The measured per-unit costs (``data/study_costs.toml``), seconds."""
     path = Path(__file__).resolve().parents[1] / "data" / "study_costs.toml"
-    return tomllib.loads(path.read_text())["seconds"]
+    from ..io.guard import read_toml
+
+    return read_toml(path, "study costs")["seconds"]
 
 
 @dataclass(frozen=True)
