@@ -136,8 +136,10 @@ def _stored_white(path):
 
     if Path(path).suffix.lower() != ".npz":
         return None
+    from ..io.guard import open_regular
+
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with open_regular(path, "image") as fh, np.load(fh, allow_pickle=False) as z:
             if "white_xyz" not in z.files:
                 return None
             w = np.asarray(z["white_xyz"], dtype=np.float64).ravel()

@@ -156,20 +156,25 @@ def read_image(path, *, key: str | None = None) -> ImageFile:
             if key is None:  # never a guess: 'srgb' read as XYZ gave wrong metrics
                 raise CfaMitsubaError(f"{str(p)!r} has no {' or '.join(map(repr, _NPZ_KEYS))} array (arrays: "
                                       f"{', '.join(names) or 'none'})")
-        try:
-            loaded = np.load(p, allow_pickle=False)
-        except (ValueError, OSError, EOFError) as exc:
-            raise CfaMitsubaError(f"{str(p)!r} is not a readable numpy file: {' '.join(str(exc).split())}") from None
-        if suffix == ".npy":
-            arr = loaded
-            meta = {}
-        else:
-            with loaded:
-                if key not in names:
-                    raise CfaMitsubaError(f"{str(p)!r}: no array {key!r} (arrays: {', '.join(names)})")
-                arr = loaded[key]
-                meta = load_json_text(str(loaded["meta"]), f"{str(p)!r}'s meta") if "meta" in loaded.files else {}
-                meta = meta if isinstance(meta, dict) else {}
+        from .guard import open_regular
+
+        with open_regular(p, "numpy file") as fh:  # the file numpy_arrays checked, not one swapped in since
+            try:
+                loaded = np.load(fh, allow_pickle=False)
+            except (ValueError, OSError, EOFError) as exc:
+                raise CfaMitsubaError(f"{str(p)!r} is not a readable numpy file: "
+                                      f"{' '.join(str(exc).split())}") from None
+            if suffix == ".npy":
+                arr = loaded
+                meta = {}
+            else:
+                with loaded:
+                    if key not in names:
+                        raise CfaMitsubaError(f"{str(p)!r}: no array {key!r} (arrays: {', '.join(names)})")
+                    arr = loaded[key]
+                    meta = load_json_text(str(loaded["meta"]), f"{str(p)!r}'s meta") if "meta" in loaded.files \
+                        else {}
+                    meta = meta if isinstance(meta, dict) else {}
         if arr.dtype.kind not in "biuf":
             raise CfaMitsubaError(f"{str(p)!r}: array of type {arr.dtype} is not numeric")
         return ImageFile(np.asarray(arr, dtype=np.float64), suffix[1:], None, None, meta)
