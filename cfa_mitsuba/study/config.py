@@ -175,7 +175,7 @@ def _sensor_values(ck: _Checker, preset, given: dict, cfas, base: Path) -> dict:
     CSV resolved against the config's folder; a base readout that every
     CFA of the study can use."""
     from ..sensor import get_cfa
-    from ..sensor.params import SensorParams
+    from ..sensor.params import SensorParams, check_channel_names
     from ..sensor.readout import readout_applies
 
     values = dict(given)
@@ -189,6 +189,7 @@ def _sensor_values(ck: _Checker, preset, given: dict, cfas, base: Path) -> dict:
                                      "transmittance)")
         values["ir_cut"] = str(f.resolve())
     try:
+        check_channel_names(values, {ch for c in cfas for ch in get_cfa(c).channels}, "any CFA of this study")
         SensorParams(**values)
     except (CfaMitsubaError, TypeError) as exc:
         ck.fail("sensor", str(exc))
@@ -307,6 +308,15 @@ def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, di
         "spectra_sets": lambda v, k: _spectra_map(ck, v, k),
     }
     sensor_cfg, preset = _sensor_preset(ck, data.get("sensor", {}), base)
+    if isinstance(sensor_cfg, dict):  # a channel no CFA has is what is wrong, before its value is judged
+        from ..sensor import get_cfa
+        from ..sensor.params import check_channel_names
+
+        try:
+            check_channel_names({k: v for k, v in sensor_cfg.items() if isinstance(v, dict)},
+                                {ch for c in cfas for ch in get_cfa(c).channels}, "any CFA of this study")
+        except CfaMitsubaError as exc:
+            ck.fail("sensor", str(exc))
     sensor_all = _dataclass_table(ck, sensor_cfg, "sensor", SensorParams, capture_extra)
     capture = {k: sensor_all.pop(k) for k in list(sensor_all) if k in capture_extra}
     sensor_all = _sensor_values(ck, preset, sensor_all, cfas, base)

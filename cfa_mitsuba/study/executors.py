@@ -20,7 +20,7 @@ variable ``CFA_MITSUBA_THREADS``, which the render stage applies with
 
 from __future__ import annotations
 
-__all__ = ["LocalExecutor", "DaskExecutor", "make_executor", "thread_budget"]
+__all__ = ["LocalExecutor", "DaskExecutor", "make_executor", "thread_budget", "check_scheduler_address"]
 
 import concurrent.futures as cf
 import multiprocessing
@@ -136,6 +136,33 @@ def _dask_call(fn: Callable, item, processes_per_host: dict):
     return fn(item)
 
 
+#: The schemes of a Dask scheduler address (distributed.comm's registered backends).
+_DASK_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx", "inproc")
+
+
+def check_scheduler_address(address: str) -> str:
+    """``address`` if it has the form of a Dask scheduler address
+    (``tcp://HOST:PORT``, ``HOST:PORT``, or another of
+    :data:`_DASK_SCHEMES`), else one line naming the expected form (a
+    malformed one was a ValueError traceback from inside the client)."""
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    expected = (f"--scheduler {address!r}: expected a Dask scheduler address such as tcp://HOST:PORT or HOST:PORT "
+                "(the scheduler prints its address when it starts)")
+    text = str(address).strip()
+    try:
+        scheme, loc = parse_address(text, strict=False)
+        if scheme not in _DASK_SCHEMES or not loc or any(c.isspace() for c in text):
+            raise ValueError(scheme)
+        if scheme != "inproc":
+            host, port = parse_host_port(loc)
+            if not host or not 0 < int(port) < 65536:
+                raise ValueError(loc)
+    except (ValueError, TypeError):
+        raise CfaMitsubaError(expected) from None
+    return text
+
+
 class DaskExecutor:
     """A Dask cluster reached at ``address`` (``tcp://HOST:PORT``)."""
 
@@ -146,6 +173,7 @@ class DaskExecutor:
             from distributed import Client
         except ImportError:  # pragma: no cover - installed by the dask/test extras
             raise CfaMitsubaError("--scheduler needs dask.distributed: pip install 'cfa-mitsuba[dask]'") from None
+        address = check_scheduler_address(address)
         self.address = address
         self.retries = retries
         self.timeout_s = timeout_s
@@ -157,7 +185,7 @@ class DaskExecutor:
     def __enter__(self):
         try:
             self.client = self._Client(self.address, timeout=self.timeout_s)
-        except (OSError, TimeoutError) as exc:
+        except (OSError, TimeoutError, ValueError) as exc:
             raise CfaMitsubaError(f"cannot reach the Dask scheduler at {self.address}: {exc}") from None
         info = self.client.scheduler_info()
         workers = info.get("workers", {})

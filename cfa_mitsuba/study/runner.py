@@ -237,10 +237,12 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     cores, else 2); ``scheduler``: a Dask scheduler address instead;
     ``force``: start a study above the size limits (study.sizing).
     """
-    from .executors import make_executor, thread_budget
+    from .executors import check_scheduler_address, make_executor, thread_budget
     from .sizing import check_study_size, resolve_workers
 
     log = log or (lambda msg: print(msg, file=sys.stderr))
+    if scheduler is not None:  # a malformed (or empty) address is refused before anything is said or written
+        check_scheduler_address(scheduler)
     # issue 27: the study's size stated and checked before anything is written
     workers = None if scheduler else resolve_workers(workers, config.workers, log)
     check_study_size(config, workers, scheduler=scheduler, force=force, log=log)
@@ -312,6 +314,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     rows = [r for task in tasks for r in done[_task_id(task)]["rows"]]
     failures = [f for task in tasks for f in done[_task_id(task)].get("failures", [])]
     _write_failures(out, failures, log)
+    _require_a_measurement(rows, failures, out)
     order = {
         "scene": [s.name for s in config.scenes], "cfa": [_cfa_label(c) for c in config.cfas],
         "demosaic": list(config.demosaics), "metric": list(SCORED_METRICS),
@@ -361,6 +364,18 @@ class _InProcess:
                 os.environ.pop("CFA_MITSUBA_THREADS", None)
             else:
                 os.environ["CFA_MITSUBA_THREADS"] = saved
+
+
+def _require_a_measurement(rows: list, failures: list[dict], out: Path) -> None:
+    """A run in which every measurement failed is an error (exit 2), not an
+    empty table: one line with the first cause; failures.csv lists all."""
+    if rows or not failures:
+        return
+    f = failures[0]
+    where = "/".join(str(f.get(k)) for k in ("scene", "cfa", "demosaic") if f.get(k) is not None)
+    raise CfaMitsubaError(f"every one of the {len(failures)} measurement(s) failed (all listed in "
+                          f"{out / 'failures.csv'}); the first, {where} {f.get('metric')} at "
+                          f"{f.get('luminance')} cd/m^2: {f.get('error')}")
 
 
 def _write_failures(out: Path, failures: list[dict], log) -> None:
@@ -457,4 +472,5 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
     for f in failures:
         once.setdefault(tuple(sorted((k, str(v)) for k, v in f.items() if k not in ("realisation", "error"))), f)
     _write_failures(out, list(once.values()), log)
+    _require_a_measurement(rows, failures, out)
     return metrics
