@@ -73,6 +73,8 @@ class StudyConfig:
     metric_options: dict = field(default_factory=dict)
     demosaic_options: dict = field(default_factory=dict)
     render_seeds: int = DEFAULT_RENDER_SEEDS
+    worker_max_tasks: int | None = None  # a local worker is recycled after this many tasks (study.executors)
+    worker_max_memory: int | None = None  # ... or once its resident memory passes this many bytes
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -341,6 +343,23 @@ def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, di
     return optics, sensor_all, capture
 
 
+def _worker_recycling(ck: _Checker, data: dict) -> tuple[int | None, int | None]:
+    """``worker_max_tasks`` (an integer >= 1) and ``worker_max_memory`` (bytes,
+    or a size such as "4G"), or None for the executor's defaults."""
+    from ..io.limits import parse_size
+
+    tasks = ck.integer(data["worker_max_tasks"], "worker_max_tasks", 1) if "worker_max_tasks" in data else None
+    memory = data.get("worker_max_memory")
+    if memory is not None:
+        if isinstance(memory, bool) or not isinstance(memory, (int, str)):
+            ck.fail("worker_max_memory", f"must be a size such as \"4G\" or a number of bytes, got {memory!r}")
+        try:
+            memory = parse_size(memory, "worker_max_memory")
+        except CfaMitsubaError as exc:
+            ck.fail("worker_max_memory", str(exc).split(": ", 1)[-1])
+    return tasks, memory
+
+
 def _at_least_one(ck: _Checker, v, key: str) -> float:
     x = ck.number(v, key, positive=True)
     if x < 1:
@@ -383,7 +402,7 @@ def _output(ck: _Checker, out_cfg) -> dict:
 
 _TOP_KEYS = ("name", "description", "seed", "scenes", "custom_scenes", "cfas", "demosaics", "luminances", "sweep",
              "render", "optics", "sensor", "isp", "mean_match", "normalisation", "output", "workers", "seeds",
-             "metrics", "render_seeds")
+             "metrics", "render_seeds", "worker_max_tasks", "worker_max_memory")
 
 
 def parse_config(data: dict, *, where: str = "config", base: Path | None = None) -> StudyConfig:
@@ -399,6 +418,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         if required not in data and not (required == "scenes" and "custom_scenes" in data):
             ck.fail(required, "missing (required)")
     name, description, seed, workers = ck.header(data)
+    max_tasks, max_memory = _worker_recycling(ck, data)
     seeds = ck.integer(data.get("seeds", DEFAULT_SEEDS), "seeds", 1)
     render_seeds = ck.integer(data.get("render_seeds", DEFAULT_RENDER_SEEDS), "render_seeds", 1)
     render_cfg = data.get("render", {})
@@ -425,6 +445,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         optics=optics, sensor=sensor_all, capture=capture, isp=isp_opts, mean_match=mean_match,
         ranges=ranges, clip_scores=clip, output=output, workers=workers, seeds=seeds, range_policy=policy,
         metric_options=options, demosaic_options=demosaic_options, render_seeds=render_seeds,
+        worker_max_tasks=max_tasks, worker_max_memory=max_memory,
     )
 
 

@@ -8,10 +8,20 @@ complete.
   with 'spawn' (a forked copy of a process that has initialised Dr.Jit's
   LLVM back end is not safe), each capped to its share of the cores; with
   one worker the tasks run in this process (no pool, easiest to debug).
+  A worker is recycled (ends, and a fresh one takes its place) after
+  ``max_tasks`` tasks or once its resident memory passes ``max_memory``:
+  Mitsuba keeps memory over many scene loads in one process (mitsuba3
+  issues 1890, 190), so a run of a million captures must not live in one
+  process (benchmarks/bench_recycling.py: worker memory over 2,000
+  renders).  Results do not depend on it: every task is seeded.
 * :class:`DaskExecutor`: a ``dask.distributed`` client on a scheduler
   address; plain ``dask worker`` processes started with no options work,
   because every task caps Dr.Jit's threads itself (:func:`thread_budget`).
-  Failed tasks (a worker killed mid-task) are retried elsewhere.
+  Failed tasks (a worker killed mid-task, or restarted by its nanny past
+  its ``--memory-limit``) are retried elsewhere.  Dask workers are
+  recycled by Dask's own options (``dask worker --lifetime 1h
+  --lifetime-stagger 5m --lifetime-restart``, ``--memory-limit``;
+  docs/study.md), not by this module.
 
 Dr.Jit ignores OMP_NUM_THREADS, so the cap travels as the environment
 variable ``CFA_MITSUBA_THREADS``, which the render stage applies with
@@ -47,6 +57,70 @@ def thread_budget(workers_on_node: int) -> int:
     return max(1, _cpu_count() // max(1, int(workers_on_node)))
 
 
+#: A local worker is recycled after this many tasks unless told otherwise (a
+#: study's ordinary run sends each worker far fewer; a long one is renewed).
+DEFAULT_WORKER_MAX_TASKS = 1000
+#: ... or once its resident memory passes this share of the memory available
+#: per worker (Dask's nanny pauses a worker at the same share, 0.8).
+DEFAULT_WORKER_MEMORY_SHARE = 0.8
+
+
+def _rss_bytes() -> int:
+    """This process's resident memory now (bytes; /proc/self/statm on Linux,
+    else the peak, which errs towards recycling)."""
+    try:
+        with open("/proc/self/statm", "rb") as fh:  # a kernel file: always a regular, tiny file
+            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        import resource
+
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+class _Recycle:
+    """The pool's per-worker task limit, extended by a memory ceiling.
+
+    ``concurrent.futures`` ends a worker after ``max_tasks_per_child`` tasks
+    (Python >= 3.11) and starts a fresh one in its place; its worker loop
+    decides with ``num_tasks >= max_tasks`` as each task starts
+    (``concurrent/futures/process.py``, ``_process_worker``).  An object of
+    this class stands in for that number: the comparison is also true once
+    the worker's resident memory has passed ``max_memory`` bytes, so the
+    worker ends after the task it is starting (at most one task past the
+    ceiling).  tests/study/test_worker_recycling.py holds the pool to it."""
+
+    def __init__(self, max_tasks: int, max_memory: int | None):
+        self.max_tasks, self.max_memory = int(max_tasks), max_memory
+
+    def __le__(self, num_tasks: int) -> bool:  # `num_tasks >= max_tasks`, reflected
+        return num_tasks >= self.max_tasks or (self.max_memory is not None and _rss_bytes() > self.max_memory)
+
+
+class _RecyclingPool(cf.ProcessPoolExecutor):
+    """A process pool whose workers end at their :class:`_Recycle` limit and
+    are always replaced.
+
+    The standard pool can deadlock with ``max_tasks_per_child``: it decides
+    whether to start a replacement from a semaphore that counts finished
+    tasks, not idle workers, so with a backlog it may start none once every
+    worker has reached its limit (CPython gh-115634, present in 3.11 to
+    3.15.0b3, fixed upstream in gh-140900 by the rule used here).  Here a
+    worker that ends is replaced whenever the pool is below its size."""
+
+    def __init__(self, recycle: _Recycle, **kwargs):
+        super().__init__(max_tasks_per_child=recycle.max_tasks, **kwargs)
+        self._max_tasks_per_child = recycle  # read by each worker as it starts a task (class _Recycle)
+
+    def _adjust_process_count(self):
+        while len(self._processes) < self._max_workers:
+            self._spawn_process()
+
+
+def _in_worker(fn: Callable, item):
+    """``fn(item)`` and the process that ran it (so recycling can be counted)."""
+    return os.getpid(), fn(item)
+
+
 def _init_worker(threads: int, parent_pid: int | None = None, death_signal: bool = False) -> None:
     os.environ["CFA_MITSUBA_THREADS"] = str(threads)
     if parent_pid is not None:  # issue 27: a worker ends when the study does, even on SIGKILL (study.shutdown)
@@ -61,12 +135,20 @@ class LocalExecutor:
 
     description: str
 
-    def __init__(self, workers: int | None = None):
+    def __init__(self, workers: int | None = None, *, max_tasks: int | None = None, max_memory: int | None = None):
         n = int(workers) if workers else min(2, _cpu_count())
         if n < 1:
             raise CfaMitsubaError(f"--workers must be at least 1, got {workers}")
         self.workers = n
         self.threads = thread_budget(n)
+        self.max_tasks = int(max_tasks) if max_tasks else DEFAULT_WORKER_MAX_TASKS
+        if max_memory is None:
+            from ..io.limits import available_memory_bytes
+
+            have = available_memory_bytes()[0]
+            max_memory = int(DEFAULT_WORKER_MEMORY_SHARE * have / n) if have else None
+        self.max_memory = max_memory
+        self.worker_pids: set[int] = set()  # every worker process that ran a task
         self._pool = None
         self._saved_env: dict = {}
         self.description = f"{n} local process{'es' if n > 1 else ''}, {self.threads} thread(s) each"
@@ -76,7 +158,8 @@ class LocalExecutor:
             for var in _THREAD_ENV + ("CFA_MITSUBA_THREADS",):
                 self._saved_env[var] = os.environ.get(var)
                 os.environ[var] = str(self.threads)
-            self._pool = cf.ProcessPoolExecutor(
+            self._pool = _RecyclingPool(
+                _Recycle(self.max_tasks, self.max_memory),
                 max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
                 initializer=_init_worker,
                 initargs=(self.threads, os.getpid(), threading.current_thread() is threading.main_thread()),
@@ -104,16 +187,23 @@ class LocalExecutor:
                 os.environ[var] = val
         return False
 
+    @property
+    def recycled(self) -> int:
+        """How many times a worker was replaced by a fresh one so far."""
+        return max(0, len(self.worker_pids) - self.workers)
+
     def map_unordered(self, fn: Callable, items: Iterable) -> Iterator:
         items = list(items)
         if self._pool is None:
             for item in items:
                 yield item, fn(item)
             return
-        futures = {self._pool.submit(fn, item): item for item in items}
+        futures = {self._pool.submit(_in_worker, fn, item): item for item in items}
         try:
             for fut in cf.as_completed(futures):
-                yield futures[fut], fut.result()
+                pid, result = fut.result()
+                self.worker_pids.add(pid)
+                yield futures[fut], result
         finally:
             for fut in futures:
                 fut.cancel()
@@ -224,8 +314,10 @@ class DaskExecutor:
                 fut.cancel()
 
 
-def make_executor(*, workers: int | None = None, scheduler: str | None = None):
-    """A Dask executor for a scheduler address, else local processes."""
+def make_executor(*, workers: int | None = None, scheduler: str | None = None, max_tasks: int | None = None,
+                  max_memory: int | None = None):
+    """A Dask executor for a scheduler address, else local processes
+    (recycled after ``max_tasks`` tasks or past ``max_memory`` bytes)."""
     if scheduler:
         return DaskExecutor(scheduler)
-    return LocalExecutor(workers)
+    return LocalExecutor(workers, max_tasks=max_tasks, max_memory=max_memory)

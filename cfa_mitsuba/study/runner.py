@@ -228,14 +228,17 @@ def _task_groups(tasks: list, render_info: dict, workers: int) -> list[tuple]:
 
 
 def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, scheduler: str | None = None,
-              progress: bool = True, log=None, force: bool = False) -> StudyResult:
+              progress: bool = True, log=None, force: bool = False, worker_max_tasks: int | None = None,
+              worker_max_memory: int | None = None) -> StudyResult:
     """Run a study's renders and evaluations and write its tables (see the
     module docstring for the outputs); ``timing_summary(result)`` is the
     line to print at the end.
 
     ``workers``: local processes (default: the config's, capped at the
     cores, else 2); ``scheduler``: a Dask scheduler address instead;
-    ``force``: start a study above the size limits (study.sizing).
+    ``force``: start a study above the size limits (study.sizing);
+    ``worker_max_tasks``, ``worker_max_memory``: when a local worker is
+    recycled (default: the config's, else study.executors' defaults).
     """
     from .executors import check_scheduler_address, make_executor, thread_budget
     from .sizing import check_study_size, resolve_workers
@@ -262,7 +265,9 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
 
     from .shutdown import terminate_cleanly
 
-    executor = make_executor(workers=workers, scheduler=scheduler)
+    executor = make_executor(workers=workers, scheduler=scheduler,
+                             max_tasks=worker_max_tasks or config.worker_max_tasks,
+                             max_memory=worker_max_memory or config.worker_max_memory)
     render_info: dict = {}
     with terminate_cleanly(log), executor:  # issue 27: SIGTERM stops the workers too
         # Written once the executor is up (a Dask scheduler that cannot be
@@ -310,6 +315,11 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         groups = _task_groups(todo, render_info, getattr(executor, "workers", 0) or 1)
         _run_tasks(executor, evaluate_group, groups, "evaluate", progress, got_group, size=len)
         timing["phases"]["evaluate_s"] = time.perf_counter() - t
+        if getattr(executor, "recycled", 0):  # a long run: workers renewed (study.executors)
+            from ..io.limits import format_bytes
+
+            ceiling = f" or past {format_bytes(executor.max_memory)}" if executor.max_memory else ""
+            log(f"workers recycled {executor.recycled} time(s) (after {executor.max_tasks} tasks{ceiling})")
 
     rows = [r for task in tasks for r in done[_task_id(task)]["rows"]]
     failures = [f for task in tasks for f in done[_task_id(task)].get("failures", [])]
