@@ -8,13 +8,13 @@ import pytest
 
 from cfa_mitsuba.errors import CfaMitsubaError
 from cfa_mitsuba.optics import OpticsParams
-from cfa_mitsuba.sensor.params import MIN_PIXEL_PITCH_UM, SensorParams
+from cfa_mitsuba.sensor.params import SensorParams
 from cfa_mitsuba.sensor.sensor_file import read_sensor_file
 from conftest import REPO
 
 
 def test_pixel_pitch_bound():
-    assert SensorParams(pixel_pitch_um=MIN_PIXEL_PITCH_UM).pixel_pitch_um == 0.1
+    assert SensorParams(pixel_pitch_um=0.1).pixel_pitch_um == 0.1  # sensor.params.MIN_PIXEL_PITCH_UM
     for bad in (1e-9, 0.099):
         with pytest.raises(CfaMitsubaError, match=r"pixel_pitch_um .* below 0\.1 um, a quarter of the shortest "
                                                   r"visible wavelength"):
