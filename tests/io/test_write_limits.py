@@ -76,3 +76,28 @@ def test_a_nested_writer_error_names_the_outer_target(tmp_path):
                 raise OSError(27, "File too large")
     assert err.value.path == target and "ulimit -f" in str(err.value)
     assert not list(tmp_path.iterdir())
+
+
+def test_a_kernel_whose_cache_cannot_be_written_still_runs(tmp_path, monkeypatch):
+    """numba writes a compiled kernel's cache on its first call; a full disk
+    or the file-size limit there ended a capture in 'File too large' (the
+    first capture of a fresh install under `ulimit -f`)."""
+    import errno
+    import importlib.util
+
+    from numba.core import caching
+
+    from cfa_mitsuba.io.jit_cache import tolerate_cache_write_errors
+
+    def full(self, *args, **kwargs):
+        raise OSError(errno.EFBIG, "File too large")
+
+    monkeypatch.setattr(caching.IndexDataCacheFile, "save", full)
+    tolerate_cache_write_errors()
+    src = tmp_path / "kernel_under_test.py"
+    src.write_text("import numba\n\n@numba.njit(cache=True)\ndef twice(x):\n    return 2 * x\n")
+    spec = importlib.util.spec_from_file_location("kernel_under_test", src)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    assert mod.twice(21) == 42
+    assert not list(tmp_path.rglob("*.nbi")) and not list(tmp_path.rglob("*.tmp.*"))
