@@ -105,6 +105,11 @@ def _load(path, forced, metric_inputs):
 
     f = read_image(path)
     data = f.data
+    if f.alpha is not None:  # the one rule for a channel beyond the colour ones (DESCRIPTION)
+        clear = int(np.count_nonzero(f.alpha != 1.0))
+        if clear:
+            raise CfaMitsubaError(f"{path}: its alpha channel is not opaque at {clear} of {f.alpha.size} pixels; "
+                                  "flatten the image onto its background first (metrics compare colour only)")
     if f.format == "png":
         data = data / float((1 << f.bit_depth) - 1)  # 0..1 as stored
         if forced == "xyz":

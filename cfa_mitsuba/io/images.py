@@ -44,6 +44,9 @@ class ImageFile:
     bit_depth : 8 or 16 for PNG, else None.
     channels : channel names where the file names them (EXR), else None.
     meta : JSON metadata stored by :func:`write_image`, if any.
+    alpha : (H, W) float64, the alpha channel the file declares (a PNG's,
+        an EXR's ``A``) scaled so that 1 is opaque, kept apart from
+        ``data``; None when it has none.
     """
 
     data: np.ndarray
@@ -51,24 +54,13 @@ class ImageFile:
     bit_depth: int | None = None
     channels: tuple[str, ...] | None = None
     meta: dict = field(default_factory=dict)
+    alpha: np.ndarray | None = None
 
 
 #: Values per pixel of each PNG colour type once decoded (a palette is expanded to RGB(A)).
 _PNG_PLANES = {0: 1, 2: 3, 3: 4, 4: 2, 6: 4}
 
 
-def _drop_opaque_alpha(colour: np.ndarray, alpha: np.ndarray, opaque: float, path) -> np.ndarray:
-    """The one rule for a channel beyond the colour ones: an alpha channel
-    the file declares (a PNG's, an EXR's ``A``) that is opaque everywhere
-    carries nothing and is dropped; one with any transparency is refused
-    (a metric compares colours, and what shows through is not in the file);
-    a fourth channel that is not declared alpha (an .npz or .npy) is
-    refused where the channels are counted."""
-    clear = int(np.count_nonzero(alpha != opaque))
-    if clear:
-        raise CfaMitsubaError(f"{str(path)!r}: its alpha channel is not opaque at {clear} of {alpha.size} pixels; "
-                              "flatten the image onto its background first (metrics compare colour only)")
-    return colour
 
 
 def _read_png(path: Path) -> ImageFile:
@@ -83,11 +75,12 @@ def _read_png(path: Path) -> ImageFile:
         width, height, rows, info = png.Reader(bytes=data).asDirect()
         planes = int(info["planes"])
         arr = np.vstack([np.asarray(r, dtype=np.uint32) for r in rows]).reshape(height, width, planes)
-    if planes in (2, 4):
-        arr = _drop_opaque_alpha(arr[..., :-1], arr[..., -1], (1 << int(info["bitdepth"])) - 1, path)
+    alpha = None
+    if planes in (2, 4):  # the alpha apart from the colour, 1 = opaque
+        arr, alpha = arr[..., :-1], arr[..., -1] / float((1 << int(info["bitdepth"])) - 1)
     if arr.shape[2] == 1:
         arr = arr[..., 0]
-    return ImageFile(arr.astype(np.float64), "png", int(info["bitdepth"]))
+    return ImageFile(arr.astype(np.float64), "png", int(info["bitdepth"]), alpha=alpha)
 
 
 def _read_exr(path: Path) -> ImageFile:
@@ -118,15 +111,15 @@ def _read_exr(path: Path) -> ImageFile:
     if len(chans) == 1:
         (name, arr), = chans.items()
         names = tuple(name) if arr.ndim == 3 and len(name) == arr.shape[2] else None
-        if names and names[-1] == "A" and len(names) in (2, 4):  # RGBA / YA read as one: the same alpha rule
-            arr, names = _drop_opaque_alpha(arr[..., :-1], arr[..., -1], 1.0, path), names[:-1]
-        return ImageFile(arr, "exr", None, names, _meta_from(header))
+        alpha = None
+        if names and names[-1] == "A" and len(names) in (2, 4):  # RGBA / YA read as one: the alpha apart
+            arr, alpha, names = arr[..., :-1], arr[..., -1], names[:-1]
+        return ImageFile(arr, "exr", None, names, _meta_from(header), alpha=alpha)
     for layout in _EXR_LAYOUTS:
         if all(c in chans for c in layout):
             data = np.stack([chans[c] for c in layout], axis=-1)
-            if "A" in chans:  # the same rule as a PNG's alpha
-                data = _drop_opaque_alpha(data, chans["A"], 1.0, path)
-            return ImageFile(data[..., 0] if len(layout) == 1 else data, "exr", None, layout, _meta_from(header))
+            return ImageFile(data[..., 0] if len(layout) == 1 else data, "exr", None, layout, _meta_from(header),
+                             alpha=chans.get("A"))
     raise CfaMitsubaError(
         f"{str(path)!r}: EXR channels {sorted(chans)} are none of X,Y,Z / R,G,B / Y"
     )

@@ -79,22 +79,26 @@ def test_alpha_is_dropped_only_when_opaque_everywhere(tmp_path, capsys):
     assert "got 4" in line and "declares it alpha" in line
 
 
-def test_an_exr_alpha_follows_the_same_rule(tmp_path):
+def test_an_exr_alpha_follows_the_same_rule(tmp_path, capsys):
+    """The reader keeps an EXR's A apart from its colour (as a PNG's); the
+    metric applies the one rule to it."""
     import OpenEXR
 
     from cfa_mitsuba.io import read_image
 
-    rgb = np.full((8, 8), 0.5, np.float32)
-    for alpha, ok in ((np.ones((8, 8), np.float32), True), (np.full((8, 8), 0.5, np.float32), False)):
+    rgb = np.random.default_rng(4).uniform(0.1, 0.9, (16, 16)).astype(np.float32)
+    for alpha, ok in ((np.ones((16, 16), np.float32), True), (np.full((16, 16), 0.5, np.float32), False)):
         p = tmp_path / f"a{ok}.exr"
         with OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
                           {"R": rgb, "G": rgb, "B": rgb, "A": alpha}) as f:
             f.write(str(p))
+        f = read_image(p)
+        assert f.data.shape == (16, 16, 3) and f.alpha.shape == (16, 16)
         if ok:
-            assert read_image(p).data.shape == (8, 8, 3)
+            code, out, err = _run(capsys, "metric", "ssim", p, p, "--json")
+            assert code == 0 and json.loads(out)["value"] == pytest.approx(1.0), err
         else:
-            with pytest.raises(CfaMitsubaError, match="not opaque at 64 of 64"):
-                read_image(p)
+            assert "not opaque at 256 of 256" in _error(capsys, "metric", "ssim", p, p)
 
 
 def test_a_falling_chirp_frequency_is_refused(tmp_path, capsys):
