@@ -96,7 +96,7 @@ class _Recycle:
         return num_tasks >= self.max_tasks or (self.max_memory is not None and _rss_bytes() > self.max_memory)
 
 
-class _RecyclingPool(cf.ProcessPoolExecutor):
+def _recycling_pool(recycle: _Recycle, **kwargs):
     """A process pool whose workers end at their :class:`_Recycle` limit and
     are always replaced.
 
@@ -105,15 +105,18 @@ class _RecyclingPool(cf.ProcessPoolExecutor):
     tasks, not idle workers, so with a backlog it may start none once every
     worker has reached its limit (CPython gh-115634, present in 3.11 to
     3.15.0b3, fixed upstream in gh-140900 by the rule used here).  Here a
-    worker that ends is replaced whenever the pool is below its size."""
+    worker that ends is replaced whenever the pool is below its size.  The
+    class is made on ``concurrent.futures.ProcessPoolExecutor`` as it is
+    when called (a test's stand-in for a pool that cannot start included)."""
 
-    def __init__(self, recycle: _Recycle, **kwargs):
-        super().__init__(max_tasks_per_child=recycle.max_tasks, **kwargs)
-        self._max_tasks_per_child = recycle  # read by each worker as it starts a task (class _Recycle)
+    class RecyclingPool(cf.ProcessPoolExecutor):
+        def _adjust_process_count(self):
+            while len(self._processes) < self._max_workers:
+                self._spawn_process()
 
-    def _adjust_process_count(self):
-        while len(self._processes) < self._max_workers:
-            self._spawn_process()
+    pool = RecyclingPool(max_tasks_per_child=recycle.max_tasks, **kwargs)
+    pool._max_tasks_per_child = recycle  # read by each worker as it starts a task (class _Recycle)
+    return pool
 
 
 def _in_worker(fn: Callable, item):
@@ -158,7 +161,7 @@ class LocalExecutor:
             for var in _THREAD_ENV + ("CFA_MITSUBA_THREADS",):
                 self._saved_env[var] = os.environ.get(var)
                 os.environ[var] = str(self.threads)
-            self._pool = _RecyclingPool(
+            self._pool = _recycling_pool(
                 _Recycle(self.max_tasks, self.max_memory),
                 max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"),
                 initializer=_init_worker,
