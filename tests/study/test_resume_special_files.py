@@ -57,7 +57,7 @@ def test_a_special_file_in_place_of_a_task_result_is_recomputed(tmp_path, kind):
 
 
 def _study(config, out):
-    return subprocess.run([sys.executable, "-m", "cfa_mitsuba", "study", str(config), "--out", str(out), "--quiet",
+    return subprocess.run([sys.executable, "-m", "cfa_mitsuba", "study", str(config), "--out", str(out),
                            "--workers", "1"], capture_output=True, text=True, cwd=REPO, timeout=600)
 
 

@@ -54,7 +54,7 @@ def test_a_study_with_recycled_workers_gives_the_same_tables(tmp_path):
 
     def study(out, *extra):
         proc = subprocess.run([sys.executable, "-m", "cfa_mitsuba", "study", str(config), "--out", str(out),
-                               "--quiet", "--workers", "2", *extra], cwd=REPO, capture_output=True, text=True,
+                               "--workers", "2", *extra], cwd=REPO, capture_output=True, text=True,
                               timeout=900)
         assert proc.returncode == 0, proc.stderr
         return proc.stderr
