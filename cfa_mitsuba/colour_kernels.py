@@ -33,6 +33,10 @@ import math
 import numba as nb
 import numpy as np
 
+from .io.jit_cache import tolerate_cache_write_errors
+
+tolerate_cache_write_errors()  # the kernel cache is a write that may fail (a full disk): io/jit_cache.py
+
 _P25_7 = 25.0 ** 7
 _TWO_PI = 2.0 * math.pi
 _D30 = math.radians(30.0)

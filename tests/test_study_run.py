@@ -203,8 +203,10 @@ def test_killed_study_resumes_and_gives_the_same_tables(quick, tmp_path):
 
 
 @pytest.fixture
-def dask_cluster(tmp_path):
-    """A real scheduler and two plain `dask worker` processes on loopback."""
+def dask_cluster(tmp_path, request):
+    """A real scheduler and two plain `dask worker` processes on loopback
+    (indirect parameters: more `dask worker` options, tests/study/test_dask_failures.py)."""
+    worker_options = list(getattr(request, "param", ()))
     env = dict(os.environ)
     sched_file = tmp_path / "scheduler.json"
     procs = [subprocess.Popen(
@@ -217,8 +219,8 @@ def dask_cluster(tmp_path):
             time.sleep(0.1)
         address = json.loads(sched_file.read_text())["address"]
         for _ in range(2):  # no options: the default nanny, threads and memory limit
-            procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address],
-                                          env=env, cwd=tmp_path, stdout=subprocess.DEVNULL,
+            procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address,
+                                           *worker_options], env=env, cwd=tmp_path, stdout=subprocess.DEVNULL,
                                           stderr=subprocess.DEVNULL, start_new_session=True))
         from distributed import Client
 

@@ -21,13 +21,17 @@ How pixel values are read (--input; inferred when omitted, with a notice):
   EXR R,G,B / Y  linear (linear RGB, white = 1)
   NPY / NPZ      linear for mtf, else xyz (the white of a 'process' .npz is
                  its stored white_xyz unless --white is given)
+An alpha channel (PNG, EXR 'A') opaque everywhere is dropped; one with any
+transparency is refused, as is a fourth channel an NPY / NPZ does not
+declare alpha.
 Metrics on XYZ (delta-e, scielab, moire, achromatic) convert sRGB / linear
 input with the IEC 61966-2-1 matrix (white (95.05, 100, 108.9)); ssim, mdsi
 and haarpsi convert XYZ / linear input to sRGB code values (0..255).
 
 Scene geometry (patches, edge ROI, chirp frequencies, field of view) comes
 from the render's sidecar with --geometry SIDECAR.json, rescaled to the
-image by the sidecar's oversampling factor.
+image by the sidecar's oversampling factor (an image that is not the
+sidecar's scene divided by one whole factor is refused).
 
 Headlines: delta-e mean CIEDE2000 (per patch with --geometry, else per
 pixel); scielab mean of the whole dE map; ssim, mdsi, haarpsi the index;
@@ -101,6 +105,11 @@ def _load(path, forced, metric_inputs):
 
     f = read_image(path)
     data = f.data
+    if f.alpha is not None:  # the one rule for a channel beyond the colour ones (DESCRIPTION)
+        clear = int(np.count_nonzero(f.alpha != 1.0))
+        if clear:
+            raise CfaMitsubaError(f"{path}: its alpha channel is not opaque at {clear} of {f.alpha.size} pixels; "
+                                  "flatten the image onto its background first (metrics compare colour only)")
     if f.format == "png":
         data = data / float((1 << f.bit_depth) - 1)  # 0..1 as stored
         if forced == "xyz":
@@ -124,7 +133,8 @@ def _load(path, forced, metric_inputs):
             mode = "linear" if metric_inputs == "linear" else "xyz"
             why = f"{f.format.upper()} array"
     if data.ndim == 3 and data.shape[2] not in (1, 3):
-        raise CfaMitsubaError(f"{path}: expected 1 or 3 channels, got {data.shape[2]}")
+        raise CfaMitsubaError(f"{path}: expected 1 or 3 channels, got {data.shape[2]} (a channel beyond the colour "
+                              "ones is dropped only when the file declares it alpha and it is opaque everywhere)")
     if data.ndim == 3 and data.shape[2] == 1:
         data = data[..., 0]
     return _Loaded(str(path), np.asarray(data, dtype=np.float64), mode, why, f.meta)
@@ -136,8 +146,10 @@ def _stored_white(path):
 
     if Path(path).suffix.lower() != ".npz":
         return None
+    from ..io.guard import open_regular
+
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with open_regular(path, "image") as fh, np.load(fh, allow_pickle=False) as z:
             if "white_xyz" not in z.files:
                 return None
             w = np.asarray(z["white_xyz"], dtype=np.float64).ravel()
@@ -272,6 +284,9 @@ def run(args) -> int:
     elif args.name == "moire":
         if args.frequency_cpd:
             lo, hi = _floats(args.frequency_cpd, 2, "--frequency-cpd")
+            require(np.isfinite(lo) and np.isfinite(hi) and 0 <= lo < hi,
+                    f"--frequency-cpd LO,HI: the chirp's frequency at its first column must be at least 0 and below "
+                    f"that at its last (a chirp rises left to right), got {args.frequency_cpd!r}")
             options["frequency_cy_per_deg"] = np.linspace(lo, hi, xyz_r.shape[1])
         require(options.get("frequency_cy_per_deg") is not None or geo.get("frequency_cy_per_deg") is not None,
                 "moire needs the chirp's frequency map: --frequency-cpd LO,HI or --geometry SIDECAR.json")

@@ -29,6 +29,11 @@ def add_arguments(parser) -> None:
                         help="local worker processes (default: the config's 'workers', else 2)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="run on a Dask cluster, e.g. tcp://HOST:8786 (needs the 'dask' extra)")
+    parser.add_argument("--worker-max-tasks", type=positive_int, metavar="N",
+                        help="recycle a local worker after N tasks (default: the config's worker_max_tasks, else 1000)")
+    parser.add_argument("--worker-max-memory", metavar="SIZE",
+                        help="recycle a local worker once its memory passes SIZE, e.g. 4G (default: the config's "
+                             "worker_max_memory, else 80%% of the memory available per worker)")
     parser.add_argument("--no-report", action="store_true", help="write the tables only, no HTML report")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress bars or log lines: print only the result path (warnings still go to stderr)")
@@ -50,9 +55,12 @@ def run(args) -> int:
 
     # the config's name is a label, never a path: '../../x' must not leave results/
     out = Path(args.out) if args.out else Path("results") / safe_name(config.name)
+    from ..io.limits import parse_size
+
+    memory = parse_size(args.worker_max_memory, "--worker-max-memory") if args.worker_max_memory else None
     log = stderr_log(args.quiet)
     result = run_study(config, out, workers=args.workers, scheduler=args.scheduler, progress=not args.quiet,
-                       force=args.force, log=log)
+                       force=args.force, log=log, worker_max_tasks=args.worker_max_tasks, worker_max_memory=memory)
     report = not args.no_report and config.output.get("report", True)
     if report:
         t = time.perf_counter()

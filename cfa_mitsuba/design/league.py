@@ -85,10 +85,12 @@ def league_table(study_dir, config):
     from ..sensor import get_cfa
     from ..sensor.cfa import layout_info
 
-    d = Path(study_dir)
-    metrics = pd.read_csv(d / "metrics.csv")
-    snr10 = pd.read_csv(d / "snr10.csv") if (d / "snr10.csv").is_file() else pd.DataFrame()
-    scores = pd.read_csv(d / "scores.csv")
+    from ..io.guard import read_csv
+
+    d = Path(study_dir)  # a results folder: each table read as a bounded regular file
+    metrics = read_csv(d / "metrics.csv")
+    snr10 = read_csv(d / "snr10.csv") if (d / "snr10.csv").is_file() else pd.DataFrame()
+    scores = read_csv(d / "scores.csv")
     low = float(metrics["luminance"].astype(float).min())
     rows = []
     for name in config.cfas:

@@ -30,6 +30,7 @@ import numpy as np
 
 from .. import spectra as _spectra
 from ..io import atomic_output
+from ..io.guard import open_regular, read_json
 from . import layouts as L
 from . import proxy as P
 from .spectra import decode_params, letter_curves, n_params
@@ -151,7 +152,7 @@ def _exhaustive(config, h, w, state: Path, settings, models, log, bar=None) -> t
     for i in range(L.n_chunks(h, w, k)):
         f = state / f"exhaustive-{h}x{w}-{_state_key(settings)}-{i:05d}.npz"
         if f.exists():
-            with np.load(f) as z:
+            with open_regular(f, "design state file") as fh, np.load(fh, allow_pickle=False) as z:
                 lay, got = z["layouts"], {n: z[n] for n in names}
             reused += len(lay)
         else:
@@ -175,7 +176,7 @@ class _Archive:
 
     def __init__(self, path: Path):
         self.path = path
-        self.rows: dict = json.loads(path.read_text()) if path.exists() else {}
+        self.rows: dict = read_json(path, "design archive", allow_nan=True) if path.exists() else {}
         self.evaluated = self.reused = 0
 
     def save(self):

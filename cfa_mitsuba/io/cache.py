@@ -52,12 +52,35 @@ def hash_key(fields: dict) -> str:
 
 
 def file_digest(path) -> str:
-    """SHA-256 (hex) of a file's bytes."""
+    """SHA-256 (hex) of a regular file's bytes (io/guard.py: a FIFO or
+    device refused, never read)."""
+    from .guard import open_regular
+
     h = hashlib.sha256()
-    with open(path, "rb") as fh:
+    with open_regular(path, "render cache entry") as fh:
         for chunk in iter(lambda: fh.read(1 << 20), b""):
             h.update(chunk)
     return h.hexdigest()
+
+
+def _present(path: Path, what: str, fd: int | None = None) -> bool:
+    """Whether ``path`` (or the open descriptor ``fd``) is there: False when
+    absent (a dangling link too), True for a regular file, else one line
+    naming the real path, what is there and what to do."""
+    import stat
+
+    from .guard import _kind
+
+    try:
+        st = os.fstat(fd) if fd is not None else os.stat(path)
+    except FileNotFoundError:
+        return False
+    except OSError as exc:
+        raise CfaMitsubaError(f"cannot read {what} {str(path)!r}: {exc.strerror}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise CfaMitsubaError(f"{what} {str(path)!r} is {_kind(st.st_mode)}, not a regular file: remove it "
+                              "(the cache makes it again)")
+    return True
 
 
 class RenderCache:
@@ -81,12 +104,18 @@ class RenderCache:
 
     def _verified(self, key: str) -> bool:
         """Whether the entry's bytes still have the checksum recorded when
-        it was written (a notice line when not)."""
+        it was written (a notice line when not).  A checksum that is not a
+        regular file (a FIFO would block the read, /dev/zero never end, a
+        folder cannot be replaced) is refused in one line naming it."""
+        from .guard import read_text
+
         p = self.path(key)
-        try:
-            recorded = self.checksum_path(key).read_text(encoding="ascii").strip()
-        except (OSError, UnicodeDecodeError):
-            recorded = None
+        recorded = None
+        if _present(self.checksum_path(key), "render cache checksum"):
+            try:  # the one bounded reader: a 64-character hex line, nothing more is trusted
+                recorded = read_text(self.checksum_path(key), "render cache checksum", limit=1024).strip()
+            except CfaMitsubaError:  # too long or not text: a damaged checksum, rendered again
+                recorded = None
         if recorded is None:
             why = "has no checksum (written by an older version, or interrupted)"
         else:
@@ -125,7 +154,7 @@ class RenderCache:
         from .exr import read_spectral_exr
 
         p = self.path(key)
-        if not p.is_file() or not self._verified(key):
+        if not _present(p, "render cache entry") or not self._verified(key):
             return None
         try:
             return read_spectral_exr(p)
@@ -150,14 +179,24 @@ class RenderCache:
     @contextlib.contextmanager
     def lock(self, key: str):
         """Hold an exclusive lock on ``key`` (blocks while another process
-        holds it)."""
-        d = self._ensure(self.root / "locks")
-        with open(d / f"{key}.lock", "a+") as fh:
-            fcntl.flock(fh.fileno(), fcntl.LOCK_EX)
+        holds it).  The lock file is opened without blocking and must be a
+        regular file: a folder or FIFO in its place is refused in one line
+        naming it."""
+        path = self._ensure(self.root / "locks") / f"{key}.lock"
+        _present(path, "render cache lock")  # a folder, FIFO or device: one line naming it
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NONBLOCK | os.O_CLOEXEC, 0o666)
+        except OSError as exc:
+            raise CfaMitsubaError(f"cannot open the render cache lock {str(path)!r}: {exc.strerror}") from None
+        try:
+            _present(path, "render cache lock", fd)  # swapped for something else since the check
+            fcntl.flock(fd, fcntl.LOCK_EX)
             try:
                 yield
             finally:
-                fcntl.flock(fh.fileno(), fcntl.LOCK_UN)
+                fcntl.flock(fd, fcntl.LOCK_UN)
+        finally:
+            os.close(fd)
 
     def get_or_create(self, key: str, make: Callable[[], SpectralImage]) -> tuple[SpectralImage, bool]:
         """Return ``(image, reused)``: the cached image for ``key``, or

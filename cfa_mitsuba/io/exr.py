@@ -43,7 +43,7 @@ import numpy as np
 from .. import colorimetry, spectra
 from ..errors import CfaMitsubaError
 from ..values import SpectralImage
-from .atomic import atomic_output
+from .atomic import atomic_output, write_error
 from .channels import parse_spectral_channel  # noqa: F401  (re-exported: the layout's reader and writer)
 from .sidecar import json_default, sidecar_path
 
@@ -115,7 +115,10 @@ def write_spectral_exr(path, image: SpectralImage, *, preview: bool = True) -> P
             channels[c] = np.ascontiguousarray(rgb[..., i], dtype=np.float32)
     with atomic_output(p) as tmp:
         with OpenEXR.File(header, channels) as f:
-            f.write(str(tmp))
+            try:
+                f.write(str(tmp))
+            except RuntimeError as exc:  # OpenEXR's C++ error on a full disk or the file-size limit
+                raise write_error(tmp, exc) from None
     return p
 
 

@@ -21,6 +21,11 @@ the problem, at the point of entry, the same way for every format:
   is removed (it would otherwise glue itself to the first field and drop a
   headerless file's first row); Latin-1, UTF-16 or invalid bytes are
   refused with the offset of the first bad byte.
+* **structure** (:func:`read_toml`, :func:`read_json`, :func:`read_csv`):
+  the three text formats of configs, CFAs, sensors, parity cases and a
+  finished study's tables, parsed from the bounded text above; a document
+  nested too deeply for the parser (a 5,000-deep TOML array is 11 kB) is
+  refused in one line, never a ``RecursionError``.
 * **decoder errors** (:func:`decoding`): what third-party decoders raise on
   a corrupt stream (``zlib.error``, ``struct.error``, ``ValueError``,
   ``EOFError``, ``MemoryError`` ...) becomes the same one-line error.
@@ -32,10 +37,12 @@ headers, :mod:`.envi` for ENVI headers against their data file).
 from __future__ import annotations
 
 __all__ = ["MAX_TEXT_BYTES", "MAX_BINARY_BYTES", "check_regular", "open_regular", "read_bytes", "read_text",
-           "require_pixels", "png_header", "decoding"]
+           "read_toml", "read_json", "read_csv", "load_json_text", "MAX_JSON_BYTES", "MAX_JSON_DEPTH", "require_pixels", "png_header", "decoding"]
 
 import contextlib
+import json
 import os
+import re
 import stat
 import struct
 import zlib
@@ -47,6 +54,12 @@ from ..errors import CfaMitsubaError
 MAX_TEXT_BYTES = 64 << 20
 #: Largest binary file read whole (PNG, MAT), bytes.
 MAX_BINARY_BYTES = 16 << 30
+
+#: Largest JSON document read (bytes): a sidecar of a 32768-column chirp is
+#: about 1 MB.
+MAX_JSON_BYTES = 64 << 20
+#: Deepest nesting of objects and arrays accepted (a sidecar uses 4).
+MAX_JSON_DEPTH = 32
 
 _KINDS = ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISDIR, "a directory"),
           (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
@@ -99,12 +112,24 @@ def read_bytes(path, what: str | None = None, limit: int = MAX_BINARY_BYTES) -> 
 
     with open_regular(path, what) as fh:
         size = os.fstat(fh.fileno()).st_size
-        if limit >= size > 64 << 20:
+        if size > limit:
+            raise CfaMitsubaError(f"{_label(path, what)} is larger than {_size(limit)}, the most read from such a "
+                                  "file")
+        if size > 64 << 20:
             limits.require_memory(size, f"reading {_label(path, what)} ({size} bytes)")
-        data = fh.read(limit + 1)
-    if len(data) > limit:
+        # Ask for what the file holds plus one byte (to see it has not grown), never for the whole limit: a
+        # read(limit + 1) reserves the limit up front, which fails under an address-space limit (ulimit -v).
+        chunks = [fh.read(size + 1)]
+        total = len(chunks[0])
+        while total > size and total <= limit:  # it grew since fstat (or a file system that reports size 0)
+            more = fh.read(min(1 << 20, limit + 1 - total))
+            if not more:
+                break
+            chunks.append(more)
+            total += len(more)
+    if total > limit:
         raise CfaMitsubaError(f"{_label(path, what)} is larger than {_size(limit)}, the most read from such a file")
-    return data
+    return chunks[0] if len(chunks) == 1 else b"".join(chunks)
 
 
 def read_text(path, what: str | None = None, limit: int = MAX_TEXT_BYTES) -> str:
@@ -119,6 +144,84 @@ def read_text(path, what: str | None = None, limit: int = MAX_TEXT_BYTES) -> str
         line = data[:exc.start].count(b"\n") + 1
         raise CfaMitsubaError(f"{_label(path, what)} is not UTF-8 text (byte 0x{data[exc.start]:02x} at offset "
                               f"{exc.start}, line {line}); save it as UTF-8") from None
+
+
+# A JSON string (with escapes) or one bracket: enough to measure nesting
+# without parsing.
+_TOKENS = re.compile(r'"(?:[^"\\]|\\.)*"|[\[\]{}]', re.S)
+
+
+def _depth(text: str) -> int:
+    depth = deepest = 0
+    for m in _TOKENS.finditer(text):
+        c = m.group()
+        if c in "[{":
+            depth += 1
+            if depth > deepest:
+                deepest = depth
+                if deepest > MAX_JSON_DEPTH:
+                    return deepest
+        elif c in "]}":
+            depth -= 1
+    return deepest
+
+
+def _no_constant(name: str):
+    raise CfaMitsubaError(f"holds {name}, which is not a JSON number")
+
+
+def load_json_text(text: str, what: str, *, allow_nan: bool = False):
+    """Parse ``text`` (a JSON document described by ``what``, e.g.
+    ``"sidecar 'a.json'"``) within the size and depth bounds; NaN and
+    infinity are refused unless ``allow_nan`` (files the project wrote
+    itself with Python's default ``json.dumps``, such as a study's
+    ``timing.json``)."""
+    if len(text) > MAX_JSON_BYTES:
+        raise CfaMitsubaError(f"{what} is {len(text) / 1e6:.0f} MB, larger than the {MAX_JSON_BYTES >> 20} MiB a "
+                              "JSON document may be")
+    depth = _depth(text)
+    if depth > MAX_JSON_DEPTH:
+        raise CfaMitsubaError(f"{what} is nested more than {MAX_JSON_DEPTH} levels deep (refused unparsed)")
+    try:
+        return json.loads(text) if allow_nan else json.loads(text, parse_constant=_no_constant)
+    except CfaMitsubaError as exc:
+        raise CfaMitsubaError(f"{what} {exc}") from None
+    except (ValueError, RecursionError) as exc:
+        raise CfaMitsubaError(f"{what} is not valid JSON: {exc}") from None
+
+
+def read_toml(path, what: str | None = None, limit: int = MAX_TEXT_BYTES) -> dict:
+    """The TOML document in regular file ``path`` (:func:`read_text`),
+    parsed; invalid TOML, or TOML nested too deeply for the parser (which
+    recurses once per level), is one line naming the file."""
+    import tomllib
+
+    text = read_text(path, what, limit)
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise CfaMitsubaError(f"{_label(path, what)}: invalid TOML: {exc}") from None
+    except RecursionError:
+        raise CfaMitsubaError(f"{_label(path, what)}: its arrays or tables nest too deeply to read") from None
+
+
+def read_json(path, what: str | None = None, limit: int = MAX_TEXT_BYTES, *, allow_nan: bool = False):
+    """The JSON document in regular file ``path`` (:func:`read_text`),
+    parsed within the nesting bound of :func:`.validate.load_json_text`
+    (measured on the text before parsing, so ``[`` x 100,000 is refused
+    unparsed); NaN and infinity refused unless ``allow_nan``."""
+    return load_json_text(read_text(path, what, limit), _label(path, what), allow_nan=allow_nan)
+
+
+def read_csv(path, what: str | None = None, limit: int = MAX_BINARY_BYTES, **kwargs):
+    """``pandas.read_csv`` of regular file ``path``, read through
+    :func:`read_bytes` (a FIFO or device refused, the size bounded and
+    checked against the memory available); ``kwargs`` go to pandas."""
+    import io
+
+    import pandas as pd
+
+    return pd.read_csv(io.BytesIO(read_bytes(path, what, limit)), **kwargs)
 
 
 def require_pixels(path, height: int, width: int, values_per_pixel: int, bytes_per_value: int,
@@ -157,6 +260,11 @@ _DECODE_ERRORS = (ValueError, TypeError, KeyError, IndexError, EOFError, OSError
                   UnicodeDecodeError, OverflowError, RecursionError)
 
 
+def _text(exc: BaseException) -> str:
+    """An exception's message on one line (what a decoder or writer said)."""
+    return " ".join(str(exc).split())
+
+
 @contextlib.contextmanager
 def decoding(path, what: str | None = None, extra: tuple = ()):
     """Run a third-party decoder on ``path``: any of its errors on a corrupt
@@ -169,5 +277,5 @@ def decoding(path, what: str | None = None, extra: tuple = ()):
     except MemoryError:
         raise CfaMitsubaError(f"{_label(path, what)}: too large to decode in the memory available") from None
     except _DECODE_ERRORS + tuple(extra) as exc:
-        text = " ".join(str(exc).split())[:200] or type(exc).__name__
+        text = _text(exc)[:200] or type(exc).__name__
         raise CfaMitsubaError(f"{_label(path, what)} is corrupt or not what its header says: {text}") from None

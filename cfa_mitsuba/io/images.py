@@ -45,6 +45,9 @@ class ImageFile:
     bit_depth : 8 or 16 for PNG, else None.
     channels : channel names where the file names them (EXR), else None.
     meta : JSON metadata stored by :func:`write_image`, if any.
+    alpha : (H, W) float64, the alpha channel the file declares (a PNG's,
+        an EXR's ``A``) scaled so that 1 is opaque, kept apart from
+        ``data``; None when it has none.
     """
 
     data: np.ndarray
@@ -52,10 +55,13 @@ class ImageFile:
     bit_depth: int | None = None
     channels: tuple[str, ...] | None = None
     meta: dict = field(default_factory=dict)
+    alpha: np.ndarray | None = None
 
 
 #: Values per pixel of each PNG colour type once decoded (a palette is expanded to RGB(A)).
 _PNG_PLANES = {0: 1, 2: 3, 3: 4, 4: 2, 6: 4}
+
+
 
 
 def _read_png(path: Path) -> ImageFile:
@@ -70,11 +76,12 @@ def _read_png(path: Path) -> ImageFile:
         width, height, rows, info = png.Reader(bytes=data).asDirect()
         planes = int(info["planes"])
         arr = np.vstack([np.asarray(r, dtype=np.uint32) for r in rows]).reshape(height, width, planes)
-    if planes in (2, 4):  # drop alpha
-        arr = arr[..., :-1]
+    alpha = None
+    if planes in (2, 4):  # the alpha apart from the colour, 1 = opaque
+        arr, alpha = arr[..., :-1], arr[..., -1] / float((1 << int(info["bitdepth"])) - 1)
     if arr.shape[2] == 1:
         arr = arr[..., 0]
-    return ImageFile(arr.astype(np.float64), "png", int(info["bitdepth"]))
+    return ImageFile(arr.astype(np.float64), "png", int(info["bitdepth"]), alpha=alpha)
 
 
 def _read_exr(path: Path) -> ImageFile:
@@ -105,11 +112,15 @@ def _read_exr(path: Path) -> ImageFile:
     if len(chans) == 1:
         (name, arr), = chans.items()
         names = tuple(name) if arr.ndim == 3 and len(name) == arr.shape[2] else None
-        return ImageFile(arr, "exr", None, names, _meta_from(header))
+        alpha = None
+        if names and names[-1] == "A" and len(names) in (2, 4):  # RGBA / YA read as one: the alpha apart
+            arr, alpha, names = arr[..., :-1], arr[..., -1], names[:-1]
+        return ImageFile(arr, "exr", None, names, _meta_from(header), alpha=alpha)
     for layout in _EXR_LAYOUTS:
         if all(c in chans for c in layout):
             data = np.stack([chans[c] for c in layout], axis=-1)
-            return ImageFile(data[..., 0] if len(layout) == 1 else data, "exr", None, layout, _meta_from(header))
+            return ImageFile(data[..., 0] if len(layout) == 1 else data, "exr", None, layout, _meta_from(header),
+                             alpha=chans.get("A"))
     raise CfaMitsubaError(
         f"{str(path)!r}: EXR channels {sorted(chans)} are none of X,Y,Z / R,G,B / Y"
     )
@@ -157,20 +168,25 @@ def read_image(path, *, key: str | None = None) -> ImageFile:
             if key is None:  # never a guess: 'srgb' read as XYZ gave wrong metrics
                 raise CfaMitsubaError(f"{str(p)!r} has no {' or '.join(map(repr, _NPZ_KEYS))} array (arrays: "
                                       f"{', '.join(names) or 'none'})")
-        try:
-            loaded = np.load(p, allow_pickle=False)
-        except (ValueError, OSError, EOFError) as exc:
-            raise CfaMitsubaError(f"{str(p)!r} is not a readable numpy file: {' '.join(str(exc).split())}") from None
-        if suffix == ".npy":
-            arr = loaded
-            meta = {}
-        else:
-            with loaded:
-                if key not in names:
-                    raise CfaMitsubaError(f"{str(p)!r}: no array {key!r} (arrays: {', '.join(names)})")
-                arr = loaded[key]
-                meta = load_json_text(str(loaded["meta"]), f"{str(p)!r}'s meta") if "meta" in loaded.files else {}
-                meta = meta if isinstance(meta, dict) else {}
+        from .guard import open_regular
+
+        with open_regular(p, "numpy file") as fh:  # the file numpy_arrays checked, not one swapped in since
+            try:
+                loaded = np.load(fh, allow_pickle=False)
+            except (ValueError, OSError, EOFError) as exc:
+                raise CfaMitsubaError(f"{str(p)!r} is not a readable numpy file: "
+                                      f"{' '.join(str(exc).split())}") from None
+            if suffix == ".npy":
+                arr = loaded
+                meta = {}
+            else:
+                with loaded:
+                    if key not in names:
+                        raise CfaMitsubaError(f"{str(p)!r}: no array {key!r} (arrays: {', '.join(names)})")
+                    arr = loaded[key]
+                    meta = load_json_text(str(loaded["meta"]), f"{str(p)!r}'s meta") if "meta" in loaded.files \
+                        else {}
+                    meta = meta if isinstance(meta, dict) else {}
         if arr.dtype.kind not in "biuf":
             raise CfaMitsubaError(f"{str(p)!r}: array of type {arr.dtype} is not numeric")
         return ImageFile(np.asarray(arr, dtype=np.float64), suffix[1:], None, None, meta)

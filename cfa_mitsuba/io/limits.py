@@ -55,6 +55,7 @@ __all__ = [
     "MEMORY_ENV",
     "available_memory_bytes",
     "format_bytes",
+    "parse_size",
     "require_memory",
     "estimate_render_bytes",
     "estimate_capture_bytes",
@@ -99,13 +100,15 @@ _RESULT_ROW = 4096
 _SUFFIX = {"": 1, "k": 1 << 10, "m": 1 << 20, "g": 1 << 30, "t": 1 << 40}
 
 
-def _parse_size(text: str) -> int:
+def parse_size(text, what: str = MEMORY_ENV) -> int:
+    """Bytes of a size written ``2G``, ``512M``, ``1.5GB`` or ``1000000``
+    (powers of 1024; ``what`` names the setting in the error)."""
     m = re.fullmatch(r"\s*(\d+(?:\.\d*)?)\s*([kKmMgGtT]?)i?[bB]?\s*", str(text))
     if not m:
-        raise CfaMitsubaError(f"{MEMORY_ENV}={text!r}: expected a size in bytes such as 2G, 512M or 1000000")
+        raise CfaMitsubaError(f"{what}={text!r}: expected a size in bytes such as 2G, 512M or 1000000")
     value = int(float(m[1]) * _SUFFIX[m[2].lower()])
     if value <= 0:
-        raise CfaMitsubaError(f"{MEMORY_ENV}={text!r}: must be positive")
+        raise CfaMitsubaError(f"{what}={text!r}: must be positive")
     return value
 
 
@@ -140,7 +143,7 @@ def available_memory_bytes() -> tuple[int | None, str]:
     found = []
     env = os.environ.get(MEMORY_ENV)
     if env:
-        found.append((_parse_size(env), f"${MEMORY_ENV}"))
+        found.append((parse_size(env), f"${MEMORY_ENV}"))
     cg = _cgroup_limit()
     if cg is not None:
         found.append((cg, "the cgroup memory limit"))

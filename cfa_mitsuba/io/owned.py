@@ -23,9 +23,13 @@ MANIFEST = ".cfa-mitsuba-written.json"
 
 
 def _recorded(folder: Path) -> set[str]:
-    try:
-        names = json.loads((folder / MANIFEST).read_text())
-    except (OSError, ValueError, RecursionError):
+    from .guard import read_json
+
+    if not (folder / MANIFEST).exists():
+        return set()
+    try:  # the bounded reader: a FIFO or a nested bomb in its place is no manifest
+        names = read_json(folder / MANIFEST, "manifest")
+    except (OSError, ValueError):  # CfaMitsubaError is a ValueError
         return set()
     if not isinstance(names, list):
         return set()

@@ -103,10 +103,13 @@ def load_raw_npz(path) -> RawImage:
     p = Path(path)
     if p.is_dir():
         raise CfaMitsubaError(f"raw file {str(p)!r} is a directory")
-    if p.exists():
-        numpy_arrays(p, "npz")  # by content: an archive, no pickled arrays, sizes that fit in memory
+    if not p.exists():
+        raise CfaMitsubaError(f"raw file {str(p)!r} does not exist")
+    numpy_arrays(p, "npz")  # by content: an archive, no pickled arrays, sizes that fit in memory
+    from .guard import open_regular
+
     try:
-        with np.load(p, allow_pickle=False) as z:
+        with open_regular(p, "raw file") as fh, np.load(fh, allow_pickle=False) as z:
             missing = [k for k in _ARRAYS if k not in z.files]
             if missing:
                 raise CfaMitsubaError(f"{str(p)!r} is not a cfa-mitsuba raw file (no {missing[0]!r})")

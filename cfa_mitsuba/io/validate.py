@@ -34,7 +34,6 @@ __all__ = [
     "safe_name",
 ]
 
-import json
 import math
 import re
 import zipfile
@@ -43,12 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CfaMitsubaError
-
-#: Largest JSON document read (bytes): a sidecar of a 32768-column chirp is
-#: about 1 MB.
-MAX_JSON_BYTES = 64 << 20
-#: Deepest nesting of objects and arrays accepted (a sidecar uses 4).
-MAX_JSON_DEPTH = 32
+from .guard import MAX_JSON_BYTES, MAX_JSON_DEPTH, load_json_text  # noqa: F401 (re-exported)
 
 _NUM = {"type": "number"}
 _RECT = {"type": "array", "items": _NUM, "minItems": 4, "maxItems": 4}
@@ -97,48 +91,6 @@ SIDECAR_SCHEMA = {
         },
     },
 }
-
-# A JSON string (with escapes) or one bracket: enough to measure nesting
-# without parsing.
-_TOKENS = re.compile(r'"(?:[^"\\]|\\.)*"|[\[\]{}]', re.S)
-
-
-def _depth(text: str) -> int:
-    depth = deepest = 0
-    for m in _TOKENS.finditer(text):
-        c = m.group()
-        if c in "[{":
-            depth += 1
-            if depth > deepest:
-                deepest = depth
-                if deepest > MAX_JSON_DEPTH:
-                    return deepest
-        elif c in "]}":
-            depth -= 1
-    return deepest
-
-
-def _no_constant(name: str):
-    raise CfaMitsubaError(f"holds {name}, which is not a JSON number")
-
-
-def load_json_text(text: str, what: str):
-    """Parse ``text`` (a JSON document described by ``what``, e.g.
-    ``"sidecar 'a.json'"``) within the size and depth bounds; NaN and
-    infinity are refused."""
-    if len(text) > MAX_JSON_BYTES:
-        raise CfaMitsubaError(f"{what} is {len(text) / 1e6:.0f} MB, larger than the {MAX_JSON_BYTES >> 20} MiB a "
-                              "JSON document may be")
-    depth = _depth(text)
-    if depth > MAX_JSON_DEPTH:
-        raise CfaMitsubaError(f"{what} is nested more than {MAX_JSON_DEPTH} levels deep (refused unparsed)")
-    try:
-        return json.loads(text, parse_constant=_no_constant)
-    except CfaMitsubaError as exc:
-        raise CfaMitsubaError(f"{what} {exc}") from None
-    except (ValueError, RecursionError) as exc:
-        raise CfaMitsubaError(f"{what} is not valid JSON: {exc}") from None
-
 
 def _where(path) -> str:
     out = ""

@@ -20,6 +20,10 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from ..io.jit_cache import tolerate_cache_write_errors
+
+tolerate_cache_write_errors()  # the kernel cache is a write that may fail (a full disk): io/jit_cache.py
+
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")
 def _gaps_and_sites(out, c, refimg, raw, sites, g):  # pragma: no cover - compiled

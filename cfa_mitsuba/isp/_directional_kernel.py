@@ -20,6 +20,10 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from ..io.jit_cache import tolerate_cache_write_errors
+
+tolerate_cache_write_errors()  # the kernel cache is a write that may fail (a full disk): io/jit_cache.py
+
 
 @nb.njit(inline="always")
 def _lin(v_plus, v_minus, tp, tm, half, ftp, fntm, span, symmetric):

@@ -30,6 +30,9 @@ import numpy as np
 
 from .column_filter import _extend
 from .mosaic import tile_across
+from ..io.jit_cache import tolerate_cache_write_errors
+
+tolerate_cache_write_errors()  # the kernel cache is a write that may fail (a full disk): io/jit_cache.py
 
 
 @nb.njit(cache=True, nogil=True, error_model="numpy")

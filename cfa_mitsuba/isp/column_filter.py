@@ -28,6 +28,10 @@ __all__ = ["correlate_columns", "correlate_along_rows"]
 import numba as nb
 import numpy as np
 
+from ..io.jit_cache import tolerate_cache_write_errors
+
+tolerate_cache_write_errors()  # the kernel cache is a write that may fail (a full disk): io/jit_cache.py
+
 _MODES = {"mirror": 0, "reflect": 1}
 
 

@@ -16,7 +16,6 @@ from __future__ import annotations
 __all__ = ["SUITS_WITHIN_DB", "demosaic_psnr", "suitability"]
 
 import functools
-import tomllib
 from pathlib import Path
 
 #: A method suits a layout within this many dB of the layout's best method.
@@ -27,7 +26,9 @@ _FILE = Path(__file__).resolve().parents[1] / "data" / "demosaic_psnr.toml"
 @functools.lru_cache(maxsize=1)
 def demosaic_psnr() -> dict:
     """{layout: {method: mean PSNR dB}} as measured."""
-    data = tomllib.loads(_FILE.read_text())
+    from ..io.guard import read_toml
+
+    data = read_toml(_FILE, "demosaic PSNR table")
     methods = data["methods"]
     return {layout: dict(zip(methods, values)) for layout, values in data["psnr_db"].items()}
 

@@ -19,6 +19,10 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from ..io.jit_cache import tolerate_cache_write_errors
+
+tolerate_cache_write_errors()  # the kernel cache is a write that may fail (a full disk): io/jit_cache.py
+
 
 @nb.njit(cache=True, nogil=True)
 def _columns(x, u, out):  # pragma: no cover - compiled

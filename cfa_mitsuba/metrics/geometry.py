@@ -59,11 +59,15 @@ def scene_geometry(sidecar: dict, image_shape) -> dict:
     h, w = int(image_shape[0]), int(image_shape[1])
     freq = geo.get("frequency_cy_per_deg")
     exr_w = sidecar.get("width") or (len(freq) if freq else None)
+    exr_h = sidecar.get("height")
     if exr_w:
         k = max(1, int(round(float(exr_w) / w)))
-        if abs(float(exr_w) / k - w) > 1:
-            raise CfaMitsubaError(f"the sidecar's scene is {exr_w} px wide; the image ({w} px) is not that "
-                                  "divided by a whole oversampling factor")
+        # both sides must be the scene's divided by the one K (within the partial tile at a border): an image
+        # of another height would get the patches of a rescaled scene, each on the wrong pixels
+        if abs(float(exr_w) / k - w) > 1 or (exr_h and abs(float(exr_h) / k - h) > 1):
+            scene = f"{exr_w} x {exr_h}" if exr_h else f"{exr_w} px wide"
+            raise CfaMitsubaError(f"the sidecar describes a scene of {scene} pixels; the image is {w} x {h}, which "
+                                  "is not that size divided by one whole oversampling factor K")
     else:
         k = int(sidecar.get("oversample") or 1)
     out: dict = {"oversample": k}

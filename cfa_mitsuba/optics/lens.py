@@ -24,6 +24,7 @@ __all__ = [
     "DEFAULT_FOV_DEG",
     "DEFAULT_SCENE_DISTANCE_M",
     "DEFAULT_F_NUMBER",
+    "MIN_F_NUMBER",
 ]
 
 import math
@@ -40,6 +41,10 @@ DEFAULT_FOV_DEG = 10.0
 DEFAULT_SCENE_DISTANCE_M = 1.2
 #: ISETCam's default optics (``opticsCreate.m``, 'standard (1/4-inch)'): f/4.
 DEFAULT_F_NUMBER = 4.0
+#: The fastest f-number a lens in air can have: N = 1 / (2 NA) for an
+#: aplanatic lens focused at infinity, and NA = n sin(theta) <= 1 in air
+#: (Born & Wolf, Principles of Optics, s. 8.6.3); the fastest made are f/0.7.
+MIN_F_NUMBER = 0.5
 
 
 @dataclass(frozen=True)
@@ -79,6 +84,11 @@ class OpticsParams:
             self.f_number is None
             or (isinstance(self.f_number, (int, float)) and math.isfinite(self.f_number) and self.f_number > 0),
             f"f-number must be a positive number, got {self.f_number!r}",
+        )
+        require(
+            self.f_number is None or self.f_number >= MIN_F_NUMBER,
+            f"f-number {self.f_number!r} is below f/{MIN_F_NUMBER:g}, the fastest a lens in air can be: N = 1 / (2 NA) "
+            "and a numerical aperture cannot exceed 1 (the refractive index of air)",
         )
         t = np.asarray(self.lens_transmittance, dtype=np.float64)
         require(t.ndim <= 1 and t.size >= 1, "lens transmittance must be a number or one value per band")

@@ -11,7 +11,6 @@ from __future__ import annotations
 __all__ = ["OpticsPreset", "get_optics_preset", "list_optics_presets"]
 
 import functools
-import tomllib
 from dataclasses import dataclass, fields
 from pathlib import Path
 
@@ -35,9 +34,11 @@ class OpticsPreset:
 
 @functools.lru_cache(maxsize=1)
 def _definitions() -> dict:
+    from ..io.guard import read_toml
+
     try:
-        return tomllib.loads(_DATA.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:
+        return read_toml(_DATA, "optics presets")
+    except CfaMitsubaError as exc:
         raise CfaMitsubaError(f"cannot read the optics presets {str(_DATA)!r}: {exc}") from None
 
 

@@ -215,11 +215,13 @@ def _source_digest() -> str:
     settings: the render package, spectra.py, values.py, the EXR and
     sidecar code, and the colour-science data files the renders read.  Any
     change to one of them invalidates cached renders by itself."""
+    from ..io.guard import read_bytes
+
     package = Path(__file__).resolve().parents[1]
     h = hashlib.sha256()
     for p in _digest_paths():
         h.update(str(p.relative_to(package) if p.is_relative_to(package) else p.name).encode())
-        h.update(p.read_bytes())
+        h.update(read_bytes(p, "render code or data file"))
     return h.hexdigest()[:16]
 
 

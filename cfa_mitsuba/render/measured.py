@@ -63,22 +63,26 @@ def _source_files(p: Path) -> list[Path]:
 
 
 def _digest(files: list[Path]) -> str:
+    from ..io.guard import open_regular
+
     h = hashlib.sha256()
     for f in files:
         h.update(f.name.encode())
-        with open(f, "rb") as fh:
+        with open_regular(f, "measured image file") as fh:  # a FIFO beside an ENVI header is refused, not read
             for chunk in iter(lambda: fh.read(1 << 20), b""):
                 h.update(chunk)
     return h.hexdigest()
 
 
 def _code_digest() -> str:
+    from ..io.guard import read_bytes
+
     h = hashlib.sha256(_CODE_VERSION.encode())
     io_dir = Path(__file__).parents[1] / "io"
     for f in [Path(__file__), Path(__file__).parents[1] / "spectra.py",
               *(io_dir / n for n in ("cube.py", "hyperspectral.py", "jcgt.py", "envi.py", "png_bands.py", "matlab.py",
                                      "illuminant.py"))]:
-        h.update(f.read_bytes())
+        h.update(read_bytes(f, "package file"))
     return h.hexdigest()[:16]
 
 

@@ -193,12 +193,21 @@ def _read(path: Path, allow_outside_paths: bool, defines=(), asset_root=None) ->
     # A --define the file does not use is not an error (the same --define
     # spp=16 serves a folder of scenes); Mitsuba's parser refuses it by default.
     config.unused_parameters = mi.LogLevel.Debug
+    # Mitsuba's load_file looks up relative names (a <spectrum filename="sub/x.spd">, read while parsing) in
+    # the scene's folder first; parse_file alone does not, so the scene's folder is put first here, as
+    # load_file does, and the resolver restored after (xmlscan has checked those files with the same order).
+    saved = mi.file_resolver()
+    resolver = mi.FileResolver(saved)
+    resolver.prepend(str(main.parent))
+    mi.set_file_resolver(resolver)
     try:
         state = mi.parser.parse_file(config, str(main), **dict(defines))
         mi.parser.transform_upgrade(config, state)
         mi.parser.transform_resolve(config, state)
     except Exception as exc:  # Mitsuba reports parse errors as RuntimeError, with file and line
         _fail(main, f"Mitsuba cannot read it: {first_line(exc)}")
+    finally:
+        mi.set_file_resolver(saved)
     parsed = {Path(os.path.realpath(str(f))) for f in state.files}
     scanned = {p for role, p in scan.files if role == "xml"}
     # Mitsuba lists only the files that gave it elements (an include of only

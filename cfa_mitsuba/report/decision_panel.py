@@ -23,12 +23,12 @@ def _e(text) -> str:
 
 def read_decisions(root: Path):
     """decisions.csv of a results directory as a DataFrame, or None."""
-    import pandas as pd
+    from ..io.guard import read_csv
 
     path = Path(root) / "decisions.csv"
     if not path.is_file():
         return None
-    return pd.read_csv(path, dtype=str, keep_default_na=False)
+    return read_csv(path, dtype=str, keep_default_na=False)
 
 
 def intervals_cover(config: dict | None) -> str:

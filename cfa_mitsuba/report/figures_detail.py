@@ -237,12 +237,16 @@ def moire_curves(res: Results):
 # -- ColorChecker (Figs 8, 9) ---------------------------------------------------------------------
 
 def _read_png(path) -> np.ndarray | None:
+    import io
+
     from PIL import Image
 
-    try:
-        with Image.open(path) as im:
+    from ..io.guard import read_bytes
+
+    try:  # through the bounded reader: a FIFO among the results is skipped, not read for ever
+        with Image.open(io.BytesIO(read_bytes(path, "thumbnail"))) as im:
             return np.asarray(im.convert("RGB"))
-    except (OSError, ValueError):
+    except (OSError, ValueError):  # CfaMitsubaError is a ValueError
         return None
 
 

@@ -17,13 +17,13 @@ _OTHER = ("#EE7733", "#009988", "#BBBBBB", "#000000")
 
 def read_sensor_curves(res):
     """The ``sensor_curves.csv`` table of a results directory, or None."""
-    import pandas as pd
+    from ..io.guard import read_csv
 
     path = res.root / "sensor_curves.csv"
     if not path.is_file():
         return None
     try:
-        t = pd.read_csv(path, dtype={"cfa": str, "spectra": str, "sensor": str, "channel": str})
+        t = read_csv(path, dtype={"cfa": str, "spectra": str, "sensor": str, "channel": str})
     except (OSError, ValueError):
         return None
     need = {"cfa", "spectra", "channel", "wavelength_nm", "qe"}

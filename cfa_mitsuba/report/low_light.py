@@ -25,12 +25,12 @@ def _e(text) -> str:
 def read_snr(res: Results, name: str = "snr.csv"):
     """``snr.csv`` or ``snr10.csv`` of the results as a DataFrame, the rows
     of the CFAs and demosaics the report shows; None when there are none."""
-    import pandas as pd
+    from ..io.guard import read_csv
 
     path = res.root / name
     if not path.exists():
         return None
-    df = pd.read_csv(path, keep_default_na=True)
+    df = read_csv(path, keep_default_na=True)
     df = df[df["cfa"].astype(str).isin(res.cfas) & df["demosaic"].astype(str).isin(res.demosaics)]
     return df if len(df) else None
 

@@ -19,14 +19,13 @@ from __future__ import annotations
 __all__ = ["PAPER_DIR", "Run", "load_run", "paper_values", "isetcam_values", "claims", "judge", "family",
            "cfa_label"]
 
-import json
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import CfaMitsubaError
+from ..io.guard import read_csv, read_json, read_toml
 from ..metrics import get_metric
 from .claim_verdicts import at_most_verdict, best_verdict, order_verdict, spread_verdict
 
@@ -45,9 +44,7 @@ def cfa_label(cfa: str) -> str:
 
 
 def _csv(name: str):
-    import pandas as pd
-
-    return pd.read_csv(PAPER_DIR / name, comment="#", dtype=str, keep_default_na=False)
+    return read_csv(PAPER_DIR / name, comment="#", dtype=str, keep_default_na=False)
 
 
 def paper_values():
@@ -66,7 +63,7 @@ def isetcam_values():
 
 def claims() -> list[dict]:
     """The claims of claims.toml, in order."""
-    return tomllib.loads((PAPER_DIR / "claims.toml").read_text())["claim"]
+    return read_toml(PAPER_DIR / "claims.toml", "paper claims")["claim"]
 
 
 @dataclass
@@ -162,7 +159,7 @@ class Run:
             return False
         f = self.path / "details" / "chirp" / cfa / demosaic / "L100.json"
         try:
-            return json.loads(f.read_text())["moire"].get("passed") is False
+            return read_json(f, allow_nan=True)["moire"].get("passed") is False
         except (OSError, ValueError, KeyError):
             return False
 
@@ -184,31 +181,29 @@ class Run:
 
 def load_run(path, key: str, label: str) -> Run:
     """A study's results folder (metrics.csv, scores.csv, config.json, timing.json)."""
-    import pandas as pd
-
     from ..study.censored import apply_rule
 
     p = Path(path)
     if not (p / "metrics.csv").is_file():
         raise CfaMitsubaError(f"{str(p)!r} holds no metrics.csv: not a study's results folder")
-    m = pd.read_csv(p / "metrics.csv")
-    all_real = pd.read_csv(p / "metrics_realisations.csv") if (p / "metrics_realisations.csv").is_file() else None
+    m = read_csv(p / "metrics.csv")
+    all_real = read_csv(p / "metrics_realisations.csv") if (p / "metrics_realisations.csv").is_file() else None
     m = apply_rule(m, all_real)  # an older metrics.csv read under one rule for bounds
     base = m[m["base"].astype(str).str.lower().isin(("true", "1"))]
     base = base[base["luminance"] == base["luminance"].min()]
-    scores = pd.read_csv(p / "scores.csv") if (p / "scores.csv").is_file() else None
+    scores = read_csv(p / "scores.csv") if (p / "scores.csv").is_file() else None
     if scores is not None and not scores.empty:
         scores = scores[scores["luminance"] == scores["luminance"].min()]
 
     def read(name):
         f = p / name
-        return json.loads(f.read_text()) if f.is_file() else {}
+        return read_json(f, allow_nan=True) if f.is_file() else {}
 
     every = None
     if all_real is not None:  # paired comparisons for the claims
         every = all_real[all_real["base"].astype(str).str.lower().isin(("true", "1"))]
         every = every[every["luminance"] == every["luminance"].min()].reset_index(drop=True)
-    decisions = (pd.read_csv(p / "decisions.csv", dtype=str, keep_default_na=False)
+    decisions = (read_csv(p / "decisions.csv", dtype=str, keep_default_na=False)
                  if (p / "decisions.csv").is_file() else None)
     return Run(key, label, p, base.reset_index(drop=True), scores, read("config.json"), read("timing.json"),
                read("cfas.json"), every, decisions)

@@ -22,14 +22,15 @@ _ROWS, _COLS = 4, 6
 
 def read_table(res: Results, name: str):
     """``res.root / name`` as a DataFrame, or None when absent or unreadable."""
-    import pandas as pd
+    from ..errors import CfaMitsubaError
+    from ..io.guard import read_csv
 
     path = Path(res.root) / name
     if not path.is_file():
         return None
     try:
-        return pd.read_csv(path)
-    except (OSError, ValueError):
+        return read_csv(path)
+    except (OSError, ValueError, CfaMitsubaError):
         return None
 
 

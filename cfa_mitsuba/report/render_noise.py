@@ -25,7 +25,6 @@ from __future__ import annotations
 
 __all__ = ["half_width_ratios", "sensor_only_ranks", "rank_changes", "render_noise_md", "main"]
 
-import json
 import sys
 from pathlib import Path
 
@@ -35,12 +34,12 @@ from ..errors import CfaMitsubaError
 
 
 def _read(root: Path, name: str, **kw):
-    import pandas as pd
+    from ..io.guard import read_csv
 
     path = root / name
-    if not path.is_file():
+    if not path.exists():
         raise CfaMitsubaError(f"{path}: not found")
-    return pd.read_csv(path, **kw)
+    return read_csv(path, **kw)
 
 
 def half_width_ratios(root: Path):
@@ -76,8 +75,10 @@ def sensor_only_ranks(root: Path, render_seed: int | None = 0):
     from ..study.tables import scored_rows
 
     every = _read(root, "metrics_realisations.csv")
-    config = json.loads((root / "config.json").read_text()) if (root / "config.json").is_file() else {}
-    raw = json.loads((root / "ranges.json").read_text())
+    from ..io.guard import read_json
+
+    config = read_json(root / "config.json", allow_nan=True) if (root / "config.json").exists() else {}
+    raw = read_json(root / "ranges.json", allow_nan=True)
     ranges = {k: ScoreRange(float(v[0]), float(v[1]), ()) for k, v in raw.items() if not k.startswith("_")}
     constant = list(raw.get("_constant") or [])
     builtin = {s.get("name") for s in config.get("scenes") or [] if isinstance(s, dict) and not s.get("file")}

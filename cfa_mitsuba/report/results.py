@@ -51,9 +51,15 @@ def lum_tag(luminance: float) -> str:
 
 
 def _read_json(path: Path):
+    """A JSON file of the results, or None when absent or unreadable (a
+    FIFO, too large, nested too deeply, not JSON: io/guard.py)."""
+    from ..io.guard import read_json
+
+    if not path.exists():
+        return None
     try:
-        return json.loads(path.read_text())
-    except (OSError, ValueError):
+        return read_json(path, allow_nan=True)
+    except (OSError, ValueError):  # CfaMitsubaError is a ValueError
         return None
 
 
@@ -160,10 +166,13 @@ class Results:
         return scene, out
 
     def scielab_map(self, scene: str, cfa: str, demosaic: str, luminance: float):
+        from ..io.guard import open_regular
+
         p = self.detail_path(scene, cfa, demosaic, luminance, ".scielab.npy")
         try:
-            a = np.load(p)
-        except (OSError, ValueError):
+            with open_regular(p) as fh:  # a FIFO or device in the results is not read
+                a = np.load(fh, allow_pickle=False)
+        except (OSError, ValueError):  # CfaMitsubaError is a ValueError
             return None
         return a if a.ndim == 2 and a.size else None
 
@@ -190,9 +199,13 @@ def _order(values, preferred=()) -> list:
 def _read_metrics(path: Path):
     import pandas as pd
 
+    from ..io.guard import read_csv
+
     try:
-        m = pd.read_csv(path, dtype={"scene": str, "cfa": str, "demosaic": str, "metric": str, "unit": str},
+        m = read_csv(path, "metrics table", dtype={"scene": str, "cfa": str, "demosaic": str, "metric": str, "unit": str},
                         keep_default_na=False, na_values={"value": ["", "nan", "NaN"], "luminance": ["", "nan"]})
+    except CfaMitsubaError:
+        raise
     except (OSError, ValueError) as exc:
         raise CfaMitsubaError(f"cannot read {str(path)!r}: {exc}") from None
     missing = [c for c in _COLUMNS if c not in m.columns]
@@ -204,12 +217,12 @@ def _read_metrics(path: Path):
 
 
 def _read_policies(path: Path):
-    import pandas as pd
+    from ..io.guard import read_csv
 
     if not path.is_file():
         return None
     try:
-        return pd.read_csv(path)
+        return read_csv(path)
     except (OSError, ValueError):
         return None
 
@@ -282,14 +295,14 @@ def _old_censored(metrics, root: Path):
     some realisations only is their Kaplan-Meier median, not a bound)."""
     if "censored_count" in metrics.columns or not (root / "metrics_realisations.csv").is_file():
         return metrics
-    import pandas as pd
-
+    from ..errors import CfaMitsubaError
+    from ..io.guard import read_csv
     from ..study.censored import apply_rule
 
     try:
-        real = pd.read_csv(root / "metrics_realisations.csv", dtype={"scene": str, "cfa": str, "demosaic": str,
-                                                                     "metric": str, "unit": str})
-    except (OSError, ValueError):
+        real = read_csv(root / "metrics_realisations.csv", dtype={"scene": str, "cfa": str, "demosaic": str,
+                                                                  "metric": str, "unit": str})
+    except (OSError, ValueError, CfaMitsubaError):
         return metrics
     return apply_rule(metrics, real)
 
@@ -299,13 +312,15 @@ def load_results(out_dir) -> Results:
     is missing or holds no ``metrics.csv``."""
     import pandas as pd
 
+    from ..io.guard import read_csv
+
     root = Path(out_dir)
     if root.exists() and not root.is_dir():
         raise CfaMitsubaError(f"{str(root)!r} is a file, not a results directory")
     if not root.is_dir():
         raise CfaMitsubaError(f"no such results directory {str(root)!r}")
     mpath = root / "metrics.csv"
-    if not mpath.is_file():
+    if not mpath.exists():  # (a FIFO or folder in its place is refused by the reader, naming what it is)
         raise CfaMitsubaError(f"{str(root)!r} is not a results directory (no metrics.csv)")
     _cached_json.cache_clear()
     notes = []
@@ -330,7 +345,7 @@ def load_results(out_dir) -> Results:
     spath = root / "scores.csv"
     if spath.is_file():
         try:
-            scores = pd.read_csv(spath, dtype={"scene": str, "cfa": str, "demosaic": str, "metric": str,
+            scores = read_csv(spath, "scores table", dtype={"scene": str, "cfa": str, "demosaic": str, "metric": str,
                                                "unit": str}, keep_default_na=False,
                                  na_values={"value": [""], "score": [""], "raw_score": [""]})
         except (OSError, ValueError) as exc:

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 __all__ = ["draw_tile", "family_of", "tiles_by_family", "FILTER_COLOURS"]
 
-import json
 
 import numpy as np
 
@@ -70,10 +69,12 @@ def _ranges(res: Results) -> tuple[dict, set]:
     ranges = {m: v for m, v in res.ranges.items() if m in SCORED_METRICS}
     if not ranges:
         ranges = {k: (r.worst, r.best) for k, r in DEFAULT_RANGES.items()}
+    from ..io.guard import read_json
+
     raw = {}
-    try:
-        raw = json.loads((res.root / "ranges.json").read_text())
-    except (OSError, ValueError):
+    try:  # bounded, not nested deeper than a ranges file (100,000 '[' is refused unparsed)
+        raw = read_json(res.root / "ranges.json", allow_nan=True)
+    except (OSError, ValueError):  # CfaMitsubaError is a ValueError
         pass
     constant = set(raw.get("_constant") or []) if isinstance(raw, dict) else set()
     return ranges, constant

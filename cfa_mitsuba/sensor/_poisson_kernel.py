@@ -37,6 +37,10 @@ import math
 import numba as nb
 import numpy as np
 
+from ..io.jit_cache import tolerate_cache_write_errors
+
+tolerate_cache_write_errors()  # the kernel cache is a write that may fail (a full disk): io/jit_cache.py
+
 _SQRT_HALF = math.sqrt(0.5)
 
 #: a pixel whose u lies this close (relative) to a CDF taken by recurrence

@@ -303,6 +303,7 @@ def _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, policy, reference
     _require_representable(photo, epr, exposure=exposure, scale=s)
 
     well = gain = None
+    sensor.check_channels(cfa.channels, f"the CFA {cfa.name!r}")
     if sensor.channel_well_e:
         well = channel_map(cfa, photo.shape, {c: sensor.channel_value("channel_well_e", c) for c in cfa.channels})
     if sensor.channel_gain:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 __all__ = ["load_cfa_toml"]
 
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -146,10 +145,7 @@ def load_cfa_toml(path, spectra: str | None = None) -> CFA:
     """
     p = Path(path)
     where = str(p)
-    try:
-        data = tomllib.loads(_guard.read_text(p, "CFA file"))
-    except tomllib.TOMLDecodeError as exc:
-        raise CfaMitsubaError(f"{where}: invalid TOML: {exc}") from None
+    data = _guard.read_toml(p, "CFA file")  # regular file, bounded, UTF-8, nesting the parser survives
     unknown = set(data) - {"name", "description", "tile", "spectra", "spectra_set"}
     if unknown:
         raise CfaMitsubaError(f"{where}: unknown key {sorted(unknown)[0]!r} "

@@ -30,7 +30,8 @@ s. 1.1), moved to the paper's 2.2 um pitch this way:
 
 from __future__ import annotations
 
-__all__ = ["SensorParams", "NOISE_MODES", "READOUT_MODES", "BINNING_MODES"]
+__all__ = ["SensorParams", "NOISE_MODES", "READOUT_MODES", "BINNING_MODES", "MIN_PIXEL_PITCH_UM", "MIN_WELL_E",
+           "check_channel_names"]
 
 import math
 import numbers
@@ -55,11 +56,35 @@ READOUT_MODES = ("full", "remosaic", "bin")
 #: sub-pixel).
 BINNING_MODES = ("charge", "digital")
 
+#: The smallest pixel pitch accepted, um.  A photodiode samples light of
+#: 400-700 nm; far below that wavelength it no longer confines the light it
+#: absorbs, and the smallest pixels made are 0.56 um (Samsung ISOCELL HP3,
+#: 2022).  0.1 um, a quarter of the shortest visible wavelength, is beyond
+#: any pixel built or planned.
+MIN_PIXEL_PITCH_UM = 0.1
+#: The smallest full well accepted: one electron (charge comes in electrons).
+MIN_WELL_E = 1.0
+
 _AREA_RATIO = (2.2 / 2.8) ** 2
 _WELL_E = 6200.0
 _SWING_V = 1.0
 _CG_V_PER_E = _SWING_V / _WELL_E
 _NOT_NUMBERS = ("readout", "binning", "ir_cut", "channel_well_e", "channel_gain")
+
+
+def check_channel_names(values: dict, channels, where: str) -> None:
+    """Refuse a per-channel setting (``channel_well_e``, ``channel_gain`` in
+    ``values``, as given or as pairs) for a channel not among ``channels``
+    (those of the CFAs it applies to; ``where`` names them): it would
+    silently apply to nothing.  Checked before the setting's values, since
+    a channel that does not exist is the first thing wrong with it."""
+    known = set(channels)
+    for name in ("channel_well_e", "channel_gain"):
+        given = values.get(name) or {}
+        for c in (given if isinstance(given, dict) else dict(given)):
+            if str(c) not in known:
+                raise CfaMitsubaError(f"sensor {name} sets channel {str(c)!r}, not a channel of {where} "
+                                      f"({', '.join(sorted(known))}): it would apply to nothing")
 
 
 def _channel_pairs(name: str, value, positive) -> tuple:
@@ -147,6 +172,10 @@ class SensorParams:
                                       f"number, got {v!r}")
 
         positive("pixel_pitch_um", self.pixel_pitch_um)
+        if self.pixel_pitch_um < MIN_PIXEL_PITCH_UM:
+            raise CfaMitsubaError(f"sensor pixel_pitch_um {self.pixel_pitch_um:g} um is below {MIN_PIXEL_PITCH_UM:g} "
+                                  "um, a quarter of the shortest visible wavelength: no photodiode samples light at "
+                                  "that pitch (the smallest made are 0.56 um)")
         positive("fill_factor", self.fill_factor)
         if self.fill_factor > 1:
             raise CfaMitsubaError(f"sensor fill_factor must lie in (0, 1], got {self.fill_factor!r}")
@@ -165,11 +194,33 @@ class SensorParams:
                 or self.sensor_seed < 0:
             raise CfaMitsubaError(f"sensor_seed must be a non-negative integer, got {self.sensor_seed!r}")
         self._check_readout_and_physics(positive)
+        self._check_dynamic_range()
         for f in fields(self):  # plain Python numbers (JSON-able settings), whatever numpy type came in
             v = getattr(self, f.name)
             if f.name in _NOT_NUMBERS or (f.name == "crosstalk_700nm" and v is None):
                 continue
             object.__setattr__(self, f.name, int(v) if f.name in ("adc_bits", "sensor_seed") else float(v))
+
+    def _check_dynamic_range(self) -> None:
+        """A full well of at least one electron that stands above the read
+        noise: a pixel whose well is not larger than its read noise has a
+        dynamic range (well / read noise, EMVA 1288 s. 4.8) below 1, so no
+        signal it can hold is distinguishable from its noise (real pixels:
+        10^2 to 10^5)."""
+        wells = [("well_capacity_e", float(self.well_capacity_e))]
+        wells += [(f"channel_well_e[{c!r}]", float(w)) for c, w in self.channel_well_e]
+        for name, well in wells:
+            if well < MIN_WELL_E:
+                raise CfaMitsubaError(f"sensor {name} {well:g} e- is below one electron: a well holds whole "
+                                      "electrons")
+            if self.read_noise_e >= well:
+                raise CfaMitsubaError(f"sensor {name} {well:g} e- is not above the read noise {self.read_noise_e:g} "
+                                      f"e-: a dynamic range (well / read noise) of {well / self.read_noise_e:.3g}, "
+                                      "below 1, leaves no signal above the noise (real pixels: 100 to 100,000)")
+
+    def check_channels(self, channels, where: str) -> None:
+        """:func:`check_channel_names` of this sensor's per-channel settings."""
+        check_channel_names({n: dict(getattr(self, n)) for n in ("channel_well_e", "channel_gain")}, channels, where)
 
     def _check_readout_and_physics(self, positive) -> None:
         if self.readout not in READOUT_MODES:

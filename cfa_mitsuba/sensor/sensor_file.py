@@ -56,14 +56,13 @@ __all__ = ["read_sensor_file", "is_sensor_file", "sensor_file_curves", "volts_to
 
 import math
 import numbers
-import tomllib
 from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import CfaMitsubaError
-from .params import SensorParams
+from .params import SensorParams, check_channel_names
 
 #: [emva] keys -> the SensorParams field each sets (K and the saturation
 #: capacity together set the well and the analog gain).
@@ -100,9 +99,11 @@ def volts_to_electrons(values: dict, where: str) -> dict:
 def is_sensor_file(path) -> bool:
     """Whether a ``.toml`` path is a sensor file (it has a ``qe`` key) rather
     than a CFA file; False for anything unreadable (the CFA reader then says why)."""
-    try:
-        return "qe" in tomllib.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+    from ..io.guard import read_toml
+
+    try:  # regular file, bounded: a FIFO named as a CFA file must not block here (issue 51)
+        return "qe" in read_toml(path, "sensor file")
+    except CfaMitsubaError:
         return False
 
 
@@ -173,6 +174,11 @@ def _pixel_values(data: dict, where: str) -> dict:
         if field and k in emva:
             put(field, float(emva[k]), f"emva.{k}")
     if "system_gain_dn_per_e" in emva:
+        swing = float(emva["system_gain_dn_per_e"]) * float(emva["saturation_capacity_e"])
+        if swing < 1.0:  # EMVA 1288 (release 4.0, s. 4): the saturation capacity is where the output saturates
+            raise CfaMitsubaError(f"{where}: emva.system_gain_dn_per_e x emva.saturation_capacity_e = {swing:.3g} DN: "
+                                  "from dark to saturation the output would span less than one digital number, "
+                                  "which no camera measured by EMVA 1288 does (at least 1 DN)")
         bits = int(values.get("adc_bits", SensorParams.adc_bits))
         black = float(values.get("black_level_dn", SensorParams.black_level_dn))
         span = 2**bits - 1 - black
@@ -224,12 +230,9 @@ def sensor_file_curves(data: dict, base: Path, where: str, channels) -> dict:
 
 
 def _read(path: Path) -> dict:
-    try:
-        return tomllib.loads(path.read_text())
-    except OSError as exc:
-        raise CfaMitsubaError(f"cannot read sensor file {str(path)!r}: {exc.strerror}") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise CfaMitsubaError(f"{path}: invalid TOML: {exc}") from None
+    from ..io.guard import read_toml
+
+    return read_toml(path, "sensor file")  # regular file, bounded, UTF-8, nesting the parser survives
 
 
 def read_sensor_file(path) -> dict:
@@ -264,9 +267,12 @@ def read_sensor_file(path) -> dict:
     name = data.get("name", p.stem)
     cfa = make_cfa(name, tile, curves, str(data.get("description", "")), where)
     try:
-        params = SensorParams(**_pixel_values(data, where))
+        values = _pixel_values(data, where)
+        check_channel_names(values, channels, "the file's tile")
+        params = SensorParams(**values)
     except CfaMitsubaError as exc:
-        raise CfaMitsubaError(f"{where}: {exc}") from None
+        text = str(exc)
+        raise CfaMitsubaError(text if text.startswith(where) else f"{where}: {text}") from None
     notes = data.get("notes", [])
     if not isinstance(notes, list) or not all(isinstance(n, str) for n in notes):
         raise CfaMitsubaError(f"{where}: notes must be a list of strings")

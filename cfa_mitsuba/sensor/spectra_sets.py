@@ -49,7 +49,6 @@ __all__ = ["SpectraSet", "list_spectra_sets", "get_spectra_set", "read_curve_csv
 import csv
 import functools
 import io
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -202,8 +201,8 @@ def read_data_toml(name: str, what: str) -> dict:
     error)."""
     path = DATA_DIR / name
     try:
-        return tomllib.loads(_guard.read_text(path, what))
-    except (CfaMitsubaError, tomllib.TOMLDecodeError) as exc:
+        return _guard.read_toml(path, what)
+    except CfaMitsubaError as exc:
         raise CfaMitsubaError(f"cannot read the {what} {str(path)!r}: {exc}") from None
 
 

@@ -49,7 +49,25 @@ def non_negative(ck, v, key):
 
 
 def _f_number(ck, v, key):
-    return ck.number(v, key, positive=True, maximum=1000.0)
+    from ..optics import OpticsParams
+
+    x = ck.number(v, key, positive=True, maximum=1000.0)
+    try:  # the lens's own physical bound (optics.lens.MIN_F_NUMBER), with its reason
+        OpticsParams(f_number=x)
+    except CfaMitsubaError as exc:
+        ck.fail(key, str(exc))
+    return x
+
+
+def _pixel_pitch(ck, v, key):
+    from ..sensor.params import SensorParams
+
+    x = ck.number(v, key, positive=True)
+    try:  # the pixel's own physical bound (sensor.params.MIN_PIXEL_PITCH_UM), with its reason
+        SensorParams(pixel_pitch_um=x)
+    except CfaMitsubaError as exc:
+        ck.fail(key, str(exc))
+    return x
 
 
 def _exposure(ck, v, key):
@@ -161,7 +179,7 @@ AXES: dict[str, Axis] = {a.name: a for a in (
     Axis(name="luminance", applies_to="capture", label="luminance", unit="cd/m²", short="L", check=positive,
          default=100.0),
     Axis(name="f_number", applies_to="optics", label="f-number", unit="", short="f", check=_f_number),
-    Axis(name="pixel_pitch_um", applies_to="sensor", label="pixel pitch", unit="µm", short="p", check=positive),
+    Axis(name="pixel_pitch_um", applies_to="sensor", label="pixel pitch", unit="µm", short="p", check=_pixel_pitch),
     Axis(name="exposure", applies_to="capture", label="exposure", unit="s", short="t", check=_exposure,
          default="auto"),
     Axis(name="read_noise_e", applies_to="sensor", label="read noise", unit="e⁻", short="rn", check=non_negative),

@@ -7,7 +7,6 @@ from __future__ import annotations
 __all__ = ["_Checker", "_typename", "read_toml"]
 
 import math
-import tomllib
 from pathlib import Path
 
 from ..errors import CfaMitsubaError
@@ -112,18 +111,16 @@ def read_toml(path, what: str) -> tuple[Path, dict]:
     """(path, the parsed TOML) of a config file; a missing, unreadable or
     malformed file is one :class:`CfaMitsubaError` naming it (``what``: 'config
     file', 'design config')."""
+    from ..io.guard import check_regular, read_toml as _read
+
     p = Path(path)
-    if not p.is_file():
+    if not p.exists() and not p.is_symlink():
         raise CfaMitsubaError(f"no such {what}: {str(p)!r}")
-    size = p.stat().st_size
+    size = check_regular(p, what).st_size  # a FIFO, device or folder refused by what it is, before any read
     if size > MAX_CONFIG_BYTES:  # issue 27: parsing a 8 MB sweep list alone took 7 s; refused at once
         raise CfaMitsubaError(f"{p.name}: {size:,} bytes, more than a {what} holds (at most "
                               f"{MAX_CONFIG_BYTES:,}: a sweep this long would be refused for its size anyway)")
-    from ..io.guard import read_text
-
-    try:  # regular file, bounded, strict UTF-8 (io/guard.py)
-        return p, tomllib.loads(read_text(p, what))
-    except tomllib.TOMLDecodeError as exc:
-        raise CfaMitsubaError(f"{p.name}: invalid TOML: {exc}") from None
+    try:  # regular file, bounded, strict UTF-8, nesting the parser survives (io/guard.py)
+        return p, _read(p, what, MAX_CONFIG_BYTES)
     except (OSError, UnicodeDecodeError) as exc:
         raise CfaMitsubaError(f"cannot read {what} {str(p)!r}: {exc}") from None

@@ -73,6 +73,8 @@ class StudyConfig:
     metric_options: dict = field(default_factory=dict)
     demosaic_options: dict = field(default_factory=dict)
     render_seeds: int = DEFAULT_RENDER_SEEDS
+    worker_max_tasks: int | None = None  # a local worker is recycled after this many tasks (study.executors)
+    worker_max_memory: int | None = None  # ... or once its resident memory passes this many bytes
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
@@ -175,7 +177,7 @@ def _sensor_values(ck: _Checker, preset, given: dict, cfas, base: Path) -> dict:
     CSV resolved against the config's folder; a base readout that every
     CFA of the study can use."""
     from ..sensor import get_cfa
-    from ..sensor.params import SensorParams
+    from ..sensor.params import SensorParams, check_channel_names
     from ..sensor.readout import readout_applies
 
     values = dict(given)
@@ -189,6 +191,7 @@ def _sensor_values(ck: _Checker, preset, given: dict, cfas, base: Path) -> dict:
                                      "transmittance)")
         values["ir_cut"] = str(f.resolve())
     try:
+        check_channel_names(values, {ch for c in cfas for ch in get_cfa(c).channels}, "any CFA of this study")
         SensorParams(**values)
     except (CfaMitsubaError, TypeError) as exc:
         ck.fail("sensor", str(exc))
@@ -326,6 +329,15 @@ def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, di
         "spectra_sets": lambda v, k: _spectra_map(ck, v, k),
     }
     sensor_cfg, preset = _sensor_preset(ck, data.get("sensor", {}), base)
+    if isinstance(sensor_cfg, dict):  # a channel no CFA has is what is wrong, before its value is judged
+        from ..sensor import get_cfa
+        from ..sensor.params import check_channel_names
+
+        try:
+            check_channel_names({k: v for k, v in sensor_cfg.items() if isinstance(v, dict)},
+                                {ch for c in cfas for ch in get_cfa(c).channels}, "any CFA of this study")
+        except CfaMitsubaError as exc:
+            ck.fail("sensor", str(exc))
     sensor_all = _dataclass_table(ck, sensor_cfg, "sensor", SensorParams, capture_extra)
     capture = {k: sensor_all.pop(k) for k in list(sensor_all) if k in capture_extra}
     sensor_all = _sensor_values(ck, preset, sensor_all, cfas, base)
@@ -348,6 +360,23 @@ def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, di
         if key in capture and policy not in ("program", "bayer"):
             ck.fail(f"sensor.{key}", f"applies to exposure_policy \"program\" or \"bayer\", not {policy!r}")
     return optics, sensor_all, capture
+
+
+def _worker_recycling(ck: _Checker, data: dict) -> tuple[int | None, int | None]:
+    """``worker_max_tasks`` (an integer >= 1) and ``worker_max_memory`` (bytes,
+    or a size such as "4G"), or None for the executor's defaults."""
+    from ..io.limits import parse_size
+
+    tasks = ck.integer(data["worker_max_tasks"], "worker_max_tasks", 1) if "worker_max_tasks" in data else None
+    memory = data.get("worker_max_memory")
+    if memory is not None:
+        if isinstance(memory, bool) or not isinstance(memory, (int, str)):
+            ck.fail("worker_max_memory", f"must be a size such as \"4G\" or a number of bytes, got {memory!r}")
+        try:
+            memory = parse_size(memory, "worker_max_memory")
+        except CfaMitsubaError as exc:
+            ck.fail("worker_max_memory", str(exc).split(": ", 1)[-1])
+    return tasks, memory
 
 
 def _at_least_one(ck: _Checker, v, key: str) -> float:
@@ -392,7 +421,7 @@ def _output(ck: _Checker, out_cfg) -> dict:
 
 _TOP_KEYS = ("name", "description", "seed", "scenes", "custom_scenes", "cfas", "demosaics", "luminances", "sweep",
              "render", "optics", "sensor", "isp", "mean_match", "normalisation", "output", "workers", "seeds",
-             "metrics", "render_seeds")
+             "metrics", "render_seeds", "worker_max_tasks", "worker_max_memory")
 
 
 def parse_config(data: dict, *, where: str = "config", base: Path | None = None) -> StudyConfig:
@@ -408,6 +437,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         if required not in data and not (required == "scenes" and "custom_scenes" in data):
             ck.fail(required, "missing (required)")
     name, description, seed, workers = ck.header(data)
+    max_tasks, max_memory = _worker_recycling(ck, data)
     seeds = ck.integer(data.get("seeds", DEFAULT_SEEDS), "seeds", 1)
     render_seeds = ck.integer(data.get("render_seeds", DEFAULT_RENDER_SEEDS), "render_seeds", 1)
     render_cfg = data.get("render", {})
@@ -434,6 +464,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         optics=optics, sensor=sensor_all, capture=capture, isp=isp_opts, mean_match=mean_match,
         ranges=ranges, clip_scores=clip, output=output, workers=workers, seeds=seeds, range_policy=policy,
         metric_options=options, demosaic_options=demosaic_options, render_seeds=render_seeds,
+        worker_max_tasks=max_tasks, worker_max_memory=max_memory,
     )
 
 

@@ -112,7 +112,7 @@ def find_cases(paths) -> list[Path]:
             if not found:
                 raise CfaMitsubaError(f"no parity cases (*.toml) in {str(p)!r}")
             out.extend(found)
-        elif p.is_file():
+        elif p.exists():  # a FIFO or device is refused by the reader, naming what it is
             out.append(p)
         else:
             raise CfaMitsubaError(f"no such parity case or folder: {str(p)!r}")

@@ -13,6 +13,9 @@ __all__ = ["load_finished", "valid_result"]
 
 import json
 import math
+import os
+import shutil
+import stat
 from pathlib import Path
 
 #: The largest task file read back (a task's rows are a few kB; a study's
@@ -56,18 +59,35 @@ def valid_result(result) -> str | None:
 
 def _read(f: Path):
     """(result, None) or (None, why the file is not trusted)."""
+    from ..errors import CfaMitsubaError
+    from ..io.guard import _kind, read_text
+
     try:
-        if not f.is_file():
-            return None, "is not a regular file"
-        if f.stat().st_size > MAX_TASK_FILE_BYTES:
+        st = os.stat(f)
+        if not stat.S_ISREG(st.st_mode):
+            return None, f"is {_kind(st.st_mode)}, not a regular file"
+        if st.st_size > MAX_TASK_FILE_BYTES:
             return None, f"is larger than {MAX_TASK_FILE_BYTES // 2**20} MiB"
-        result = json.loads(f.read_text(encoding="utf-8"))
+        # through the one bounded regular-file reader: a FIFO swapped in after the stat cannot block it
+        result = json.loads(read_text(f, "saved task result", MAX_TASK_FILE_BYTES))
     except RecursionError:
         return None, "is nested too deeply"
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
+    except CfaMitsubaError as exc:  # grew past the bound, became a FIFO, not UTF-8: the reader says which
+        return None, f"cannot be read ({exc})"
+    except (OSError, ValueError) as exc:
         return None, f"is not readable JSON ({type(exc).__name__})"
     why = valid_result(result)
     return (None, why) if why else (result, None)
+
+
+def _remove(f: Path) -> None:
+    """Clear the place of an untrusted result so the rerun task's result can
+    be written there: a file or link is removed, a folder (which a rename
+    cannot replace) too, with what it holds (``.work`` is the study's own)."""
+    if f.is_symlink() or not f.is_dir():
+        f.unlink(missing_ok=True)
+    else:
+        shutil.rmtree(f, ignore_errors=True)
 
 
 def load_finished(work: Path, task_ids, log) -> dict:
@@ -85,8 +105,7 @@ def load_finished(work: Path, task_ids, log) -> dict:
             done[tid] = result
             continue
         bad.append(f"{f.name} {why}")
-        if f.is_file() or f.is_symlink():
-            f.unlink(missing_ok=True)
+        _remove(f)
     if bad:
         log(f"notice: {len(bad)} saved task result(s) under {work} could not be trusted and will be "
             f"recomputed ({bad[0]}{'; ...' if len(bad) > 1 else ''})")

@@ -231,19 +231,24 @@ def _task_groups(tasks: list, render_info: dict, workers: int) -> list[tuple]:
 
 
 def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, scheduler: str | None = None,
-              progress: bool = True, log=None, force: bool = False) -> StudyResult:
+              progress: bool = True, log=None, force: bool = False, worker_max_tasks: int | None = None,
+              worker_max_memory: int | None = None) -> StudyResult:
     """Run a study's renders and evaluations and write its tables (see the
     module docstring for the outputs); ``timing_summary(result)`` is the
     line to print at the end.
 
     ``workers``: local processes (default: the config's, capped at the
     cores, else 2); ``scheduler``: a Dask scheduler address instead;
-    ``force``: start a study above the size limits (study.sizing).
+    ``force``: start a study above the size limits (study.sizing);
+    ``worker_max_tasks``, ``worker_max_memory``: when a local worker is
+    recycled (default: the config's, else study.executors' defaults).
     """
-    from .executors import make_executor, thread_budget
+    from .executors import check_scheduler_address, make_executor, thread_budget
     from .sizing import check_study_size, resolve_workers
 
     log = log or (lambda msg: print(msg, file=sys.stderr))
+    if scheduler is not None:  # a malformed (or empty) address is refused before anything is said or written
+        check_scheduler_address(scheduler)
     # issue 27: the study's size stated and checked before anything is written
     workers = None if scheduler else resolve_workers(workers, config.workers, log)
     size = check_study_size(config, workers, scheduler=scheduler, force=force, log=log)
@@ -263,7 +268,9 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
 
     from .shutdown import terminate_cleanly
 
-    executor = make_executor(workers=workers, scheduler=scheduler)
+    executor = make_executor(workers=workers, scheduler=scheduler,
+                             max_tasks=worker_max_tasks or config.worker_max_tasks,
+                             max_memory=worker_max_memory or config.worker_max_memory)
     render_info: dict = {}
     with terminate_cleanly(log), executor:  # issue 27: SIGTERM stops the workers too
         # Written once the executor is up (a Dask scheduler that cannot be
@@ -311,10 +318,16 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         groups = _task_groups(todo, render_info, getattr(executor, "workers", 0) or 1)
         _run_tasks(executor, evaluate_group, groups, "evaluate", progress, got_group, size=len)
         timing["phases"]["evaluate_s"] = time.perf_counter() - t
+        if getattr(executor, "recycled", 0):  # a long run: workers renewed (study.executors)
+            from ..io.limits import format_bytes
+
+            ceiling = f" or past {format_bytes(executor.max_memory)}" if executor.max_memory else ""
+            log(f"workers recycled {executor.recycled} time(s) (after {executor.max_tasks} tasks{ceiling})")
 
     rows = [r for task in tasks for r in done[_task_id(task)]["rows"]]
     failures = [f for task in tasks for f in done[_task_id(task)].get("failures", [])]
     _write_failures(out, failures, log)
+    _require_a_measurement(rows, failures, out)
     order = {
         "scene": [s.name for s in config.scenes], "cfa": [_cfa_label(c) for c in config.cfas],
         "demosaic": list(config.demosaics), "metric": list(SCORED_METRICS),
@@ -394,6 +407,18 @@ class _InProcess:
                 os.environ.pop("CFA_MITSUBA_THREADS", None)
             else:
                 os.environ["CFA_MITSUBA_THREADS"] = saved
+
+
+def _require_a_measurement(rows: list, failures: list[dict], out: Path) -> None:
+    """A run in which every measurement failed is an error (exit 2), not an
+    empty table: one line with the first cause; failures.csv lists all."""
+    if rows or not failures:
+        return
+    f = failures[0]
+    where = "/".join(str(f.get(k)) for k in ("scene", "cfa", "demosaic") if f.get(k) is not None)
+    raise CfaMitsubaError(f"every one of the {len(failures)} measurement(s) failed (all listed in "
+                          f"{out / 'failures.csv'}); the first, {where} {f.get('metric')} at "
+                          f"{f.get('luminance')} cd/m^2: {f.get('error')}")
 
 
 def _write_failures(out: Path, failures: list[dict], log) -> None:
@@ -494,4 +519,5 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
     for f in failures:
         once.setdefault(tuple(sorted((k, str(v)) for k, v in f.items() if k not in ("realisation", "error"))), f)
     _write_failures(out, list(once.values()), log)
+    _require_a_measurement(rows, failures, out)
     return metrics

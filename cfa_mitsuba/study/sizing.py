@@ -20,7 +20,11 @@ them is a product, building them is 1.6 GB):
 
 The time is estimated from measured per-unit costs (``data/study_costs.toml``:
 worker seconds per optical image, capture and camera output, per megapixel,
-measured on the quick study) divided among the workers; the peak memory is
+and per evaluation task whatever its size, divided among the workers; plus
+the main process's seconds per condition for the tables: the scores and
+ranks of every condition, which dominate a study of many tiny conditions;
+``benchmarks/bench_estimates.py`` measures the last two and prints
+estimated against measured time); the peak memory is
 the main process's largest render and its result rows plus one evaluation
 task per worker (:mod:`cfa_mitsuba.io.limits`' measured models), so the
 memory check covers N workers, not one task, and the rows a study of
@@ -40,7 +44,6 @@ __all__ = ["StudySize", "study_size", "scene_units", "check_study_size", "resolv
 
 import functools
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -60,7 +63,9 @@ _UNKNOWN_SIZE = (512, 512, 1)
 def unit_costs() -> dict:
     """The measured per-unit costs (``data/study_costs.toml``), seconds."""
     path = Path(__file__).resolve().parents[1] / "data" / "study_costs.toml"
-    return tomllib.loads(path.read_text())["seconds"]
+    from ..io.guard import read_toml
+
+    return read_toml(path, "study costs")["seconds"]
 
 
 @dataclass(frozen=True)
@@ -76,6 +81,7 @@ class StudySize:
     peak_bytes: int
     rows: int = 0
     rows_bytes: int = 0
+    render_seconds: float = 0.0  # the renders' share of ``seconds`` (nothing when they are cached)
 
     def describe(self) -> str:
         from ..io.limits import format_bytes
@@ -227,10 +233,15 @@ def study_size(config, workers: int | None, scheduler: str | None = None, costs:
         w, h, bands = u["size"]
         render_peak = max(render_peak, limits.estimate_render_bytes(w, h, bands))
         task_peak = max(task_peak, limits.estimate_task_bytes(h, w, bands))
-    seconds = render_s + cost["worker_start"] + worker_s / n_workers
+    # per-task overhead (issue 51): a task's own bookkeeping in its worker, whatever its size, and the main
+    # process's tables, whose scoring and ranks are made per condition (20,000 tiny conditions were
+    # estimated at 66 s without them and took 13 minutes)
+    worker_s += tasks * cost.get("task_overhead", 0.0)
+    main_s = conditions * cost.get("tables_per_condition", 0.0)
+    seconds = render_s + cost["worker_start"] + worker_s / n_workers + main_s
     rows_bytes = limits.estimate_result_rows_bytes(rows)
     peak = render_peak + rows_bytes + (0 if scheduler else n_workers * task_peak)
-    return StudySize(conditions, tasks, captures, outputs, n_workers, seconds, peak, rows, rows_bytes)
+    return StudySize(conditions, tasks, captures, outputs, n_workers, seconds, peak, rows, rows_bytes, render_s)
 
 
 def check_study_size(config, workers: int | None, *, scheduler: str | None = None, force: bool = False,

@@ -1,0 +1,132 @@
+"""A study on a real Dask cluster (the suite's ``dask_cluster``: a scheduler
+and two `dask worker` processes, each with a nanny) when a worker fails:
+one that exceeds its memory limit is restarted by its nanny and its task
+retried, not lost; workers recycled by Dask's lifetime options lose
+nothing either.  Each ends with tables byte-identical to a local run
+(issue 51, items 12 and 13).  The killed-worker case is
+tests/test_study_run.py's."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import cloudpickle
+import numpy as np
+import pytest
+from distributed import Client, WorkerPlugin
+
+from conftest import REPO
+from test_study_run import dask_cluster  # noqa: F401 (the suite's one Dask cluster fixture)
+
+SMALL = """\
+name = "small"
+seed = 1
+seeds = 2
+scenes = ["macbeth"]
+cfas = ["bayer", "rgb4", "cmy1", "rgbw1"]
+demosaics = ["bilinear", "laplacian"]
+luminances = [10, 30, 100, 300]
+[render.macbeth]
+width = 120
+height = 106
+[output]
+report = false
+"""
+#: A worker's memory limit, and what the balloon below holds on top of what the worker already holds.
+LIMIT = "1.5GB"
+BALLOON_BYTES = 1_600_000_000
+
+
+def _study(config, out, *extra):
+    return subprocess.run([sys.executable, "-m", "cfa_mitsuba", "study", str(config), "--out", str(out), "--quiet",
+                           *map(str, extra)], cwd=REPO, capture_output=True, text=True, timeout=900)
+
+
+@pytest.fixture(scope="module")
+def local_run(tmp_path_factory):
+    config = tmp_path_factory.mktemp("small") / "small.toml"
+    config.write_text(SMALL)
+    proc = _study(config, config.parent / "local", "--workers", 2)
+    assert proc.returncode == 0, proc.stderr
+    return config, config.parent / "local"
+
+
+class Balloon(WorkerPlugin):
+    """On the first task any worker starts (once per cluster: a marker file
+    decides), hold ``nbytes`` of touched memory in that worker process, so
+    its nanny finds it past its memory limit and restarts it mid-task."""
+
+    def __init__(self, marker: str, nbytes: int):
+        self.marker, self.nbytes, self.held = marker, nbytes, None
+
+    def transition(self, key, start, finish, **kwargs):
+        if finish != "executing" or self.held is not None:
+            return
+        try:
+            fd = os.open(self.marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+        except FileExistsError:
+            return  # the balloon went up once already (this may be the restarted worker)
+        os.write(fd, str(os.getpid()).encode())
+        os.close(fd)
+        self.held = np.ones(self.nbytes // 8)  # every page written: resident
+
+
+cloudpickle.register_pickle_by_value(sys.modules[__name__])  # the workers cannot import this test module
+
+
+def _worker_pids(address):
+    with Client(address, timeout=60) as c:
+        c.wait_for_workers(2, timeout=120)
+        return set(c.run(os.getpid).values())
+
+
+def _same_tables(a, b):
+    for name in ("metrics.csv", "scores.csv", "metrics_realisations.csv"):
+        assert (a / name).read_bytes() == (b / name).read_bytes(), name
+
+
+@pytest.mark.parametrize("dask_cluster", [("--memory-limit", LIMIT, "--nthreads", "1")], indirect=True)
+def test_a_worker_past_its_memory_limit_is_restarted_and_its_task_retried(local_run, dask_cluster, tmp_path):
+    config, local = local_run
+    address, _ = dask_cluster
+    marker = tmp_path / "ballooned"
+    with Client(address, timeout=60) as c:
+        c.register_plugin(Balloon(str(marker), BALLOON_BYTES), name="balloon")
+    before = _worker_pids(address)
+    proc = _study(config, tmp_path / "dask", "--scheduler", address)
+    assert proc.returncode == 0, proc.stderr
+    assert marker.is_file(), "no worker went past its limit"
+    ballooned = int(marker.read_text())
+    after = _worker_pids(address)
+    assert ballooned in before and ballooned not in after and len(after) == 2, (ballooned, before, after)
+    _same_tables(tmp_path / "dask", local)
+
+
+@pytest.mark.parametrize("dask_cluster", [("--lifetime", "5s", "--lifetime-stagger", "1s", "--lifetime-restart",
+                                           "--nthreads", "1")], indirect=True)
+def test_workers_recycled_by_their_lifetime_lose_nothing(local_run, dask_cluster, tmp_path):
+    """Dask's worker lifetime options (docs/study.md) recycle long-lived
+    workers on a cluster: workers replaced while the study runs, and the
+    same tables."""
+    import time
+
+    config, local = local_run
+    address, _ = dask_cluster
+    seen = _worker_pids(address)
+    cmd = [sys.executable, "-m", "cfa_mitsuba", "study", str(config), "--out", str(tmp_path / "dask"), "--quiet",
+           "--scheduler", address]
+    proc = subprocess.Popen(cmd, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    for _ in range(900):  # about 15 minutes at most (a hang guard, not a measurement)
+        if proc.poll() is not None:
+            break
+        try:
+            seen |= _worker_pids(address)
+        except (OSError, TimeoutError):
+            pass  # a worker between lives
+        time.sleep(1.0)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 0, err
+    assert len(seen) > 2, f"no worker was recycled while the study ran ({len(seen)} worker processes seen)"
+    _same_tables(tmp_path / "dask", local)
