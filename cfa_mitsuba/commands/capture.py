@@ -7,6 +7,7 @@ import argparse
 import math
 import sys
 
+from ..errors import one_line
 from .argtypes import non_negative_float, non_negative_int, positive_float, positive_int
 
 HELP = "capture a spectral EXR with a CFA sensor (or the ideal XYZ sensor) into a raw .npz"
@@ -227,7 +228,7 @@ def run(args) -> int:
                           max_analog_gain=args.max_analog_gain, **ref)
         save_raw_npz(out, raw)
     for w in caught:
-        sys.stderr.write(f"{args._prog}: warning: {' '.join(str(w.message).split())}\n")
+        sys.stderr.write(f"{args._prog}: warning: {one_line(w.message)}\n")
 
     st, meta, opt = raw.settings, raw.meta, raw.meta["optics"]
     h, w = raw.raw.shape[:2]
