@@ -14,7 +14,7 @@ __all__ = ["MetricRecord", "NATURAL", "INPUT_KINDS"]
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from ..render.types import NATURAL  # the kind of a natural scene (puppy, user XML, measured image)
+from ..values import NATURAL  # the kind of a natural scene (puppy, user XML, measured image)
 
 #: What a metric function takes positionally, by the record's ``inputs``:
 #: 'xyz' (reference XYZ, test XYZ, white XYZ), 'srgb8' (reference and test

@@ -23,8 +23,7 @@ process, on many, or on a Dask cluster, and after an interruption.
 
 from __future__ import annotations
 
-__all__ = ["EvaluationTask", "render_task", "evaluate_task", "task_seed", "load_scene_image", "condition_columns",
-           "safe_label"]
+__all__ = ["EvaluationTask", "render_task", "evaluate_task", "task_seed", "load_scene_image", "condition_columns"]
 
 import dataclasses
 import hashlib
@@ -37,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ..io.sidecar import json_default
+from .details_layout import ideal_folder, output_folder
 
 
 @dataclass(frozen=True)
@@ -339,7 +339,7 @@ def evaluate_task(task) -> dict:
             rows.extend({**base, **r, **_capture_columns(raw)} for r in _result_rows(ev.results))
             failures.extend({**base, **f} for f in ev.failures)
             if keep:
-                _save_details(details_dir / t.scene / safe_label(cfa_label) / method, tag, ev.results,
+                _save_details(output_folder(details_dir, t.scene, cfa_label, method), tag, ev.results,
                               ev.processed, _details_extra(ev, raw, seed), crop=_crop(t.scene, ideal))
     return {"rows": rows, "timing": chain.timing, "failures": failures,
             "ideal_rows": _ideal_rows(t, chain, ideal, details_dir, tag)}
@@ -360,7 +360,7 @@ def _ideal_rows(t: EvaluationTask, chain, ideal, details_dir, tag) -> list[dict]
                 "base": bool(t.base), "realisation": 0, "render_seed": 0}
         rows = [{**base, **r} for r in _result_rows(got)]
     if details_dir is not None:
-        ideal_dir = details_dir / t.scene / "ideal"
+        ideal_dir = ideal_folder(details_dir, t.scene)
         if not (ideal_dir / f"{tag}.png").exists():
             kept = [n for n in t.metrics if m.get_metric(n).ideal_details]
             ideal_results = m.evaluate_many(kept, chain.inputs(ideal, ideal.xyz, cond),
@@ -381,10 +381,3 @@ def _result_rows(results: dict) -> list[dict]:
     from ..metrics import result_rows
 
     return result_rows(results)
-
-
-def safe_label(label: str) -> str:
-    """The file-name-safe form of a label: the folder a CFA gets under
-    ``details/`` (TOML CFAs are labelled by their name, which may hold any
-    character); the report reads the same folders."""
-    return "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in str(label))
