@@ -60,9 +60,10 @@ def _cfa_files(folder: Path) -> dict:
 def measured_mtf50(cfas: dict, height: int, width: int = 320) -> dict:
     """{tile: MTF50 cy/mm} noise-free, as a study measures it."""
     from cfa_mitsuba import render
+    from cfa_mitsuba.sensor import ExposureProgram
     from cfa_mitsuba.study.chain import CameraChain, ChainSettings
 
-    settings = ChainSettings(exposure_policy="program")
+    settings = ChainSettings(exposure_program=ExposureProgram("program"))
     chain = CameraChain(settings)
     image = render.render_cached("slanted-edge", width=width, height=height)
     cond = settings.base_condition(luminance=100.0)
@@ -80,9 +81,9 @@ def proxy_numbers() -> dict:
     from cfa_mitsuba import spectra
     from cfa_mitsuba.design import proxy as P
     from cfa_mitsuba.design.search import fixed_models
-    from cfa_mitsuba.sensor import get_spectra_set
+    from cfa_mitsuba.sensor import ExposureProgram, get_spectra_set
 
-    settings = P.ProxySettings(policy="program", luminance_cd_m2=10.0)
+    settings = P.ProxySettings(exposure=ExposureProgram("program"), luminance_cd_m2=10.0)
     model = fixed_models(get_spectra_set("isetcam-rgb").curves, LETTERS, settings)((0, 1, 2))
     white = spectra.xyz_from_radiance(spectra.illuminant("D65", spectra.DEFAULT_WAVELENGTHS)[None, :],
                                       spectra.DEFAULT_WAVELENGTHS)[0]

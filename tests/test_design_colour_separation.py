@@ -27,7 +27,7 @@ TILES = {"least-noise": ["B B", "B B", "B B", "G R"], "most-noise": ["G G R B", 
 def test_layouts_on_one_filter_set_do_not_separate_on_macbeth_de00(tmp_path):
     from cfa_mitsuba.design import proxy as P
     from cfa_mitsuba.design.search import fixed_models
-    from cfa_mitsuba.sensor import get_spectra_set
+    from cfa_mitsuba.sensor import ExposureProgram, get_spectra_set
 
     paths = []
     for name, tile in TILES.items():
@@ -36,7 +36,7 @@ def test_layouts_on_one_filter_set_do_not_separate_on_macbeth_de00(tmp_path):
         paths.append(str(p))
     # the two layouts' luminance noise really differs (the proxy's exact propagation, dim light)
     models = fixed_models(get_spectra_set("isetcam-rgb").curves, ("R", "G", "B"))
-    settings = P.ProxySettings(policy="program", luminance_cd_m2=10.0)
+    settings = P.ProxySettings(exposure=ExposureProgram("program"), luminance_cd_m2=10.0)
     noise = [P.evaluate_layouts(np.array([lay], np.uint8), h, w, models, settings)["noise"][0]
              for lay, h, w in (([2, 2, 2, 2, 2, 2, 1, 0], 4, 2), ([1, 1, 0, 2, 1, 1, 1, 0], 2, 4))]
     assert noise[1] > 1.3 * noise[0], noise

@@ -13,6 +13,7 @@ import cfa_mitsuba as cm
 from cfa_mitsuba.design import proxy as P
 from cfa_mitsuba.design.search import fixed_models
 from cfa_mitsuba.design.spectra import letter_curves
+from cfa_mitsuba.sensor import ExposureProgram
 
 LETTERS = ("R", "G", "B")
 
@@ -116,13 +117,14 @@ def test_the_exposure_program_gives_a_sensitive_channel_more_electrons_in_dim_li
     the channels' electrons scale with their share of the maximum; under the
     program in dim light the time is the cap for everyone, so electrons
     follow the channels' absolute rates and rise with the luminance."""
-    ref = P.grey_electrons(model, P.ProxySettings(policy="reference", luminance_ratio=0.1))
+    ref = P.grey_electrons(model, P.ProxySettings(exposure=ExposureProgram("reference"), luminance_ratio=0.1))
     assert ref.max() == pytest.approx(0.18 * 0.95 * 6200 * 0.1)
-    dim = P.ProxySettings(policy="program", luminance_cd_m2=3.0, max_exposure_s=1 / 30)
+    dim = P.ProxySettings(exposure=ExposureProgram("program", max_exposure_s=1 / 30), luminance_cd_m2=3.0)
     e3 = P.grey_electrons(model, dim)
-    e30 = P.grey_electrons(model, P.ProxySettings(policy="program", luminance_cd_m2=30.0, max_exposure_s=1 / 30))
+    e30 = P.grey_electrons(model, P.ProxySettings(exposure=ExposureProgram("program", max_exposure_s=1 / 30),
+                                                  luminance_cd_m2=30.0))
     np.testing.assert_allclose(e30 / e3, 10.0, rtol=1e-12)                  # capped time: linear in light
     np.testing.assert_allclose(e3 / e3.max(), model.white_response / model.white_response.max(), rtol=1e-12)
-    bright = P.grey_electrons(model, P.ProxySettings(policy="program", luminance_cd_m2=1e6))
+    bright = P.grey_electrons(model, P.ProxySettings(exposure=ExposureProgram("program"), luminance_cd_m2=1e6))
     # bright: the metered time, the brightest pixel's best channel at 95 % of the well
     assert bright.max() * P._BRIGHT_OF_MEAN / P._GREY_OF_MEAN == pytest.approx(0.95 * 6200)

@@ -9,7 +9,7 @@ import pytest
 import cfa_mitsuba as cm
 from cfa_mitsuba.errors import CfaMitsubaError
 from cfa_mitsuba.sensor import capture
-from cfa_mitsuba.sensor.exposure_program import DEFAULT_MAX_EXPOSURE_S, run_program
+from cfa_mitsuba.sensor.exposure_program import ExposureProgram
 from cfa_mitsuba.values import SpectralImage
 
 PAPER_CFAS = ["bayer", "rgb1", "rgb2", "rgb3", "rgb4", "rgb5", "cmy1", "cmy2", "cmy3", "rgbw1", "rgbw2", "rgbw3"]
@@ -44,7 +44,7 @@ def test_program_never_clips_the_puppy_at_400_and_runs_out_of_time_at_3(puppy_oi
         assert bright.meta["clipped_fraction"] <= 1e-3, (cfa, bright.meta["clipped_fraction"])
         assert bright.settings["exposure_policy"] == "program"
         dim = capture(puppy_oi, cfa, luminance_cd_m2=3.0, seed=1)
-        assert dim.exposure_s == pytest.approx(DEFAULT_MAX_EXPOSURE_S, rel=1e-12), cfa
+        assert dim.exposure_s == pytest.approx(ExposureProgram().max_exposure_s, rel=1e-12), cfa
         assert dim.settings["analog_gain"] * dim.settings["digital_gain"] > 1.0, cfa
         # the gains make up exactly what the time could not: the metered time at base gain
         total = dim.exposure_s * dim.settings["analog_gain"] * dim.settings["digital_gain"]
@@ -55,13 +55,16 @@ def test_program_never_clips_the_puppy_at_400_and_runs_out_of_time_at_3(puppy_oi
 
 
 def test_program_steps_time_then_analogue_then_digital_gain():
-    assert run_program(0.01).exposure_s == 0.01
-    c = run_program(0.1, max_exposure_s=0.02, max_analog_gain=4.0)
+    assert ExposureProgram().choose(0.01).exposure_s == 0.01
+    small = ExposureProgram(max_exposure_s=0.02, max_analog_gain=4.0)
+    c = small.choose(0.1)
     assert (c.exposure_s, c.analog_gain, c.digital_gain) == (0.02, 4.0, pytest.approx(1.25))
-    c = run_program(0.06, max_exposure_s=0.02, max_analog_gain=4.0)
+    c = small.choose(0.06)
     assert (c.analog_gain, c.digital_gain) == (pytest.approx(3.0), 1.0)
     with pytest.raises(CfaMitsubaError, match="max_analog_gain"):
-        run_program(0.1, max_analog_gain=0.5)
+        ExposureProgram(max_analog_gain=0.5)
+    with pytest.raises(CfaMitsubaError, match="unknown exposure policy 'sometimes'"):
+        ExposureProgram("sometimes")
 
 
 def test_bayer_protocol_gives_every_cfa_bayers_time_and_gain(puppy_oi):
@@ -143,7 +146,7 @@ def test_colour_matrix_does_not_make_cmy2_worse_with_more_light(puppy_oi):
     from cfa_mitsuba.study.chain import CameraChain, ChainSettings
     from cfa_mitsuba.study.intervals import t_interval
 
-    chain = CameraChain(ChainSettings(exposure_policy="reference"))
+    chain = CameraChain(ChainSettings(exposure_program=ExposureProgram("reference")))
     img = puppy_oi
     prev = None
     for lum in (12.0, 50.0, 100.0):

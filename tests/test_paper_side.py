@@ -101,7 +101,7 @@ def test_mcc_fit_is_the_least_squares_fit_on_the_chart():
 def test_paper_isetcam_config_selects_isetcams_procedure():
     cfg = load_config(ISETCAM_TOML)
     ch = cfg.chain_settings()
-    assert cfg.range_policy == "paper" and cfg.capture["exposure_policy"] == "each"
+    assert cfg.range_policy == "paper" and cfg.exposure_program.policy == "each"
     assert dict(ch.isp) == {"white_balance": "illuminant", "white_preserving": False, "colour_fit": "mcc",
                             "regularise": False}  # ISETCam: the exact, unconstrained fit
     assert ch.options_of_metrics()["delta-e"] == {"version": "1976"}

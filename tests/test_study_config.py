@@ -41,22 +41,40 @@ def test_paper_config_is_the_papers_study():
     assert sweep.scenes == ("puppy",) and set(sweep.metrics) == {"scielab", "ssim"}
     assert sweep.values["luminance"] == (0.3, 1, 3, 6, 12, 50, 100, 200, 400)  # the paper's 3..400, and lower (issue 22)
     assert snr.scenes == ("gray-bar",) and snr.metrics == ("ysnr",) and snr.values["luminance"] == sweep.values["luminance"]
-    assert cfg.chain_settings().exposure_policy == "program"
+    assert cfg.chain_settings().exposure_program.policy == "program"
 
 
 def test_exposure_policies_set_where_auto_exposure_is_chosen(tmp_path):
-    each = load_config(write(tmp_path, GOOD + '[sensor]\nexposure_policy = "each"\n')).chain_settings()
-    assert each.reference_luminance_cd_m2 is None  # ISETCam's auto exposure at every luminance
-    program = load_config(write(tmp_path, GOOD)).chain_settings()
-    assert (program.exposure_policy, program.max_exposure_s, program.max_analog_gain) == ("program", 1 / 30, 16.0)
-    ref = load_config(write(tmp_path, GOOD + '[sensor]\nexposure_policy = "reference"\n')).chain_settings()
-    assert ref.reference_luminance_cd_m2 == 100.0 and ref.exposure_policy == "reference"
+    from cfa_mitsuba.sensor import ExposureProgram
+
+    each = load_config(write(tmp_path, GOOD + '[sensor]\nexposure_policy = "each"\n'))
+    assert each.exposure_program.policy == "each"  # ISETCam's auto exposure at every luminance
+    program = load_config(write(tmp_path, GOOD))
+    # the config's one value reaches the chain whole, the program's defaults where [sensor] names none
+    assert program.chain_settings().exposure_program is program.exposure_program == ExposureProgram()
+    assert (program.exposure_program.max_exposure_s, program.exposure_program.max_analog_gain) == (1 / 30, 16.0)
+    ref = load_config(write(tmp_path, GOOD + '[sensor]\nexposure_policy = "reference"\n')).exposure_program
+    assert (ref.policy, ref.reference_luminance_cd_m2) == ("reference", 100.0)
     bayer = load_config(write(tmp_path, GOOD + '[sensor]\nexposure_policy = "bayer"\nmax_analog_gain = 8\n'))
-    assert bayer.chain_settings().exposure_policy == "bayer" and bayer.chain_settings().max_analog_gain == 8.0
+    assert bayer.chain_settings().exposure_program == ExposureProgram("bayer", max_analog_gain=8.0)
+    # config.json holds the program's keys that its policy reads
+    assert bayer.to_dict()["capture"] == {"exposure_policy": "bayer", "max_exposure_s": 1 / 30, "max_analog_gain": 8.0}
     isetcam = load_config(REPO / "configs" / "paper-isetcam.toml").chain_settings()
-    assert isetcam.exposure_policy == "each"  # ISETCam's own rule, chosen explicitly
+    assert isetcam.exposure_program.policy == "each"  # ISETCam's own rule, chosen explicitly
     fixed = load_config(write(tmp_path, GOOD + '[sensor]\nexposure_policy = "fixed"\nexposure = 0.02\n'))
-    assert fixed.base_condition().exposure == 0.02
+    assert fixed.base_condition().exposure == 0.02 and fixed.exposure_program.policy == "fixed"
+    with pytest.raises(cm.CfaMitsubaError, match=r"sweep\[0\].exposure: 'auto' needs an exposure policy"):
+        load_config(write(tmp_path, GOOD + '[sensor]\nexposure_policy = "fixed"\nexposure = 0.02\n'
+                          '[[sweep]]\nscene = "macbeth"\nexposure = ["auto", 0.01]\n'))
+
+
+def test_the_chain_settings_are_built_once_per_study(tmp_path):
+    cfg = load_config(write(tmp_path, GOOD))
+    assert cfg.chain_settings() is cfg.chain_settings()
+    from cfa_mitsuba.study.runner import plan_study
+
+    _, tasks = plan_study(cfg, None)
+    assert all(t.chain is cfg.chain_settings() for t in tasks)
 
 
 def test_one_f_number_for_every_scene_unless_the_config_asks_for_the_scenes_own(tmp_path):

@@ -98,6 +98,7 @@ import numpy as np
 from .. import spectra
 from ..colorimetry import delta_e00
 from ..isp.colour_matrix import electrons_per_radiance_of, fit_colour_matrix
+from ..sensor.exposure_program import ExposureProgram
 
 #: The proxies, each lower-is-better.
 PROXY_NAMES = ("aliasing", "aliasing_h", "blur", "neg_capacity", "noise", "noise_area", "snr10", "snr10_area",
@@ -126,12 +127,11 @@ class ProxySettings:
     well_e: float = 6200.0
     read_noise_e: float = 6.2
     luminance_ratio: float = 1.0
-    policy: str = "reference"        # the exposure policy: 'program' (and 'bayer'), 'reference', 'each'
+    # the exposure program (policy, the program's longest time, where 'reference' meters): the study's
+    exposure: ExposureProgram = ExposureProgram(policy="reference")
     luminance_cd_m2: float = 100.0    # the (lowest) objective luminance the noise is predicted at
-    max_exposure_s: float = 1.0 / 30.0
     fill_factor: float = 1.0
     demosaics: tuple = ("bilinear",)  # the noise proxy is the best (lowest) over these
-    reference_luminance_cd_m2: float = 100.0  # where the 'reference' policy meters
     edge_luminance_cd_m2: float = 100.0       # the slanted edge's luminance (the capacity proxy's)
     edge_both: bool = False  # blur and capacity: the worse of the tile's and its transpose's (design/orientation.py)
 
@@ -386,18 +386,18 @@ def grey_electrons(model: ColourModel, settings: ProxySettings, *, level_of_mean
     D65 at the grey's luminance, through the f-number, the pixel area and
     fill factor) times the program's time: the metered time (the brightest
     pixel's most sensitive channel at 95 % of the well) capped at
-    ``max_exposure_s``; gains add no electrons.  The defaults measure the
+    the program's ``max_exposure_s``; gains add no electrons.  The defaults measure the
     gray bar's mid-grey; ``level_of_mean`` and ``bright_of_mean`` (the
     measured level and the brightest pixel over the scene's mean
     luminance) and ``reference_level`` (the measured reflectance) another
     chart's."""
-    if settings.policy in ("reference", "each") or model.white_rate is None:
+    if settings.exposure.policy in ("reference", "each") or model.white_rate is None:
         return (reference_level * _AE_LEVEL * settings.well_e * settings.luminance_ratio
                 * model.white_response / model.white_response.max())
     optics = np.pi / (1.0 + 4.0 * settings.f_number ** 2) * (settings.pixel_pitch_um * 1e-6) ** 2 * settings.fill_factor
     rate = model.white_rate * optics * settings.luminance_cd_m2   # e-/s of a D65 field at the mean luminance
     metered = _AE_LEVEL * settings.well_e / (rate.max() * bright_of_mean)
-    return rate * level_of_mean * min(metered, settings.max_exposure_s)
+    return rate * level_of_mean * min(metered, settings.exposure.max_exposure_s)
 
 
 def _noise_gains(layout_row, h, w, idx, m: ColourModel, method: str, cache: dict) -> tuple:
@@ -445,10 +445,10 @@ def evaluate_layouts(layouts: np.ndarray, h: int, w: int, models: dict, settings
     out = {name: np.zeros(n) for name in ("sampling", "aliasing_h", "noise", "noise_xyz", "noise_area", "snr10",
                                           "snr10_area", "blur", "neg_capacity", "colour", "vora_trussell")}
     dim = dataclasses.replace(settings, luminance_cd_m2=1.0,
-                              luminance_ratio=1.0 / settings.reference_luminance_cd_m2)
+                              luminance_ratio=1.0 / settings.exposure.reference_luminance_cd_m2)
     edge_settings = dataclasses.replace(settings, luminance_cd_m2=settings.edge_luminance_cd_m2,
                                         luminance_ratio=settings.edge_luminance_cd_m2
-                                        / settings.reference_luminance_cd_m2)
+                                        / settings.exposure.reference_luminance_cd_m2)
     keys = present @ (1 << np.arange(k))
     for key in np.unique(keys):
         rows = np.flatnonzero(keys == key)

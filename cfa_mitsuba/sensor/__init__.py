@@ -9,3 +9,4 @@ from .presets import SensorPreset, get_sensor_preset, list_sensor_presets  # noq
 from .noise import collect_electrons, fixed_pattern, read_out  # noqa: F401
 from .capture import (AUTO_EXPOSURE_LEVEL, DEFAULT_REFERENCE_LUMINANCE_CD_M2, auto_exposure,  # noqa: F401
                       capture, capture_ideal, capture_many)
+from .exposure_program import EXPOSURE_POLICIES, ExposureProgram  # noqa: F401

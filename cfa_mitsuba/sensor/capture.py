@@ -39,18 +39,18 @@ from ..optics import OpticsParams, compute_optics, integrate_pixels
 from ..values import OpticalImage, RawImage, SpectralImage
 from .catalogue import get_cfa
 from .cfa import CFA
-from .exposure_program import (DEFAULT_MAX_ANALOG_GAIN, DEFAULT_MAX_EXPOSURE_S, EXPOSURE_POLICIES,
-                               PEDESTAL_SIGMAS, ExposureChoice, run_program)
+from .exposure_program import PEDESTAL_SIGMAS, ExposureChoice, ExposureProgram
 from .noise import collect_electrons, read_out, temporal_rng
 from .params import NOISE_MODES, SensorParams
 from .photometry import add_photometry as _photometry, saturation_rel as _saturation_rel
 from .physics import apply_crosstalk, channel_map, crosstalk_fractions, with_ir_cut
 from .readout import binned_pattern, read_binned, require_block_layout
 
-#: Auto exposure is chosen for the scene scaled to this mean luminance and
-#: kept for any other luminance, so that dim scenes really are noisier
-#: (Bae 2020 sweeps 3..400 cd/m^2 around 100 cd/m^2).
-DEFAULT_REFERENCE_LUMINANCE_CD_M2 = 100.0
+#: ISETCam's auto exposure (the 'reference' policy) is chosen for the scene
+#: scaled to this mean luminance and kept for any other luminance, so that
+#: dim scenes really are noisier: the exposure program's default
+#: (:class:`~.exposure_program.ExposureProgram`), read from it.
+DEFAULT_REFERENCE_LUMINANCE_CD_M2 = ExposureProgram.reference_luminance_cd_m2
 #: ISETCam ``autoExposure(oi, sensor, 0.95, 'luminance')``: the brightest
 #: pixel reaches 95 % of the well.
 AUTO_EXPOSURE_LEVEL = 0.95
@@ -183,12 +183,19 @@ def _resolve_exposure(exposure_s, auto) -> tuple[ExposureChoice, str]:
 _UNSET = object()
 
 
-def _policy_of(exposure_policy, reference) -> str:
-    if exposure_policy is None:
-        return "program" if reference is _UNSET else ("each" if reference is None else "reference")
-    require(exposure_policy in EXPOSURE_POLICIES,
-            f"unknown exposure policy {exposure_policy!r} (choose {', '.join(EXPOSURE_POLICIES)})")
-    return exposure_policy
+def _program_of(program, policy, reference, max_exposure_s, max_analog_gain) -> ExposureProgram:
+    """The capture's :class:`ExposureProgram`: the one given whole, or one
+    made once from the loose keywords (not both)."""
+    loose = policy is not None or reference is not _UNSET or max_exposure_s is not None or max_analog_gain is not None
+    if program is not None:
+        require(not loose, "give the exposure program whole (exposure_program=) or as keywords "
+                           "(exposure_policy=, max_exposure_s=, ...), not both")
+        require(isinstance(program, ExposureProgram),
+                f"exposure_program must be an ExposureProgram, got {type(program).__name__}")
+        return program
+    return ExposureProgram.from_keywords(policy, None if reference is _UNSET else reference,
+                                         reference_given=reference is not _UNSET, max_exposure_s=max_exposure_s,
+                                         max_analog_gain=max_analog_gain)
 
 
 def metered_exposure(oi: OpticalImage, pix: np.ndarray, spectra_cb: np.ndarray, sensor: SensorParams,
@@ -210,16 +217,18 @@ def metered_exposure(oi: OpticalImage, pix: np.ndarray, spectra_cb: np.ndarray, 
     return min(t_rule, AUTO_EXPOSURE_LEVEL * sensor.well_capacity_e / peak)
 
 
-def _auto_choice(oi, pix, qe, sensor, s, policy, reference, limits) -> ExposureChoice:
-    """The exposure ``policy`` chooses (module doc of :mod:`.exposure_program`)."""
+def _auto_choice(oi, pix, qe, sensor, s, program: ExposureProgram) -> ExposureChoice:
+    """The exposure the program's policy chooses (module doc of :mod:`.exposure_program`)."""
+    policy = program.policy
+    require(policy != "fixed", "exposure policy 'fixed' takes an exposure time in seconds, not 'auto'")
     if policy in ("reference", "each"):
-        ref = None if policy == "each" else (DEFAULT_REFERENCE_LUMINANCE_CD_M2 if reference is _UNSET else reference)
-        return ExposureChoice(auto_exposure(oi, qe, sensor, None if policy == "each" else ref, s))
+        return ExposureChoice(auto_exposure(oi, qe, sensor, None if policy == "each" else
+                                            program.reference_luminance_cd_m2, s))
     require(float(oi.meta["scene_luminance_cd_m2"]) > 0,
             "auto exposure needs light: the scene is black (mean luminance 0; give a fixed exposure)")
     if policy == "bayer":  # the same camera with Bayer's filters: its program, for every CFA
         qe = with_ir_cut(get_cfa("bayer"), sensor.ir_cut).sensitivities(np.asarray(oi.wavelengths, dtype=np.float64))
-    return run_program(metered_exposure(oi, pix, qe, sensor, s), *limits)
+    return program.choose(metered_exposure(oi, pix, qe, sensor, s))
 
 
 def pedestal_for_gain(sensor: SensorParams) -> SensorParams:
@@ -275,14 +284,14 @@ def _check_seed(seed) -> int:
 _LAST_SIGNAL: list = [None]
 
 
-def _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, policy, reference_luminance_cd_m2, limits):
+def _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, program):
     """What a capture computes before any noise: (exposure choice, exposure
     mode, the sensor at the chosen gain, mean photo-electrons (H, W),
     electrons per radiance (C, B), per-pixel wells and gains or None, (H,
     W)); the arrays read-only."""
     pix = _pixel_irradiance(oi, sensor.fill_factor)
     choice, mode = _resolve_exposure(
-        exposure_s, lambda: _auto_choice(oi, pix, qe, sensor, s, policy, reference_luminance_cd_m2, limits))
+        exposure_s, lambda: _auto_choice(oi, pix, qe, sensor, s, program))
     exposure = choice.exposure_s
     if choice.analog_gain != 1.0:  # the program's gain on top of the sensor's own, its pedestal raised to match
         sensor = pedestal_for_gain(sensor.with_(analog_gain=sensor.analog_gain * choice.analog_gain))
@@ -315,9 +324,9 @@ def _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, policy, reference
 
 def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposure_s="auto",
             noise: str = "all", seed: int = 0, sensor: SensorParams | None = None,
-            optics: OpticsParams | None = None, oversample=None, reference_luminance_cd_m2=_UNSET,
-            exposure_policy: str | None = None, max_exposure_s: float = DEFAULT_MAX_EXPOSURE_S,
-            max_analog_gain: float = DEFAULT_MAX_ANALOG_GAIN) -> RawImage:
+            optics: OpticsParams | None = None, oversample=None, exposure_program: ExposureProgram | None = None,
+            reference_luminance_cd_m2=_UNSET, exposure_policy: str | None = None, max_exposure_s: float | None = None,
+            max_analog_gain: float | None = None) -> RawImage:
     """Capture a raw mosaic.
 
     Parameters
@@ -330,19 +339,22 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     luminance_cd_m2 : scale the scene to this mean luminance (cd/m^2);
         None keeps its radiance.
     exposure_s : seconds, or ``"auto"``: the time and gains the exposure
-        policy chooses (:mod:`.exposure_program`).
+        program chooses (:mod:`.exposure_program`).
     noise : ``off``, ``shot`` or ``all`` (:mod:`cfa_mitsuba.sensor.noise`).
     seed : temporal noise seed (non-negative int); the fixed pattern comes
         from ``sensor.sensor_seed``.
     sensor : :class:`SensorParams` (defaults documented there).
     optics, oversample : for a SpectralImage, as in ``compute_optics``.
+    exposure_program : the :class:`~.exposure_program.ExposureProgram`
+        (policy, limits, reference luminance), passed whole; default
+        ``ExposureProgram()``, the program.  Or, for a one-off call, its
+        settings as keywords (a value not given keeps the program's default):
     reference_luminance_cd_m2 : for the 'reference' policy, the mean
-        luminance at which auto exposure is chosen (default 100); None: at
-        the captured luminance ('each').  Given without a policy, it selects
-        'reference' (or 'each' for None), the rule before the program.
-    exposure_policy : :data:`~.exposure_program.EXPOSURE_POLICIES`; default
-        'program' (unless a reference luminance is given, above).
-    max_exposure_s, max_analog_gain : the program's limits (1/30 s, 16).
+        luminance at which auto exposure is chosen; None: at the captured
+        luminance ('each').  Given without a policy, it selects 'reference'
+        (or 'each' for None), the rule before the program.
+    exposure_policy : :data:`~.exposure_program.EXPOSURE_POLICIES`.
+    max_exposure_s, max_analog_gain : the program's limits.
 
     Returns
     -------
@@ -362,15 +374,14 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     s = _luminance_scale(oi, luminance_cd_m2)
     wl = np.asarray(oi.wavelengths, dtype=np.float64)
     qe = cfa.sensitivities(wl)  # (C, B)
-    policy = _policy_of(exposure_policy, reference_luminance_cd_m2)
-    limits = (max_exposure_s, max_analog_gain)
-    inputs = (cfa.name, cfa.pattern.shape, cfa.pattern.tobytes(), qe.tobytes(), s, exposure_s, sensor, policy,
-              reference_luminance_cd_m2, limits, repr(oi.meta.get("on_axis_factor")))
+    program = _program_of(exposure_program, exposure_policy, reference_luminance_cd_m2, max_exposure_s,
+                          max_analog_gain)
+    inputs = (cfa.name, cfa.pattern.shape, cfa.pattern.tobytes(), qe.tobytes(), s, exposure_s, sensor, program,
+              repr(oi.meta.get("on_axis_factor")))
     last = _LAST_SIGNAL[0]
     if last is None or last[0] is not oi or last[1] != inputs:  # not another noise seed of the last capture
         _LAST_SIGNAL[0] = None
-        _LAST_SIGNAL[0] = last = (oi, inputs, _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, policy,
-                                                                 reference_luminance_cd_m2, limits))
+        _LAST_SIGNAL[0] = last = (oi, inputs, _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, program))
     choice, mode, sensor, photo, epr, well, gain, (h, w) = last[2]
     epr = epr.copy()  # returned in the RawImage, which its caller may change
     exposure = choice.exposure_s
@@ -400,20 +411,17 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     meta["readout"] = {"mode": sensor.readout, "block": block, "binning": sensor.binning if sensor.readout == "bin"
                        else None, "native_tile": cfa.tile_text(), "full_shape": [h, w],
                        "pixel_pitch_um": sensor.pixel_pitch_um * (block if sensor.readout == "bin" else 1)}
+    recorded = program.record(mode)
     settings = {
         "cfa": {"name": cfa.name, "description": cfa.description, "tile": cfa.tile_text(), "spectra": cfa.spectra},
         "noise": noise,
         "exposure_mode": mode,
         "exposure_s": exposure,
-        "exposure_policy": policy if mode == "auto" else "fixed",
+        "exposure_policy": recorded.pop("exposure_policy"),
         "analog_gain": choice.analog_gain,
         "digital_gain": choice.digital_gain,
         "metered_exposure_s": choice.metered_exposure_s,
-        "max_exposure_s": float(max_exposure_s) if mode == "auto" and policy in ("program", "bayer") else None,
-        "max_analog_gain": float(max_analog_gain) if mode == "auto" and policy in ("program", "bayer") else None,
-        "reference_luminance_cd_m2": (
-            (DEFAULT_REFERENCE_LUMINANCE_CD_M2 if reference_luminance_cd_m2 is _UNSET else reference_luminance_cd_m2)
-            if mode == "auto" and policy == "reference" else None),
+        **recorded,  # the limits or the reference luminance, where the policy used them
         "auto_exposure_level": AUTO_EXPOSURE_LEVEL if mode == "auto" else None,
         "luminance_cd_m2": meta["luminance_cd_m2"],
         "luminance_scale": s,

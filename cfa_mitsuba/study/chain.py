@@ -44,13 +44,10 @@ class ChainSettings:
     ``optics`` and ``sensor`` are :class:`~cfa_mitsuba.optics.OpticsParams`
     and :class:`~cfa_mitsuba.sensor.params.SensorParams` (their f-number,
     pitch and read noise are replaced by the condition's); ``noise`` is
-    'off', 'shot' or 'all'; ``exposure_policy`` how 'auto' exposure is
-    chosen (:data:`~cfa_mitsuba.sensor.exposure_program.EXPOSURE_POLICIES`:
-    'program', the default, within ``max_exposure_s`` and
-    ``max_analog_gain``; 'bayer'; 'reference'; 'each');
-    ``reference_luminance_cd_m2`` is where the 'reference' policy chooses it
-    (None: at each capture's own luminance, ISETCam's plain auto exposure,
-    the 'each' policy); ``isp`` the processing options (white balance,
+    'off', 'shot' or 'all'; ``exposure_program`` how 'auto' exposure is
+    chosen (:class:`~cfa_mitsuba.sensor.exposure_program.ExposureProgram`,
+    passed whole to every capture; None: its defaults, the program);
+    ``isp`` the processing options (white balance,
     white preserving, ...) as sorted (key, value) pairs; ``demosaic_options``
     each method's own options (``[demosaics.<name>]``);
     ``mean_match`` scales each camera output to the ideal's mean (ISETCam);
@@ -62,11 +59,8 @@ class ChainSettings:
     optics: object = None
     sensor: object = None
     noise: str = "all"
-    reference_luminance_cd_m2: float | None = 100.0
+    exposure_program: object = None
     isp: tuple = ()
-    exposure_policy: str = "program"
-    max_exposure_s: float = 1.0 / 30.0
-    max_analog_gain: float = 16.0
     mean_match: bool = True
     spectra_sets: tuple = ()
     metric_options: tuple = ()
@@ -74,8 +68,11 @@ class ChainSettings:
 
     def __post_init__(self):
         from ..optics import OpticsParams
+        from ..sensor.exposure_program import ExposureProgram
         from ..sensor.params import SensorParams
 
+        if self.exposure_program is None:
+            object.__setattr__(self, "exposure_program", ExposureProgram())
         if self.optics is None:
             object.__setattr__(self, "optics", OpticsParams())
         if self.sensor is None:
@@ -268,17 +265,8 @@ class CameraChain:
         if spectra is not None:
             cfa = get_cfa(cfa, spectra=spectra)
         return self._timed("capture_s", capture, oi, cfa, luminance_cd_m2=cond.luminance, exposure_s=cond.exposure,
-                           noise=noise or self.settings.noise, seed=seed, sensor=sensor, **self.exposure_keywords())
-
-    def exposure_keywords(self) -> dict:
-        """The keywords of :func:`cfa_mitsuba.sensor.capture` that choose an 'auto' exposure."""
-        st = self.settings
-        policy = "each" if st.exposure_policy == "reference" and st.reference_luminance_cd_m2 is None \
-            else st.exposure_policy
-        kw = {"exposure_policy": policy, "max_exposure_s": st.max_exposure_s, "max_analog_gain": st.max_analog_gain}
-        if policy == "reference":
-            kw["reference_luminance_cd_m2"] = st.reference_luminance_cd_m2
-        return kw
+                           noise=noise or self.settings.noise, seed=seed, sensor=sensor,
+                           exposure_program=self.settings.exposure_program)
 
     def process(self, raw, method: str, cond: Condition | None = None, **options):
         """:func:`cfa_mitsuba.isp.process` of ``raw`` (a RawImage, or a
