@@ -227,5 +227,5 @@ def test_a_readout_sweep_reads_only_the_block_layouts_in_its_other_modes(tmp_pat
                              "cfa": cfa, "demosaics": ["bilinear"], "metrics": ["achromatic"], "chain": chain,
                              "details_dir": None, "realisations": 2, "ideal_rows": cfa == "bayer"})
         rows[cfa] = got
-    assert rows["bayer"]["rows"] == [] and rows["bayer"]["ideal_rows"]  # left out, the ideal still measured
-    assert len(rows["quad-bayer"]["rows"]) == 2 and all(r["readout"] == "bin" for r in rows["quad-bayer"]["rows"])
+    assert rows["bayer"].rows == [] and rows["bayer"].ideal_rows  # left out, the ideal still measured
+    assert len(rows["quad-bayer"].rows) == 2 and all(r["readout"] == "bin" for r in rows["quad-bayer"].rows)

@@ -72,11 +72,11 @@ def test_black_ideal_interior_is_a_recorded_failure(tmp_path, monkeypatch):
             "cfa": "bayer", "demosaics": ["bilinear", "pocs"], "metrics": ["ssim", "haarpsi"],
             "chain": ChainSettings(), "details_dir": None}
     result = tasks.evaluate_task(task)
-    assert result["rows"] == []
-    assert len(result["failures"]) == 4
-    assert {(f["demosaic"], f["metric"]) for f in result["failures"]} == {
+    assert result.rows == []
+    assert len(result.failures) == 4
+    assert {(f["demosaic"], f["metric"]) for f in result.failures} == {
         (d, m) for d in ("bilinear", "pocs") for m in ("ssim", "haarpsi")}
-    assert all("interior mean is 0" in f["error"] for f in result["failures"])
+    assert all("interior mean is 0" in f["error"] for f in result.failures)
 
 
 def test_unreachable_scheduler_is_refused_before_anything_is_written(tmp_path, monkeypatch):
@@ -188,7 +188,7 @@ def test_summary_options_skip_only_what_no_row_reads(tmp_path, monkeypatch):
         task = {"source": {"kind": "exr", "path": str(exr)}, "scene": "frame", "condition": Condition(30.0),
                 "cfa": "bayer", "demosaics": ["bilinear", "pocs"], "metrics": ["scielab", "ssim"],
                 "chain": chain, "details_dir": str(details), "realisations": 3}
-        return tasks.evaluate_task(task)["rows"], len(sorts)
+        return tasks.evaluate_task(task).rows, len(sorts)
 
     rows, n_sorts = run(tmp_path / "d1")
     kept = json.loads((tmp_path / "d1" / "frame" / "bayer" / "pocs" / "L30.json").read_text())

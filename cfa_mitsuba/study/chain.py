@@ -3,7 +3,12 @@
 
 The study's evaluation tasks, the convergence study and the benchmarks all
 run through :class:`CameraChain`; settings travel as frozen dataclasses
-(:class:`ChainSettings`, :class:`~.conditions.Condition`).
+(:class:`ChainSettings`, :class:`~.conditions.Condition`).  A study's task
+is evaluated whole by :meth:`CameraChain.run` (the ideal image and its rows,
+the spectra set and read-out in effect, every realisation, demosaic and
+metric), which returns typed values (:mod:`.task_values`); the worker
+(:mod:`.tasks`) only loads the render, writes the details and hands the rows
+back.
 
 The optical image does not depend on the CFA or the demosaic, so a chain
 computes it once per (scene, optics-relevant condition) and keeps it, with
@@ -14,8 +19,9 @@ puppy-sized optical image is about 0.2 GB).
 
 from __future__ import annotations
 
-__all__ = ["ChainSettings", "CameraChain", "Evaluation"]
+__all__ = ["ChainSettings", "CameraChain", "Evaluation", "condition_columns", "capture_columns"]
 
+import json
 import os
 import time
 from collections import OrderedDict
@@ -25,6 +31,7 @@ import numpy as np
 
 from .axes import AXES
 from .conditions import Condition
+from .task_values import CameraOutput, TaskEvaluation, realisation_seeds
 
 #: Set to 1 to recompute the optical image for every capture (what the
 #: study did before the chain shared it): for benchmarks/bench_study.py only.
@@ -108,6 +115,16 @@ class ChainSettings:
         from ..sensor import get_cfa
 
         return dict(self.spectra_sets).get(get_cfa(cfa).spectra)
+
+    def spectra_in_effect(self, cfa, cond: Condition) -> str:
+        """The spectra set a capture of ``cfa`` uses under ``cond``
+        (:meth:`spectra_for`), else the CFA's own ('' for none)."""
+        chosen = self.spectra_for(cfa, cond)
+        if chosen is not None:
+            return chosen
+        from ..sensor import get_cfa
+
+        return str(get_cfa(cfa).spectra or "")
 
     def base_condition(self, *, luminance: float = 100.0, exposure="auto", seed: int = 0) -> Condition:
         """The condition these settings describe at ``luminance``: every
@@ -196,6 +213,35 @@ def _shared(ideal) -> dict:
     return ideal.__dict__.setdefault("_metric_shared", {})
 
 
+def condition_columns(cond: Condition, ideal_meta: dict) -> dict:
+    """The condition axes as metrics.csv columns: the values in effect (the
+    f-number the optics used when the condition left it to the scene)."""
+    out = {axis: getattr(cond, axis) for axis in AXES}
+    if out["f_number"] is None:
+        out["f_number"] = (ideal_meta.get("optics") or {}).get("f_number")
+    return out
+
+
+def _readout_applies(cfa, cond: Condition) -> bool:
+    """Whether the condition's read-out mode applies to the CFA: ``full``
+    always, ``remosaic`` and ``bin`` on the block layouts only (a sweep
+    over readout leaves the other CFAs out of its non-full conditions)."""
+    from ..sensor import get_cfa
+    from ..sensor.readout import readout_applies
+
+    return readout_applies(get_cfa(cfa).pattern, getattr(cond, "readout", "full"))
+
+
+def capture_columns(raw) -> dict:
+    """metrics.csv's columns of the capture (:data:`.tables.CAPTURE_COLUMNS`)."""
+    st = raw.settings or {}
+    return {"exposure_s": float(raw.exposure_s), "analog_gain": float(st.get("analog_gain") or 1.0),
+            "digital_gain": float(st.get("digital_gain") or 1.0),
+            "clipped_fraction": raw.meta.get("clipped_fraction", raw.meta.get("saturated_fraction")),
+            "scene_illuminance_lux": raw.meta.get("scene_illuminance_lux"),
+            "sensor_exposure_lux_s": raw.meta.get("sensor_exposure_lux_s")}
+
+
 class CameraChain:
     """The chain after the render for one set of :class:`ChainSettings`.
 
@@ -256,7 +302,7 @@ class CameraChain:
         """The raw mosaic of ``cfa`` (a name, TOML path or CFA) under ``cond``
         (another spectra set, when the condition or the settings name one; ``noise`` overrides
         the settings' noise mode).  ``seed`` is the capture's noise seed, derived from the
-        condition's study seed by :func:`~.tasks.realisation_seeds` (the one seed path:
+        condition's study seed by :func:`~.task_values.realisation_seeds` (the one seed path:
         ``cond.seed`` is its input and is not used here)."""
         from ..sensor import capture, get_cfa
 
@@ -325,6 +371,54 @@ class CameraChain:
         results = self._timed("metrics_s", m.evaluate_many, metric_names, self.inputs(ideal, cam, cond), failures,
                               options=options)
         return results, failures, float(scale)
+
+    def run(self, task, scene_image, *, ideal_details: bool = False) -> TaskEvaluation:
+        """Evaluate one study task whole (:class:`~.task_values.EvaluationTask`):
+        the CFA captured in every realisation (when the condition's read-out
+        applies to it), each capture processed by every demosaic and measured
+        against the ideal; the ideal against itself when the task asks
+        (``ideal_rows``); the ideal's own results for the metrics that keep
+        its curves when ``ideal_details``.  ``scene_image``: the render (a
+        SpectralImage, or a function returning one, called only when the
+        optical image is not already made).  Returns the
+        :class:`~.task_values.TaskEvaluation`; the first realisation's
+        outputs keep their images and curves when the task keeps details."""
+        from .. import metrics as m
+        from ..metrics import result_rows
+
+        cond = task.condition
+        scene_key = json.dumps(task.source, sort_keys=True)
+        ideal, outputs = None, []
+        if _readout_applies(task.cfa, cond):
+            seeds = realisation_seeds(cond.seed, task.scene, cond.luminance, task.realisations,
+                                      task.realisation_offset)
+            for i, seed in enumerate(seeds):
+                keep = task.keeps_details and i == 0  # the first realisation's curves and images
+                for raw, ideal, method, ev in self.evaluate(scene_image, task.cfa, task.demosaics, task.metrics, cond,
+                                                            seed, scene_key, details=keep):
+                    index = task.realisation_offset + i
+                    if not hasattr(ev, "results"):
+                        # No output to measure (a channel the scene white leaves dark) or no scale for it (a
+                        # black ideal interior): every metric of this output is unmeasurable.
+                        failed = [{"metric": name, "error": str(ev)} for name in task.metrics]
+                        outputs.append(CameraOutput(method, index, seed, {}, [], failed))
+                        continue
+                    outputs.append(CameraOutput(method, index, seed, capture_columns(raw), result_rows(ev.results),
+                                                list(ev.failures), ev if keep else None, raw if keep else None))
+        elif task.ideal_rows or ideal_details:
+            ideal = self.ideal(self.optical(scene_image, cond, scene_key), cond, scene_key)
+        ideal_rows, ideal_results = [], None
+        if ideal is not None:
+            options = self.settings.metric_options_for(cond)
+            if task.ideal_rows:
+                ideal_rows = result_rows(m.evaluate_many(task.metrics, self.inputs(ideal, ideal.xyz, cond), [],
+                                                         options=options))
+            if ideal_details:
+                kept = [n for n in task.metrics if m.get_metric(n).ideal_details]
+                ideal_results = m.evaluate_many(kept, self.inputs(ideal, ideal.xyz, cond), options=options)
+        return TaskEvaluation(task, None if ideal is None else condition_columns(cond, ideal.meta),
+                              self.settings.spectra_in_effect(task.cfa, cond), outputs, ideal_rows, ideal,
+                              ideal_results, self.timing)
 
     def evaluate(self, scene_image, cfa, demosaics, metric_names, cond: Condition, seed: int, scene_key=None, *,
                  details: bool = True):

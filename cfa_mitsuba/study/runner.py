@@ -257,7 +257,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
 
     from .resume import load_finished  # issue 27: untrusted resume files are recomputed, one notice
 
-    done: dict[str, dict] = load_finished(work, [_task_id(t) for t in tasks], log) if work.is_dir() else {}
+    done: dict = load_finished(work, [_task_id(t) for t in tasks], log) if work.is_dir() else {}
     todo = [t for t in tasks if _task_id(t) not in done]
     reused = len(tasks) - len(todo)
 
@@ -299,9 +299,9 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         def got_eval(task, result):
             tid = _task_id(task)
             with atomic_output(work / f"{tid}.json") as tmp:
-                tmp.write_text(json.dumps(result))
+                tmp.write_text(json.dumps(result.to_dict()))
             done[tid] = result
-            for k, v in result["timing"].items():
+            for k, v in result.timing.items():
                 timing["tasks"][k] = timing["tasks"].get(k, 0.0) + v
 
         def got_group(group, results):
@@ -312,15 +312,16 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         _run_tasks(executor, evaluate_group, groups, "evaluate", progress, got_group, size=len)
         timing["phases"]["evaluate_s"] = time.perf_counter() - t
 
-    rows = [r for task in tasks for r in done[_task_id(task)]["rows"]]
-    failures = [f for task in tasks for f in done[_task_id(task)].get("failures", [])]
+    results = [done[_task_id(task)] for task in tasks]
+    rows = [r for result in results for r in result.rows]
+    failures = [f for result in results for f in result.failures]
     _write_failures(out, failures, log)
     order = {
         "scene": [s.name for s in config.scenes], "cfa": [_cfa_label(c) for c in config.cfas],
         "demosaic": list(config.demosaics), "metric": list(SCORED_METRICS),
     }
     realisations = order_rows(rows, order)
-    ideal = order_rows([r for task in tasks for r in done[_task_id(task)].get("ideal_rows", [])], order)
+    ideal = order_rows([r for result in results for r in result.ideal_rows], order)
     if not render_info:  # everything was reused: the chirp's geometry for the MSP range
         render_info = {_render_label(s): render_task(s) for s in sources if s["scene"] == "chirp"}
     builtin = {s.name for s in config.scenes if s.file is None}
@@ -475,8 +476,8 @@ def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,
     rows, failures = [], []
 
     def got(task, result):
-        rows.extend(result["rows"])
-        failures.extend(result.get("failures", []))
+        rows.extend(result.rows)
+        failures.extend(result.failures)
 
     with make_executor(workers=workers) as executor:
         log(f"evaluate: {len(exrs)} render(s) x {len(cfas)} CFA(s) x {len(demosaics)} demosaic(s) "
