@@ -39,7 +39,7 @@ DEMOSAICS = ("bilinear", "pocs")
 SCENES = ("macbeth", "slanted-edge", "chirp", "gray-bar", "puppy")
 #: figures/ stems and whether each has an SVG (image sheets are PNG only).
 EXPECTED_FIGURES = {
-    "radar-demosaic": True, "radar-cfa": True, "ranks": True, "tiles": True, "mtf": True, "moire": True, "gray-bar": True,
+    "radar-demosaic": True, "radar-cfa": True, "ranks": True, "tiles": True, "mtf": True, "moire": True, "achromatic": True,
     "luminance-sweep": True, "scielab-maps": False, "sensor-curves": True,
     **{f"ab-{d}": True for d in DEMOSAICS}, **{f"xy-{d}": True for d in DEMOSAICS},
     **{f"outputs-{s}": False for s in SCENES},

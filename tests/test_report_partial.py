@@ -67,7 +67,7 @@ def test_one_cfa_one_demosaic(results):
     shutil.rmtree(results / "details" / "macbeth" / "rgbw1")
     text = _build(results)
     figs = _figures(text)
-    assert {"ab-bilinear", "xy-bilinear", "mtf", "moire", "gray-bar", "scielab-maps", "radar-cfa"} <= figs
+    assert {"ab-bilinear", "xy-bilinear", "mtf", "moire", "achromatic", "scielab-maps", "radar-cfa"} <= figs
     assert not any(f.endswith("-pocs") for f in figs)
     assert "rgbw1</th>" not in text
 

@@ -19,7 +19,7 @@ puppy-sized optical image is about 0.2 GB).
 
 from __future__ import annotations
 
-__all__ = ["ChainSettings", "CameraChain", "Evaluation", "condition_columns", "capture_columns"]
+__all__ = ["ChainSettings", "CameraChain", "Evaluation", "condition_columns", "condition_applies", "capture_columns"]
 
 import json
 import os
@@ -214,22 +214,20 @@ def _shared(ideal) -> dict:
 
 
 def condition_columns(cond: Condition, ideal_meta: dict) -> dict:
-    """The condition axes as metrics.csv columns: the values in effect (the
-    f-number the optics used when the condition left it to the scene)."""
-    out = {axis: getattr(cond, axis) for axis in AXES}
-    if out["f_number"] is None:
-        out["f_number"] = (ideal_meta.get("optics") or {}).get("f_number")
-    return out
+    """The condition axes as metrics.csv columns: the values in effect (an
+    axis the condition left to the scene read from the ideal image's meta,
+    :meth:`.axes.Axis.in_effect`: the f-number the optics used)."""
+    return {name: axis.in_effect(getattr(cond, name), ideal_meta) for name, axis in AXES.items()}
 
 
-def _readout_applies(cfa, cond: Condition) -> bool:
-    """Whether the condition's read-out mode applies to the CFA: ``full``
-    always, ``remosaic`` and ``bin`` on the block layouts only (a sweep
-    over readout leaves the other CFAs out of its non-full conditions)."""
+def condition_applies(cfa, cond: Condition) -> bool:
+    """Whether every axis value of ``cond`` applies to ``cfa``
+    (:meth:`.axes.Axis.applies`: a block read-out to the block layouts
+    only, so a sweep over it leaves the other CFAs out of its conditions)."""
     from ..sensor import get_cfa
-    from ..sensor.readout import readout_applies
 
-    return readout_applies(get_cfa(cfa).pattern, getattr(cond, "readout", "full"))
+    pattern = get_cfa(cfa).pattern
+    return all(axis.applies(pattern, getattr(cond, name)) for name, axis in AXES.items())
 
 
 def capture_columns(raw) -> dict:
@@ -389,7 +387,7 @@ class CameraChain:
         cond = task.condition
         scene_key = json.dumps(task.source, sort_keys=True)
         ideal, outputs = None, []
-        if _readout_applies(task.cfa, cond):
+        if condition_applies(task.cfa, cond):
             seeds = realisation_seeds(cond.seed, task.scene, cond.luminance, task.realisations,
                                       task.realisation_offset)
             for i, seed in enumerate(seeds):

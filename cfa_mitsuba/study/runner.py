@@ -71,12 +71,18 @@ class StudyResult:
 
 
 def _source(scene, render_common: dict, cond=None) -> dict:
-    """The render a scene is evaluated on: its settings, plus the condition's
-    f-number for a 3D scene (thin-lens defocus; a chart's render does not
-    depend on it) when the condition sets one."""
+    """The render a scene is evaluated on: its settings, plus, for a 3D
+    scene, the render settings the condition's axes set when it gives them
+    (:attr:`.axes.Axis.render_setting`: the f-number's thin-lens defocus;
+    a chart's render depends on none)."""
+    from .axes import AXES
+
     settings = {**render_common, **scene.render}
-    if cond is not None and cond.f_number is not None and _is_3d(scene):
-        settings["f_number"] = float(cond.f_number)
+    if cond is not None and _is_3d(scene):
+        for name, axis in AXES.items():
+            value = getattr(cond, name)
+            if axis.render_setting is not None and value is not None:
+                settings[axis.render_setting] = float(value) if axis.numeric else value
     src = {"kind": "cache", "scene": scene.name, "settings": settings}
     if scene.file:
         src["file"] = scene.file
