@@ -80,6 +80,7 @@ def measured_mtf50(cfas: dict, height: int, width: int = 320) -> dict:
 def proxy_numbers() -> dict:
     from cfa_mitsuba import spectra
     from cfa_mitsuba.design import proxy as P
+    from cfa_mitsuba.design import responses as R
     from cfa_mitsuba.design.search import fixed_models
     from cfa_mitsuba.sensor import ExposureProgram, get_spectra_set
 
@@ -98,7 +99,7 @@ def proxy_numbers() -> dict:
         for column in (model.matrix_rel[:, 1], luma / luma.sum()):
             m = model.matrix_rel.copy()
             m[:, 1] = column
-            lsf = P._gains_and_lsf(lay, LETTERS, m, "bilinear", model.lum_weights)[1]
+            lsf = R._gains_and_lsf(lay, LETTERS, m, "bilinear", model.lum_weights)[1]
             mtf.append(P.edge_mtf50(lsf, settings.f_number, settings.pixel_pitch_um) * per_mm)
         gains = P.demosaic_noise_gains(lay, LETTERS, model.matrix_rel, "bilinear")[:, 1]
         area = P.demosaic_area_noise_gains(lay, LETTERS, model.matrix_rel, "bilinear")[:, 1]

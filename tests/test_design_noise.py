@@ -11,6 +11,7 @@ import pytest
 
 import cfa_mitsuba as cm
 from cfa_mitsuba.design import proxy as P
+from cfa_mitsuba.design import responses as R
 from cfa_mitsuba.design.search import fixed_models
 from cfa_mitsuba.design.spectra import letter_curves
 from cfa_mitsuba.sensor import ExposureProgram
@@ -26,7 +27,7 @@ def model():
 def _monte_carlo(layout, method, m, rel_sd, realisations=24, reps=36, seed=0):
     rng = np.random.default_rng(seed)
     h, w = layout.shape
-    tile = P._Tile(np.array(LETTERS, dtype=object)[layout], LETTERS)
+    tile = R._Tile(np.array(LETTERS, dtype=object)[layout], LETTERS)
     chan = np.tile(layout, (reps, reps))
     opts = {} if method == "bilinear" else {"luminance_weights": list(m.lum_weights)}
     err = []
@@ -68,7 +69,7 @@ def test_area_noise_matches_the_metric_on_a_monte_carlo_grey_within_four_percent
     area = P.demosaic_area_noise_gains(layout, LETTERS, model.matrix_rel, method, model.lum_weights)
     predicted = np.sqrt(rel_sd ** 2 @ area[:, 1])             # relative Y noise x px, white = 1
     rng = np.random.default_rng(1)
-    tile = P._Tile(np.array(LETTERS, dtype=object)[layout], LETTERS)
+    tile = R._Tile(np.array(LETTERS, dtype=object)[layout], LETTERS)
     chan = np.tile(layout, (256 // h, 256 // w))
     opts = {} if method == "bilinear" else {"luminance_weights": list(model.lum_weights)}
     nps0 = []

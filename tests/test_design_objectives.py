@@ -43,7 +43,7 @@ def test_snr10_objective_sweeps_the_gray_bar_and_best_takes_every_demosaic():
     swept = sorted(v for s in cfg.study.sweeps for v in s.values["luminance"] if "ysnr" in s.metrics)
     assert swept == [1.0, 3.0, 10.0, 30.0]
     settings = proxy_settings(cfg)
-    assert settings.policy == "program"          # the study default, not 'reference'
+    assert settings.exposure.policy == "program"          # the study default, not 'reference'
     assert settings.demosaics == ("bilinear", "laplacian")
 
 
@@ -80,9 +80,9 @@ def test_a_bad_snr10_basis_is_refused_in_one_line(where, line):
 
 def test_a_named_reference_policy_is_kept():
     cfg = load_design(REPO / "configs" / "design-quick.toml")
-    assert proxy_settings(cfg).policy == "program"
+    assert proxy_settings(cfg).exposure.policy == "program"
     data = tomllib.loads(BASE + '[study.sensor]\nexposure_policy = "reference"\n')
-    assert proxy_settings(parse_design(data)).policy == "reference"
+    assert proxy_settings(parse_design(data)).exposure.policy == "reference"
 
 
 def test_spearman_interval_follows_fisher_z_with_the_fieller_variance():

@@ -59,7 +59,8 @@ def proxy_settings(config) -> P.ProxySettings:
     """The study's optics, sensor and exposure policy (the study's own
     default, the exposure program, when the config names none), at the
     lowest luminance of an objective that the noise proxy predicts; the
-    noise proxy takes the best of the objectives' linear demosaics."""
+    noise proxy takes the best of the objectives' demosaics, each predicted
+    by its linear core (itself when its record says it is linear)."""
     st = config.study
     chain = st.chain_settings()
     sensor = chain.sensor
@@ -73,7 +74,7 @@ def proxy_settings(config) -> P.ProxySettings:
     wanted = [d for o in config.objectives
               if {"noise", "noise_area", "snr10", "snr10_area", "blur", "neg_capacity"} & set(o.proxies)
               for d in (st.demosaics if o.demosaic == "best" else (o.demosaic,))]
-    demosaics = tuple(dict.fromkeys(d if d in P.LINEAR_DEMOSAICS else "laplacian" for d in wanted)) or ("bilinear",)
+    demosaics = tuple(dict.fromkeys(P.linear_core(d) for d in wanted)) or ("bilinear",)
     return P.ProxySettings(f_number, float(sensor.pixel_pitch_um), float(sensor.well_capacity_e),
                            float(sensor.read_noise_e), ratio, exposure=program, luminance_cd_m2=float(min(lums)),
                            fill_factor=float(sensor.fill_factor), demosaics=demosaics, edge_luminance_cd_m2=edge,

@@ -75,7 +75,7 @@ import numpy as np
 from ..errors import CfaMitsubaError
 from ._memo import LastImage
 from .bilinear import interpolate_channel
-from .demosaic import DemosaicMethod
+from .demosaic import AccuracyBar, DemosaicMethod
 from .mosaic import (
     Mosaic,
     Stencil,
@@ -473,8 +473,8 @@ def adaptive_laplacian(raw, cfa, *, alpha: float = MHC_ALPHA, chroma_gain: float
 
 #: This module's methods (registered by :func:`.demosaic.collect_demosaics`).
 DEMOSAICS = (
-    DemosaicMethod(name="laplacian", function=laplacian, order=2,
+    DemosaicMethod(name="laplacian", function=laplacian, order=2, linear=True, accuracy=AccuracyBar(),
                    description="gradient-corrected linear (Malvar-He-Cutler on Bayer), then colour differences"),
-    DemosaicMethod(name="adaptive-laplacian", function=adaptive_laplacian, order=3,
+    DemosaicMethod(name="adaptive-laplacian", function=adaptive_laplacian, order=3, accuracy=AccuracyBar(),
                    description="edge-directed (Hamilton-Adams classifiers on Bayer), directional colour differences"),
 )
