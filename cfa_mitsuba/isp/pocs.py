@@ -59,7 +59,7 @@ from scipy import ndimage
 from ..errors import CfaMitsubaError
 from .bilinear import bilinear_image
 from .demosaic import AccuracyBar, DemosaicMethod
-from .laplacian import MHC_ALPHA, reference_adaptive, reference_for
+from .laplacian_reference import MHC_ALPHA, reference_adaptive, reference_for
 from .mosaic import geometry
 
 _H0 = np.array([1.0, 2.0, 1.0]) / 4.0

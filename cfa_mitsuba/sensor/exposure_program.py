@@ -4,7 +4,7 @@ A camera meters the scene and runs an *exposure program* (ISO 2720's
 reflected-light metering; every phone and video camera's auto exposure):
 
 1. the time that brings the brightest pixel's most sensitive channel to
-   :data:`~.capture.AUTO_EXPOSURE_LEVEL` (95 %) of its well at base gain,
+   :data:`~.metering.AUTO_EXPOSURE_LEVEL` (95 %) of its well at base gain,
    metered at the captured luminance (ISETCam's ``autoExposure``, plus the
    brightest pixel of the optical image itself, so no pixel's well fills in
    bright light);
@@ -35,7 +35,7 @@ electrons unless said:
   sigmas in DN when the sensor's own is less (64 DN is 16 read-noise sigmas
   at gain 1 but one at gain 16, where the clip at code 0 would cut the
   dark tail, bias the mean up and the noise down: YSNR 4.3 measured for 2.7
-  expected on a 2 cd/m^2 grey); ``capture.pedestal_for_gain``;
+  expected on a 2 cd/m^2 grey); ``metering.pedestal_for_gain``;
 * digital gain: in the image processor, after the ADC, on the
   black-subtracted codes in floating point (an image processor's extra
   bits, no clip): it multiplies signal and every noise alike, the
