@@ -12,6 +12,7 @@ from cfa_mitsuba.errors import CfaMitsubaError
 from cfa_mitsuba.sensor import cfa_from_raw, get_cfa, list_cfas, load_cfa_toml, make_cfa, register_cfa
 from cfa_mitsuba.sensor.cfa import builtin_filter_curve
 
+import registry_checks as checks
 from conftest import REPO, assert_one_line_error, run_cli
 
 # issue 3, "CFAs as data": rows top to bottom
@@ -33,6 +34,11 @@ ISSUE_TILES = {
 
 def _tile(text):
     return [row.split() for row in text.split("/")]
+
+
+@pytest.mark.parametrize("name", list_cfas())
+def test_every_cfa_passes_the_generic_checks(name):
+    checks.check_cfa(name)
 
 
 def test_the_twelve_cfas_and_their_tiles():

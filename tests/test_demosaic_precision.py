@@ -9,13 +9,14 @@ from scipy import ndimage
 from skimage import data
 
 from cfa_mitsuba.errors import CfaMitsubaError
-from cfa_mitsuba.isp import channels_from_rgb, demosaic, get_demosaic, mosaic_image
+from cfa_mitsuba.isp import channels_from_rgb, demosaic, get_demosaic, list_demosaics, mosaic_image
 from cfa_mitsuba.isp._memo import clear_all
 from cfa_mitsuba.isp.column_filter import correlate_along_rows, correlate_columns
 from cfa_mitsuba.isp.mosaic import geometry
 from cfa_mitsuba.sensor import get_cfa
 
-METHODS = ("bilinear", "laplacian", "adaptive-laplacian", "pocs")
+#: Every registered method: a new one is covered without editing a list.
+METHODS = tuple(n for n, _ in list_demosaics())
 
 
 def _photo_mosaic(cfa_name, size=96):

@@ -13,7 +13,8 @@ from cfa_mitsuba.errors import CfaMitsubaError
 from cfa_mitsuba.sensor import SensorParams
 from test_isp_process import WHITE, WL, synthetic_raw
 
-METHODS = ("bilinear", "laplacian", "adaptive-laplacian", "pocs")
+#: Every registered method: a new one is covered without editing a list.
+METHODS = tuple(n for n, _ in cm.isp.list_demosaics())
 
 
 def _noisy(cfa, *, readout="full", seed=3):

@@ -14,7 +14,8 @@ from cfa_mitsuba.values import RawImage
 WL = spectra.DEFAULT_WAVELENGTHS
 D65 = spectra.illuminant("D65", WL)
 WHITE = D65 * (100.0 / spectra.luminance_cd_m2(D65, WL))  # a 100 cd/m^2 white
-METHODS = ("bilinear", "laplacian", "adaptive-laplacian", "pocs")
+#: Every registered method: a new one is covered without editing a list.
+METHODS = tuple(n for n, _ in cm.isp.list_demosaics())
 
 
 def synthetic_raw(radiance, cfa, *, white=WHITE, peak_e=5000.0, dn_per_e=0.6, black=64.0) -> RawImage:

@@ -16,7 +16,8 @@ from cfa_mitsuba.study.chain import CameraChain, ChainSettings
 from cfa_mitsuba.study.conditions import Condition
 
 NEW = ("quad-bayer", "nona", "tetra2", "ryyb", "rccb", "rccc", "xtrans", "kodak-cfa3", "sony-rgbw")
-METHODS = ("bilinear", "laplacian", "adaptive-laplacian", "pocs")
+#: Every registered method: a new one is covered without editing a list.
+METHODS = tuple(n for n, _ in cm.isp.list_demosaics())
 #: small renders of every built-in scene (EXR sizes divisible by each scene's oversampling)
 SMALL = {"macbeth": dict(width=144, height=96), "slanted-edge": dict(width=288, height=240),
          "chirp": dict(width=288, height=96), "gray-bar": dict(width=144, height=72),

@@ -151,8 +151,9 @@ def test_two_base_luminances(results):
     extra["value"] = extra["value"] * 1.01
     both = pd.concat([m[m["luminance"] != 30], extra])
     both.to_csv(results / "metrics.csv", index=False)
-    scored = both[both["metric"].isin(["delta-e", "scielab", "ssim", "mtf", "moire", "achromatic", "mdsi",
-                                       "haarpsi"])]
+    from cfa_mitsuba.metrics import scored_metrics
+
+    scored = both[both["metric"].isin(scored_metrics())]
     score(scored.assign(unit=scored["unit"].replace({"": ""}))).to_csv(results / "scores.csv", index=False)
     cfg = json.loads((results / "config.json").read_text())
     cfg["luminances"] = [50.0, 100.0]

@@ -7,17 +7,19 @@ import pandas as pd
 import pytest
 
 from cfa_mitsuba.errors import CfaMitsubaError
+from cfa_mitsuba.metrics import NATURAL, get_metric, scored_metrics
 from cfa_mitsuba.study.scoring import DEFAULT_RANGES, ScoreRange, default_ranges, msp_range_cpd, normalise, rank_table, score
 
-SCENE = {"delta-e": "macbeth", "scielab": "puppy", "ssim": "puppy", "mtf": "slanted-edge", "moire": "chirp",
-         "achromatic": "gray-bar", "mdsi": "puppy", "haarpsi": "puppy"}
-UNIT = {"delta-e": "dE00", "scielab": "dE00", "ssim": "", "mtf": "cy/mm", "moire": "cy/deg", "achromatic": "L*",
-        "mdsi": "", "haarpsi": ""}
+#: The scored metrics (the paper's eight, from their records): each on a scene of its kind, in its unit.
+SCORED = scored_metrics()
+SCENE = {m: "puppy" if get_metric(m).scenes[0] == NATURAL else get_metric(m).scenes[0] for m in SCORED}
+UNIT = {m: get_metric(m).unit for m in SCORED}
+_RANGES = default_ranges()
 # Per CFA: values at the best end, the middle, and the worst end of the paper's ranges.
 VALUES = {
-    "good": {"delta-e": 2.2, "scielab": 2.5, "ssim": 1.0, "mtf": 110.0, "moire": 7.5, "achromatic": 0.5, "mdsi": 0.0, "haarpsi": 1.0},
-    "mid": {"delta-e": 4.1, "scielab": 6.0, "ssim": 0.5, "mtf": 70.0, "moire": 4.25, "achromatic": 0.75, "mdsi": 0.25, "haarpsi": 0.5},
-    "bad": {"delta-e": 6.0, "scielab": 9.5, "ssim": 0.0, "mtf": 30.0, "moire": 1.0, "achromatic": 1.0, "mdsi": 0.5, "haarpsi": 0.0},
+    "good": {m: _RANGES[m].best for m in SCORED},
+    "mid": {m: 0.5 * (_RANGES[m].best + _RANGES[m].worst) for m in SCORED},
+    "bad": {m: _RANGES[m].worst for m in SCORED},
 }
 
 
@@ -55,7 +57,7 @@ def test_eq8_scores_means_and_ranks():
     assert np.allclose(by.xs("bad", level="cfa"), 0.0)
     per = s.drop_duplicates(["cfa", "demosaic"]).set_index(["cfa", "demosaic"])
     assert per.loc[("good", "pocs"), "mean_score"] == pytest.approx(1.0)
-    assert per.loc[("mid", "bilinear"), "n_metrics"] == 8
+    assert per.loc[("mid", "bilinear"), "n_metrics"] == len(SCORED)
     assert per.loc[("good", "bilinear"), "demosaic_rank"] == 1 and per.loc[("bad", "pocs"), "demosaic_rank"] == 3
     assert per.loc[("mid", "pocs"), "total_rank"] == 2
     assert set(s.loc[(s.cfa == "good"), "metric_rank"]) == {1}

@@ -10,7 +10,13 @@ import cfa_mitsuba as cm
 from cfa_mitsuba.errors import CfaMitsubaError
 from cfa_mitsuba.sensor import get_sensor_preset, list_sensor_presets
 
+import registry_checks as checks
 from conftest import assert_one_line_error, run_cli
+
+
+@pytest.mark.parametrize("name", list_sensor_presets())
+def test_every_preset_passes_the_generic_checks(name):
+    checks.check_sensor_preset(name)
 
 
 def test_the_five_presets():

@@ -367,6 +367,7 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
 #: This module's metric records (collected by :mod:`.registry`).
 _SCIELAB = MetricRecord(
     name="scielab", function=scielab, scenes=(NATURAL,), inputs="xyz", unit="dE00", higher_is_better=False,
+    identical_value=0.0,
     scored=True, label="S-CIELAB", order=2, decimals=2, paper="ΔEs (s. 2.2.2, Fig 10)", score_range=(9.5, 2.5),
     range_units=("dE00", "dE76"), reference_cache=("reference_lab", scielab_reference),
     study_options=(("fft_precision", "single"),), summary_options=(("order_statistics", False),),

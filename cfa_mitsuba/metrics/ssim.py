@@ -157,6 +157,7 @@ def ssim(reference, test, *, data_range: float = 255.0, channel: str = "gray",
 #: This module's metric records (collected by :mod:`.registry`).
 RECORDS = (
     MetricRecord(name="ssim", function=ssim, scenes=(NATURAL,), inputs="srgb8", unit="", higher_is_better=True,
+                 identical_value=1.0,
                  scored=True, label="SSIM", order=3, decimals=3,
                  description="structural similarity (Wang 2004) of the 8-bit sRGB luma",
                  paper="SSIM (s. 2.2.3, Fig 10)", score_range=(0.0, 1.0),
