@@ -77,11 +77,11 @@ def _source(scene, render_common: dict, cond=None) -> dict:
     from .axes import AXES
 
     settings = {**render_common, **scene.render}
-    if cond is not None and _is_3d(scene):
-        for name, axis in AXES.items():
-            value = getattr(cond, name)
-            if axis.render_setting is not None and value is not None:
-                settings[axis.render_setting] = float(value) if axis.numeric else value
+    given = {} if cond is None else {
+        axis.render_setting: float(getattr(cond, name)) if axis.numeric else getattr(cond, name)
+        for name, axis in AXES.items() if axis.render_setting is not None and getattr(cond, name) is not None}
+    if given and _is_3d(scene):  # asked only when a condition sets one (a measured image is no scene file)
+        settings.update(given)
     src = {"kind": "cache", "scene": scene.name, "settings": settings}
     if scene.file:
         src["file"] = scene.file
