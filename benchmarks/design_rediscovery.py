@@ -1,5 +1,5 @@
 """Measurements behind the 2x2 rediscovery (issue 26; docs/design.md,
-tests/test_design_rediscovery.py): why G G / B R and R B / G R tied or
+tests/design/test_rediscovery.py): why G G / B R and R B / G R tied or
 beat Bayer, on ISETCam's RGB filters, under the exposure program.
 
 1. MTF50 of the slanted edge, noise off, through the study's own chain and

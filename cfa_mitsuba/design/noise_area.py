@@ -43,7 +43,7 @@ __all__ = ["AREA_LAG_PX", "area_noise_gains"]
 import numpy as np
 
 #: The largest lag L (px) summed: the metric's default (metrics/snr.py
-#: ``ysnr(correlation_px=4)``; tests/test_design_noise.py checks they agree).
+#: ``ysnr(correlation_px=4)``; tests/design/test_responses.py checks they agree).
 AREA_LAG_PX = 4
 
 

@@ -243,7 +243,7 @@ def demosaic(raw, cfa, method: str = "bilinear", *, precision: str = "double", *
         float32 from the mosaic rounded to float32 (the built-in methods
         keep float32 throughout: half the memory traffic and twice the SIMD
         lanes; the estimates within a few float32 roundings of the mosaic's
-        range, tests/test_demosaic_precision.py).  The result is
+        range, tests/isp/test_demosaic_precision.py).  The result is
         float64 either way, and the observed samples are the mosaic's own
         float64 values.  A study demosaics in 'single' unless its ``[isp]
         demosaic_precision`` says otherwise (docs/study.md).

@@ -282,7 +282,7 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
         whose transforms run in float32.  Filtering is linear, so only the
         rounding differs, and it scales with the difference, not the image:
         about twice as fast per test image, the dE map moves by less than
-        1e-5 dE00 (tests/test_scielab_precision.py).  A study uses ``'single'`` unless
+        1e-5 dE00 (tests/metrics/test_scielab.py).  A study uses ``'single'`` unless
         its ``[metrics.scielab]`` says otherwise (the record's
         ``study_options``; docs/study.md).
     reference_lab : optional, :func:`scielab_reference` (or its CIELAB,

@@ -124,7 +124,7 @@ def _thumbnail(rendered, path: Path, longest: int = 240) -> None:
     from ..isp.colour_matrix import DISPLAY_ADAPTATION
 
     # The 8-bit codes by xyz_to_srgb8's table, the same codes write_image rounds xyz_to_srgb's
-    # encoding to (tests/test_study_tasks.py), without a power per value (5 of a thumbnail's 14 ms)
+    # encoding to (tests/study/test_tasks.py), without a power per value (5 of a thumbnail's 14 ms)
     codes = xyz_to_srgb8(_block_mean(np.asarray(rendered.xyz, dtype=np.float64), longest),
                          rendered.white_xyz, adaptation=DISPLAY_ADAPTATION)
     write_image(path, codes / 255.0)

@@ -11,7 +11,7 @@ import cfa_mitsuba as cm
 from cfa_mitsuba import spectra
 from cfa_mitsuba.colorimetry import realisable, xyz_to_xy
 from cfa_mitsuba.isp.colour_matrix import channel_noise, electrons_per_radiance_of, fit_colour_matrix
-from test_isp_process import WHITE, WL, synthetic_raw
+from synthetic_raw import WHITE, WL, synthetic_raw
 
 
 def _overexposed(cfa, factor=1000.0):

@@ -8,28 +8,11 @@ import pytest
 
 import cfa_mitsuba as cm
 from cfa_mitsuba import spectra
-from cfa_mitsuba.isp.colour_matrix import electrons_per_radiance_of
 from cfa_mitsuba.values import RawImage
+from synthetic_raw import WHITE, WL, synthetic_raw  # shared with the other ISP tests
 
-WL = spectra.DEFAULT_WAVELENGTHS
-D65 = spectra.illuminant("D65", WL)
-WHITE = D65 * (100.0 / spectra.luminance_cd_m2(D65, WL))  # a 100 cd/m^2 white
 #: Every registered method: a new one is covered without editing a list.
 METHODS = tuple(n for n, _ in cm.isp.list_demosaics())
-
-
-def synthetic_raw(radiance, cfa, *, white=WHITE, peak_e=5000.0, dn_per_e=0.6, black=64.0) -> RawImage:
-    """A noise-free capture computed here, independently of sensor/:
-    electrons = sum_b L_b epr[c, b] at each pixel's channel, DN = e g + black."""
-    cfa = cm.sensor.get_cfa(cfa)
-    qe = cfa.sensitivities(WL)
-    epr = electrons_per_radiance_of(qe, WL)
-    epr *= peak_e / (epr @ white).max()
-    electrons = cm.isp.mosaic_image(radiance @ epr.T, cfa)
-    return RawImage(raw=electrons * dn_per_e + black, pattern=cfa.pattern.copy(), channels=cfa.channels,
-                    spectra=qe, wavelengths=WL.copy(), electrons_per_radiance=epr, white_radiance=white,
-                    exposure_s=0.01, dn_per_electron=dn_per_e, black_level_dn=black, seed=0,
-                    settings={"cfa": {"name": cfa.name}, "sensor": {"adc_bits": 12}}, meta={"scene": "test"})
 
 
 @pytest.mark.parametrize("cfa", cm.sensor.list_cfas())
@@ -103,7 +86,7 @@ def test_colour_chart_through_the_real_sensor_matches_the_ideal_sensor():
     """sensor.capture -> process against capture_ideal: the absolute scales
     of the two paths agree and the chart's colours are within the fit's
     error (patch centres, noise off; the Nikon set, whose fit error on the
-    chart is 1.08 dE00 mean: tests/test_colour.py)."""
+    chart is 1.08 dE00 mean: tests/isp/test_colour_matrix.py)."""
     names, refl = spectra.colorchecker(WL)
     p = 12
     img = np.zeros((4 * p, 6 * p, WL.size))

@@ -11,7 +11,7 @@ import pytest
 import cfa_mitsuba as cm
 from cfa_mitsuba.errors import CfaMitsubaError
 from cfa_mitsuba.sensor import SensorParams
-from test_isp_process import WHITE, WL, synthetic_raw
+from synthetic_raw import WHITE, WL, synthetic_raw
 
 #: Every registered method: a new one is covered without editing a list.
 METHODS = tuple(n for n, _ in cm.isp.list_demosaics())

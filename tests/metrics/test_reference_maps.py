@@ -1,5 +1,5 @@
 """MDSI and HaarPSI with the reference's maps computed once (issue 25): the
-same numbers as without them, which tests/test_metrics_reference.py holds to
+same numbers as without them, which tests/metrics/test_mdsi.py and test_haarpsi.py hold to
 the authors' MATLAB code; here also on the authors' own values directly."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from cfa_mitsuba.metrics import colourspace as mc
 from cfa_mitsuba.metrics.haarpsi import haarpsi, haarpsi_reference_maps
 from cfa_mitsuba.metrics.mdsi import mdsi, mdsi_reference_maps
 
-from test_metrics_reference import COLOUR_PAIRS, colour_pair, entries
+from reference_data import COLOUR_PAIRS, colour_pair, entries
 
 
 @pytest.fixture(scope="module")

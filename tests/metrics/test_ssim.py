@@ -11,6 +11,8 @@ from skimage.metrics import structural_similarity
 from cfa_mitsuba import metrics as m
 from cfa_mitsuba.errors import CfaMitsubaError
 from cfa_mitsuba.metrics.ssim import ssim, ssim_reference_moments
+import cfa_mitsuba.metrics as cm
+from reference_data import COLOUR_PAIRS, entries, colour_pair
 
 
 def _skimage(a, b):
@@ -65,3 +67,15 @@ def test_gaussian_window_is_scikit_images_bit_for_bit():
 
     x = np.round(np.random.default_rng(3).random((317, 240)) * 255.0)
     np.testing.assert_array_equal(_gaussian(x), gaussian(x, sigma=1.5, truncate=3.5, mode="reflect"))
+
+
+# -- reference values (tests/data/reference/expected.json: the authors' own code) ---------------
+
+@pytest.mark.parametrize("pid", COLOUR_PAIRS)
+def test_ssim_matches_ssim_index_m(pid):
+    ref, dist = colour_pair(pid)
+    for e in entries("colour_pairs", pid, "ssim", oracle="ssim_index.m"):
+        channel, down = e["variant"].split("|")
+        got = cm.ssim(ref, dist, channel=channel, downsample=down == "wang2009_downsampling")
+        assert abs(got - e["value"]) <= 1e-6, (e["variant"], got, e["value"])
+        assert abs(cm.ssim(dist, ref, channel=channel, downsample=down == "wang2009_downsampling") - got) < 1e-12

@@ -122,9 +122,9 @@ def test_texel_centres_are_the_measured_mixes(variant_name):
         from pathlib import Path
 
         here = Path(__file__).resolve().parent
-        code = (f"import sys; sys.path.insert(0, {str(here)!r}); import test_render_texture as t; "
+        code = (f"import sys; sys.path[:0] = [{str(here)!r}, {str(here.parent)!r}]; import test_texture as t; "
                 "t._check_texel_centres('scalar_spectral')")
-        proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=here.parent)
+        proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=here.parents[1])
         assert proc.returncode == 0, proc.stderr[-2000:]
         return
     _check_texel_centres(variant_name)

@@ -10,7 +10,7 @@ import cfa_mitsuba as cm
 from cfa_mitsuba import spectra
 from cfa_mitsuba.errors import CfaMitsubaError
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 EXAMPLE = REPO / "scenes" / "examples" / "spheres.xml"
 
 SCENE = """<scene version="3.0.0">

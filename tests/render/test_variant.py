@@ -58,7 +58,7 @@ def test_thread_budget_from_environment():
     assert proc.returncode != 0 and "CFA_MITSUBA_THREADS" in proc.stderr
 
 
-EXAMPLE = str(Path(__file__).resolve().parents[1] / "scenes" / "examples" / "spheres.xml")
+EXAMPLE = str(Path(__file__).resolve().parents[2] / "scenes" / "examples" / "spheres.xml")
 
 
 def _scalar_in_subprocess(name, size, tmp_path):
@@ -74,7 +74,7 @@ def _scalar_in_subprocess(name, size, tmp_path):
             f"cm.io.write_spectral_exr({str(out)!r}, img, preview=False); "
             f"open({str(out.with_suffix('.meta.json'))!r}, 'w').write(json.dumps(img.meta, default=str))")
     subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True,
-                   cwd=Path(__file__).resolve().parents[1])
+                   cwd=Path(__file__).resolve().parents[2])
     img = cm.io.read_spectral_exr(out)
     img.meta.update(json.loads(out.with_suffix(".meta.json").read_text()))
     return img

@@ -11,8 +11,8 @@ user would meet it.
   it rather than skipping);
 - ``cfa-mitsuba report`` rebuilds it and refuses a bad directory with exit 2.
 
-Partial results directories are in tests/test_report_partial.py; both
-modules use the one study of tests/test_report_fixtures.py.
+Partial results directories are in tests/report/test_partial_results.py; both
+modules use the one study of tests/report_fixtures.py.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ import pytest
 
 from cfa_mitsuba.io.owned import record_written
 from conftest import assert_one_line_error, run_cli
-from test_report_fixtures import run_chromium, study_dir
+from report_fixtures import run_chromium, study_dir
 
 pytestmark = pytest.mark.slow
 

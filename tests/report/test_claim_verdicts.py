@@ -29,7 +29,7 @@ import pytest
 
 from cfa_mitsuba.report import claim_verdicts
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 PAGE = REPO / "docs" / "paper-comparison.md"
 CLAIMS = tomllib.loads((REPO / "cfa_mitsuba" / "data" / "paper" / "claims.toml").read_text())["claim"]
 #: the page's column for each committed run (a run whose folder is not committed is not on the page)

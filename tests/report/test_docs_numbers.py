@@ -12,24 +12,15 @@ from __future__ import annotations
 import json
 
 import re
-import shutil
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
 from cfa_mitsuba.report import docs_numbers
+from docs_copy import _copy_docs
 
-REPO = Path(__file__).resolve().parents[1]
-
-
-def _copy_docs(tmp: Path) -> Path:
-    """README, docs/ and every source a marker names, under ``tmp`` as in the repository."""
-    shutil.copy(REPO / "README.md", tmp / "README.md")
-    shutil.copytree(REPO / "docs", tmp / "docs", ignore=shutil.ignore_patterns("*.png", "*.svg", "*.html"))
-    (tmp / "tests" / "data").mkdir(parents=True)
-    shutil.copy(REPO / "tests" / "data" / "quick_expected.csv", tmp / "tests" / "data" / "quick_expected.csv")
-    return tmp
+REPO = Path(__file__).resolve().parents[2]
 
 
 def test_every_doc_holds_markers_and_each_equals_its_source():

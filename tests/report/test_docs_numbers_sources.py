@@ -1,6 +1,6 @@
 """Every kind of committed source the docs' numbers come from makes the check fail when it changes.
 
-tests/test_docs_numbers.py shows it for the example report's scores.csv and
+tests/report/test_docs_numbers.py shows it for the example report's scores.csv and
 timing.json; here for the other sources: the convergence runs'
 CSV (docs/convergence.md), the stability matrix's JSON (docs/stability.md),
 the benchmarks' JSON (README.md, docs/isp.md) and the
@@ -17,11 +17,11 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-from test_docs_numbers import _copy_docs  # README, docs/ and the sources, copied as in the repository
+from docs_copy import _copy_docs  # README, docs/ and the sources, copied as in the repository
 
 from cfa_mitsuba.report import docs_numbers
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 def _bump_convergence_wall_time(repo: Path) -> None:

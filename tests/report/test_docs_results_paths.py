@@ -10,7 +10,7 @@ from pathlib import Path
 
 from cfa_mitsuba.io.portable import ABSOLUTE_PATH
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 #: What a run writes: tables, records, configs as run (pages, *.md, are prose, not results).
 RESULT_SUFFIXES = (".csv", ".json", ".toml", ".txt", ".tsv")
 

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from cfa_mitsuba.report import docs_tour
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 def test_the_tour_block_layout_is_read_back():

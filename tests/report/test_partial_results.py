@@ -1,7 +1,7 @@
 """The report of partial and unusual results directories: it draws what the
 data supports, says what is absent, and never fails.
 
-Each case is cut from the small study of tests/test_report_fixtures.py
+Each case is cut from the small study of tests/report_fixtures.py
 (copied, then edited on disk as a user's directory could be).
 """
 
@@ -15,7 +15,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from test_report_fixtures import study_dir
+from report_fixtures import study_dir
 
 pytestmark = pytest.mark.slow
 

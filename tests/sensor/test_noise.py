@@ -15,7 +15,7 @@ from cfa_mitsuba.sensor.noise import temporal_rng
 from cfa_mitsuba.values import SpectralImage
 
 WL = cm.spectra.DEFAULT_WAVELENGTHS
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 FLAT = OpticsParams(relative_illumination=False)
 MONO = cm.sensor.make_cfa("mono", "W", {"W": (np.array([300.0, 800.0]), np.array([0.5, 0.5]))})
 N = 512  # 262 144 pixels: a variance is then known to 0.3 %

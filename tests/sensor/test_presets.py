@@ -11,6 +11,7 @@ from cfa_mitsuba.errors import CfaMitsubaError
 from cfa_mitsuba.sensor import get_sensor_preset, list_sensor_presets
 
 import registry_checks as checks
+from chart_files import chart_exr  # noqa: F401  (the small chart EXR fixture)
 from conftest import assert_one_line_error, run_cli
 
 
@@ -68,17 +69,6 @@ def test_list_sensors_shows_parameters_and_source():
     for part in ("1.4 um", "well 6000 e-", "read noise 5 e-", "PRNU 0.7 %", "10 bit", "spectra mt9v024-rgb",
                  "source: ISETCam"):
         assert part in imx, (part, imx)
-
-
-@pytest.fixture(scope="module")
-def chart_exr(tmp_path_factory):
-    wl = cm.spectra.DEFAULT_WAVELENGTHS
-    refl = cm.spectra.colorchecker(wl)[1]
-    idx = np.arange(24).reshape(4, 6).repeat(8, 0).repeat(8, 1)
-    path = tmp_path_factory.mktemp("presets") / "chart.exr"
-    cm.io.write_spectral_exr(path, cm.values.SpectralImage(refl[idx] * cm.spectra.illuminant("D65", wl) * 1e-3, wl,
-                                                           {"fov_deg": 10.0}))
-    return path
 
 
 def test_capture_with_a_preset(chart_exr, tmp_path):

@@ -15,7 +15,7 @@ from cfa_mitsuba.errors import CfaMitsubaError
 from cfa_mitsuba.sensor import get_sensor_preset
 
 from conftest import REPO, assert_one_line_error, run_cli
-from test_sensor_presets import chart_exr  # noqa: F401  (the small chart EXR fixture)
+from chart_files import chart_exr  # noqa: F401  (the small chart EXR fixture)
 
 EXAMPLE = REPO / "configs" / "sensors" / "mt9v024-rgb.toml"
 CSV = EXAMPLE.with_name("mt9v024-rgb-qe.csv")

@@ -186,7 +186,7 @@ def test_duplicate_wavelengths(tmp_path):
 
 
 #: upstream files the package does not ship (each rebuilt from a shipped one), kept as test data
-UPSTREAM_ONLY = Path(__file__).resolve().parent / "data" / "filters"
+UPSTREAM_ONLY = Path(__file__).resolve().parents[1] / "data" / "filters"
 
 
 def _sha256sums(folder):

@@ -250,7 +250,7 @@ def _rank_interval_mutant(means, lows, highs):
 
 
 def test_a_rank_interval_comparing_a_lower_bound_with_a_mean_fails():
-    """The case of tests/test_intervals.py (b's top above a's bottom, below
+    """The case of tests/study/test_intervals.py (b's top above a's bottom, below
     a's mean): the rule ties them, the mutant ranks a strictly first."""
     case = ([3.0, 2.0], [2.9, 1.05], [3.1, 2.95])
     _, best, worst = rank_interval(*case)

@@ -9,7 +9,7 @@ import math
 
 import pandas as pd
 
-import test_measured_formats as chart
+import measured_charts as chart
 from conftest import assert_one_line_error, run_cli
 
 CONFIG = """\

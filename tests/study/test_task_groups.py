@@ -7,7 +7,7 @@ from pathlib import Path
 from cfa_mitsuba.study.config import load_config
 from cfa_mitsuba.study.runner import _render_label, _task_groups, _task_id, plan_study
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 
 
 def _plan():
