@@ -223,15 +223,16 @@ def test_band_grid_option():
 
 def test_scene_registry_declares_defaults_and_metrics():
     rows = dict(cm.render.list_scenes())
-    assert set(rows) == {"macbeth", "slanted-edge", "chirp", "gray-bar", "puppy"}
+    assert {"macbeth", "slanted-edge", "chirp", "gray-bar", "puppy"} <= set(rows)  # the paper's, among others
     assert all(cm.render.get_scene(name).name == name for name in rows)
+    # the paper's metrics on its scenes (the records may name more)
     expect = {"macbeth": ("delta-e",), "slanted-edge": ("mtf", "info-capacity"), "chirp": ("moire",),
               "gray-bar": ("achromatic", "ysnr"),
               "puppy": ("scielab", "ssim", "mdsi", "haarpsi")}
     sizes = {"macbeth": (636, 720), "slanted-edge": (636, 720), "puppy": (636, 720), "chirp": (500, 500), "gray-bar": (500, 500)}
     for name, metrics in expect.items():
         sc = cm.render.get_scene(name)
-        assert cm.metrics.metrics_for_scene(sc.kind) == metrics
+        assert set(metrics) <= set(cm.metrics.metrics_for_scene(sc.kind))
         assert (sc.height, sc.width) == sizes[name]
         assert sc.fov_deg > 0 and sc.spp >= 1
     assert cm.render.get_scene("slanted-edge").oversample == 4 and cm.render.get_scene("chirp").oversample == 2

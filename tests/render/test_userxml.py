@@ -35,7 +35,7 @@ def test_example_scene_renders_with_its_camera():
     sc = cm.render.get_scene(str(EXAMPLE))
     assert sc.name == "spheres" and (sc.width, sc.height) == (96, 64)  # the file's film size
     assert sc.fov_deg == pytest.approx(30.0) and sc.max_depth == 4  # its camera, its integrator's depth
-    assert sc.kind == "natural" and cm.metrics.metrics_for_scene(sc.kind) == ("scielab", "ssim", "mdsi", "haarpsi")
+    assert sc.kind == "natural" and {"scielab", "ssim", "mdsi", "haarpsi"} <= set(cm.metrics.metrics_for_scene(sc.kind))
     img = cm.render.render(str(EXAMPLE), width=48, height=32, spp=16)
     assert img.data.shape == (32, 48, 31)
     assert spectra.luminance_cd_m2(img.data).mean() == pytest.approx(100.0, rel=5e-3)

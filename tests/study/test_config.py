@@ -159,7 +159,7 @@ def test_bad_values_are_refused_with_the_key(tmp_path, extra, key, reason):
     (GOOD.replace('"macbeth", ', '"macbeth", "kitchen", '), "scenes[1]"),
     (GOOD.replace('"rgbw1"', '"rgbw9"'), "cfas[1]"),
     (GOOD.replace('"rgbw1"', '"nothere.toml"'), "cfas[1]"),
-    (GOOD.replace('["bilinear"]', '["bilinear", "nearest"]'), "demosaics[1]"),
+    (GOOD.replace('["bilinear"]', '["bilinear", "no-such-method"]'), "demosaics[1]"),
     (GOOD.replace("[100]", "[100, -3]"), "luminances[1]"),
     (GOOD.replace("[100]", "[100, 100]"), "luminances"),
     (GOOD.replace('cfas = ["bayer", "rgbw1"]\n', ""), "cfas"),
