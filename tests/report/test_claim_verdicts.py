@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from cfa_mitsuba.metrics import get_metric, scored_metrics
 from cfa_mitsuba.report import claim_verdicts
 
 REPO = Path(__file__).resolve().parents[2]
@@ -159,9 +160,8 @@ def _by_rule(folder: Path, claim: dict) -> str:
     raise AssertionError(f"unknown kind {claim['kind']}")
 
 
-#: Decimals each metric prints with (the records' own, written again here: the facts are checked as printed).
-DECIMALS = {"scielab": 2, "ssim": 3, "mdsi": 3, "haarpsi": 3, "achromatic": 3, "delta-e": 2, "mtf": 1,
-            "moire": 2}
+#: Decimals each metric prints with (its record's: the facts are checked as printed).
+DECIMALS = {name: get_metric(name).decimals for name in scored_metrics()}
 
 
 def _label(cfa: str) -> str:

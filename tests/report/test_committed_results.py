@@ -8,7 +8,7 @@ from __future__ import annotations
 import re
 import shutil
 
-from test_report_fixtures import study_dir
+from report_fixtures import study_dir
 
 from cfa_mitsuba.report import build_report
 
