@@ -121,12 +121,8 @@ def _check_options_by_name(name: str) -> None:
 # -- demosaics ----------------------------------------------------------------------------------
 
 
-def check_demosaic(name: str, cfa: str) -> None:
-    """One method on one CFA: shape, finiteness and every sample kept with
-    partial tiles at both borders; a constant per channel exact to the
-    border; zeros and a saturated mosaic kept; scale invariance; single
-    precision within float32 rounding of double, with the mosaic's own
-    samples."""
+def check_demosaic_samples(name: str, cfa: str) -> None:
+    """Shape, finiteness and every sample kept, with partial tiles at both borders."""
     c = cm.sensor.get_cfa(cfa)
     th, tw = c.tile_shape
     shape = (4 * th + th // 2 + 1, 5 * tw + 1)
@@ -136,19 +132,39 @@ def check_demosaic(name: str, cfa: str) -> None:
     masks = c.masks(shape)
     for k in range(len(c.channels)):
         assert np.array_equal(out[..., k][masks[k]], raw[masks[k]])
-    # a constant per channel: border handling that shifts the CFA phase mixes channels and fails
+
+
+def check_demosaic_constants(name: str, cfa: str) -> None:
+    """A different constant in each channel, exact to the border (border
+    handling that shifts the CFA phase mixes channels and fails); zeros stay
+    zeros and a saturated mosaic stays saturated."""
+    c = cm.sensor.get_cfa(cfa)
+    th, tw = c.tile_shape
     small = (3 * th + 1, 3 * tw + 2)
     levels = np.linspace(0.2, 0.9, len(c.channels))
     truth = np.broadcast_to(levels, (*small, len(levels)))
     assert np.abs(cm.isp.demosaic(cm.isp.mosaic_image(truth, c), c, name) - truth).max() < 1e-12
     assert np.all(cm.isp.demosaic(np.zeros(small), c, name) == 0.0)
     assert np.allclose(cm.isp.demosaic(np.full(small, 4095.0), c, name), 4095.0, rtol=0, atol=1e-9)
+
+
+def check_demosaic_scale(name: str, cfa: str) -> None:
+    """Scale invariance: 1000 x the mosaic gives 1000 x the image."""
+    c = cm.sensor.get_cfa(cfa)
+    th, tw = c.tile_shape
+    raw = np.random.default_rng(5).random((4 * th + 1, 5 * tw + 1))
     a, b = cm.isp.demosaic(raw, c, name), cm.isp.demosaic(1000.0 * raw, c, name)
     assert np.allclose(1000.0 * a, b, rtol=1e-9, atol=1e-9)
-    # single precision: within a few float32 roundings of the mosaic's range on a photograph (measured at
-    # most 9 over every method and CFA; an edge-directed choice near a tie on white noise reaches 16)
+
+
+def check_demosaic_precision(name: str, cfa: str) -> None:
+    """Single precision within a few float32 roundings of the mosaic's range
+    of double on a photograph (measured at most 9 over every method and CFA;
+    an edge-directed choice near a tie on white noise reaches 16), with the
+    mosaic's own float64 samples."""
     from cfa_mitsuba.isp._memo import clear_all
 
+    c = cm.sensor.get_cfa(cfa)
     photo = _photo_mosaic(cfa)
     clear_all()
     double = cm.isp.demosaic(photo, c, name)
@@ -161,6 +177,16 @@ def check_demosaic(name: str, cfa: str) -> None:
         assert np.array_equal(single[..., k][pm[k]], photo[pm[k]])
 
 
+#: Every generic check of one method on one CFA (the test modules run them one by one).
+DEMOSAIC_CHECKS = (check_demosaic_samples, check_demosaic_constants, check_demosaic_scale, check_demosaic_precision)
+
+
+def check_demosaic(name: str, cfa: str) -> None:
+    """Every generic check of one method on one CFA (:data:`DEMOSAIC_CHECKS`)."""
+    for check in DEMOSAIC_CHECKS:
+        check(name, cfa)
+
+
 def _photo_mosaic(cfa: str, size: int = 96) -> np.ndarray:
     """A crop of scikit-image's astronaut (edges, texture, flat sky), linear
     light 0..1, mosaicked by the CFA's white-balanced channels."""
@@ -171,21 +197,30 @@ def _photo_mosaic(cfa: str, size: int = 96) -> np.ndarray:
     return cm.isp.mosaic_image(cm.isp.channels_from_rgb(rgb, c), c)
 
 
-def check_demosaic_refusals(name: str) -> None:
-    """Bad input is a one-line error for every method: smaller than the tile,
-    a NaN or an infinity; exactly one tile is fine."""
+def check_demosaic_too_small(name: str) -> None:
+    """A mosaic smaller than the tile is a one-line error; exactly one tile is fine."""
     with pytest.raises(CfaMitsubaError, match="smaller than the CFA tile"):
         cm.isp.demosaic(np.ones((3, 3)), "rgbw2", name)
-    for value in (np.nan, np.inf, -np.inf):
-        raw = np.ones((8, 8))
-        raw[3, 4] = value
-        with pytest.raises(CfaMitsubaError, match="1 NaN or infinite"):
-            cm.isp.demosaic(raw, "bayer", name)
+    with pytest.raises(CfaMitsubaError, match="smaller than the CFA tile"):
+        cm.isp.demosaic(np.ones((1, 5)), "bayer", name)
     for cfa in ("bayer", "rgbw2", "rgb3", "cmy2"):
         c = cm.sensor.get_cfa(cfa)
         assert np.allclose(cm.isp.demosaic(np.full(c.tile_shape, 0.3), c, name), 0.3)
-    with pytest.raises(CfaMitsubaError, match="smaller than the CFA tile"):
-        cm.isp.demosaic(np.ones((1, 5)), "bayer", name)
+
+
+def check_demosaic_non_finite(name: str, value: float) -> None:
+    """A NaN or an infinity in the mosaic is a one-line error."""
+    raw = np.ones((8, 8))
+    raw[3, 4] = value
+    with pytest.raises(CfaMitsubaError, match="1 NaN or infinite"):
+        cm.isp.demosaic(raw, "bayer", name)
+
+
+def check_demosaic_refusals(name: str) -> None:
+    """Bad input is a one-line error for every method (both checks above)."""
+    check_demosaic_too_small(name)
+    for value in (np.nan, np.inf, -np.inf):
+        check_demosaic_non_finite(name, value)
 
 
 def smooth_errors(cfa: str, name: str):
@@ -213,8 +248,8 @@ def check_demosaic_accuracy(name: str, cfa: str) -> None:
     """A method with an accuracy bar (its record's) meets it on ``cfa``:
     white-balanced achromatic content reproduced in every channel, the
     bound growing with the block size on block layouts and wider on the
-    layouts that sample unevenly (:func:`uneven_layout`); a linear ramp
-    exact in the interior on Bayer.  A baseline (no bar) is not held to it."""
+    layouts that sample unevenly (:func:`uneven_layout`).  A baseline (no
+    bar) is not held to it."""
     from cfa_mitsuba.sensor.readout import block_size
 
     bar = cm.isp.get_demosaic_record(name).accuracy
@@ -231,10 +266,18 @@ def check_demosaic_accuracy(name: str, cfa: str) -> None:
     else:
         assert inner.max() < bar.smooth_max and inner.mean() < bar.smooth_mean, (inner.max(), inner.mean())
         assert err.max() < bar.border_max, err.max()
-    if cfa == "bayer":
-        ramp = np.add.outer(0.01 * np.arange(48.0), 0.02 * np.arange(52.0))
-        m = bar.ramp_margin_px
-        assert np.abs(cm.isp.demosaic(ramp, "bayer", name) - ramp[..., None])[m:-m, m:-m].max() < 1e-9
+
+
+def check_demosaic_ramp(name: str) -> None:
+    """A linear ramp is exact on Bayer away from the borders (where the mirror
+    folds it), within the margin of the method's accuracy bar; a baseline
+    (no bar) is not held to it."""
+    bar = cm.isp.get_demosaic_record(name).accuracy
+    if bar is None:
+        return
+    ramp = np.add.outer(0.01 * np.arange(48.0), 0.02 * np.arange(52.0))
+    m = bar.ramp_margin_px
+    assert np.abs(cm.isp.demosaic(ramp, "bayer", name) - ramp[..., None])[m:-m, m:-m].max() < 1e-9
 
 
 # -- denoisers ----------------------------------------------------------------------------------

@@ -75,6 +75,7 @@ def test_each_toy_passes_the_generic_checks_of_its_kind(toys):
     for cfa in cm.sensor.list_cfas():
         checks.check_demosaic("toy-nearest", cfa)
         checks.check_demosaic_accuracy("toy-nearest", cfa)  # a baseline: no bar to meet
+    checks.check_demosaic_ramp("toy-nearest")
     checks.check_demosaic_refusals("toy-nearest")
     checks.check_denoiser("toy-box")
     checks.check_axis(axis)

@@ -40,8 +40,26 @@ def test_registry_lists_the_paper_methods_first_each_with_a_record():
 
 @pytest.mark.parametrize("cfa", CFAS)
 @pytest.mark.parametrize("method", METHODS)
-def test_every_method_on_every_cfa(cfa, method):
-    checks.check_demosaic(method, cfa)
+def test_shape_finite_and_samples_kept(cfa, method):
+    checks.check_demosaic_samples(method, cfa)
+
+
+@pytest.mark.parametrize("cfa", CFAS)
+@pytest.mark.parametrize("method", METHODS)
+def test_per_channel_constants_zeros_and_saturation(cfa, method):
+    checks.check_demosaic_constants(method, cfa)
+
+
+@pytest.mark.parametrize("cfa", CFAS)
+@pytest.mark.parametrize("method", METHODS)
+def test_scale_invariant(cfa, method):
+    checks.check_demosaic_scale(method, cfa)
+
+
+@pytest.mark.parametrize("cfa", CFAS)
+@pytest.mark.parametrize("method", METHODS)
+def test_single_precision_is_double_to_float32_rounding(cfa, method):
+    checks.check_demosaic_precision(method, cfa)
 
 
 @pytest.mark.parametrize("cfa", CFAS)
@@ -76,8 +94,19 @@ def test_the_uneven_layouts_are_told_apart_by_the_ramp():
 
 
 @pytest.mark.parametrize("method", METHODS)
-def test_refusals(method):
-    checks.check_demosaic_refusals(method)
+def test_linear_ramp_exact_in_interior_bayer(method):
+    checks.check_demosaic_ramp(method)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_smaller_than_the_tile_is_refused_one_tile_is_fine(method):
+    checks.check_demosaic_too_small(method)
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+@pytest.mark.parametrize("method", METHODS)
+def test_nan_or_inf_refused(value, method):
+    checks.check_demosaic_non_finite(method, value)
 
 
 def test_a_linear_method_is_linear():
