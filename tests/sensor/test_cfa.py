@@ -180,8 +180,13 @@ def test_registry_protects_names():
     with pytest.raises(CfaMitsubaError, match="unknown CFA"):
         get_cfa("bayerr")
     assert get_cfa("bayer") is bayer
+    from cfa_mitsuba.sensor.cfa import _REGISTRY
+
     mine = register_cfa(make_cfa("test-mono-g", "G", {"G": builtin_filter_curve("G")}), replace=True)
-    assert get_cfa("test-mono-g") is mine and "test-mono-g" in list_cfas()
+    try:
+        assert get_cfa("test-mono-g") is mine and "test-mono-g" in list_cfas()
+    finally:  # a test's CFA leaves the registry with it: later tests list the project's own
+        _REGISTRY.pop("test-mono-g", None)
 
 
 def test_example_tomls_in_configs():
