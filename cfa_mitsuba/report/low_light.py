@@ -110,8 +110,9 @@ def _field_axes(ax, snr, last: bool, plain) -> None:
 
 
 def _policy(res: Results) -> str:
-    sensor = (res.config or {}).get("capture") or {}
-    return str(sensor.get("exposure_policy") or "program")
+    from ..study.config import exposure_program_of
+
+    return exposure_program_of(res.config).policy
 
 
 def _fmt(v, spec: str) -> str:

@@ -14,7 +14,8 @@ relative to the config file.
 
 from __future__ import annotations
 
-__all__ = ["StudyConfig", "SceneSpec", "SweepSpec", "load_config", "parse_config", "IMAGE_METRICS"]
+__all__ = ["StudyConfig", "SceneSpec", "SweepSpec", "load_config", "parse_config", "IMAGE_METRICS",
+           "exposure_program_of"]
 
 import dataclasses
 from dataclasses import dataclass, field
@@ -303,6 +304,23 @@ def one_f_number(optics_table):
 
 #: The ``[sensor]`` keys of the exposure program (:class:`~cfa_mitsuba.sensor.exposure_program.ExposureProgram`).
 _PROGRAM_KEYS = ("exposure_policy", "max_exposure_s", "max_analog_gain", "reference_luminance_cd_m2")
+
+
+def exposure_program_of(config: dict | None):
+    """The :class:`~cfa_mitsuba.sensor.exposure_program.ExposureProgram` a
+    results folder's config.json describes: its ``capture`` keys (and, in a
+    config.json written before ``capture`` held them, ``sensor``'s) over the
+    program's own defaults; the defaults alone when they do not make a valid
+    program.  The report reads a study's exposure from here, so no default
+    of the program is written twice."""
+    from ..sensor.exposure_program import ExposureProgram
+
+    cfg = config or {}
+    keys = {**(cfg.get("sensor") or {}), **(cfg.get("capture") or {})}
+    try:
+        return ExposureProgram.from_table({k: keys[k] for k in _PROGRAM_KEYS if keys.get(k) is not None})
+    except (CfaMitsubaError, TypeError):
+        return ExposureProgram()
 
 
 def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, dict, dict, object]:
