@@ -87,7 +87,7 @@ def main() -> int:
         subprocess.run([sys.executable, "-c", setup + "tasks.render_task(sources[0])"], check=True, cwd=REPO, env=env,
                        capture_output=True)  # into the cache, not measured
         rows.append((f"study task: {args.scene}, bayer, 4 demosaics, its metrics",
-                     _peak(setup + "r = tasks.evaluate_task(todo[0])\nassert r['rows'], r", env),
+                     _peak(setup + "r = tasks.evaluate_task(todo[0])\nassert r.rows, r", env),
                      limits.estimate_task_bytes(h, w, b)))
 
     print(f"{'case':<58} {'measured':>10} {'estimate':>10} {'ratio':>6}")

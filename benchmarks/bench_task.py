@@ -40,7 +40,8 @@ def measure(scene: str, cfas: list[str], luminance: float, repeat: int) -> dict:
     from cfa_mitsuba.study.chain import CameraChain
     from cfa_mitsuba.study.config import load_config
     from cfa_mitsuba.study.runner import plan_study
-    from cfa_mitsuba.study.tasks import load_scene_image, realisation_seeds
+    from cfa_mitsuba.study.task_values import realisation_seeds
+    from cfa_mitsuba.study.tasks import load_scene_image
 
     config = load_config(REPO / "configs" / "paper.toml")
     _, tasks = plan_study(config, None)
@@ -61,7 +62,7 @@ def measure(scene: str, cfas: list[str], luminance: float, repeat: int) -> dict:
         key = json.dumps(task.source, sort_keys=True)
         oi = chain.optical(load_scene_image(task.source), cond, key)
         ideal = chain.ideal(oi, cond, key)
-        seed = realisation_seeds(cond.seed, task.scene, task.cfa, cond.luminance, 1)[0]
+        seed = realisation_seeds(cond.seed, task.scene, cond.luminance, 1)[0]
         options = chain.settings.metric_options_for(cond)
         for _ in range(repeat):
             raw = timed(f"{cfa} capture", chain.capture, oi, cfa, cond, seed)

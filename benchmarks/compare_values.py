@@ -7,7 +7,7 @@ Joins the two tables on (scene, cfa, demosaic, luminance, metric) and, for
 compared, the largest absolute and relative difference and where it is.
 With ``--expected`` OLD is tests/data/quick_expected.csv (its ``value`` and
 ``tolerance``): NEW must be a quick study's metrics_realisations.csv (its
-first realisation is compared, as tests/test_study_run.py does) and the
+first realisation is compared, as tests/study/test_runner.py does) and the
 table adds the largest difference as a fraction of the stored tolerance.
 ``--json PATH`` also writes the numbers (per metric: rows, rows with the
 same value, largest absolute and relative difference), for the docs to

@@ -1,5 +1,5 @@
 """Measurements behind the 2x2 rediscovery (issue 26; docs/design.md,
-tests/test_design_rediscovery.py): why G G / B R and R B / G R tied or
+tests/design/test_rediscovery.py): why G G / B R and R B / G R tied or
 beat Bayer, on ISETCam's RGB filters, under the exposure program.
 
 1. MTF50 of the slanted edge, noise off, through the study's own chain and
@@ -60,9 +60,10 @@ def _cfa_files(folder: Path) -> dict:
 def measured_mtf50(cfas: dict, height: int, width: int = 320) -> dict:
     """{tile: MTF50 cy/mm} noise-free, as a study measures it."""
     from cfa_mitsuba import render
+    from cfa_mitsuba.sensor import ExposureProgram
     from cfa_mitsuba.study.chain import CameraChain, ChainSettings
 
-    settings = ChainSettings(exposure_policy="program")
+    settings = ChainSettings(exposure_program=ExposureProgram("program"))
     chain = CameraChain(settings)
     image = render.render_cached("slanted-edge", width=width, height=height)
     cond = settings.base_condition(luminance=100.0)
@@ -79,10 +80,11 @@ def measured_mtf50(cfas: dict, height: int, width: int = 320) -> dict:
 def proxy_numbers() -> dict:
     from cfa_mitsuba import spectra
     from cfa_mitsuba.design import proxy as P
+    from cfa_mitsuba.design import responses as R
     from cfa_mitsuba.design.search import fixed_models
-    from cfa_mitsuba.sensor import get_spectra_set
+    from cfa_mitsuba.sensor import ExposureProgram, get_spectra_set
 
-    settings = P.ProxySettings(policy="program", luminance_cd_m2=10.0)
+    settings = P.ProxySettings(exposure=ExposureProgram("program"), luminance_cd_m2=10.0)
     model = fixed_models(get_spectra_set("isetcam-rgb").curves, LETTERS, settings)((0, 1, 2))
     white = spectra.xyz_from_radiance(spectra.illuminant("D65", spectra.DEFAULT_WAVELENGTHS)[None, :],
                                       spectra.DEFAULT_WAVELENGTHS)[0]
@@ -97,7 +99,7 @@ def proxy_numbers() -> dict:
         for column in (model.matrix_rel[:, 1], luma / luma.sum()):
             m = model.matrix_rel.copy()
             m[:, 1] = column
-            lsf = P._gains_and_lsf(lay, LETTERS, m, "bilinear", model.lum_weights)[1]
+            lsf = R._gains_and_lsf(lay, LETTERS, m, "bilinear", model.lum_weights)[1]
             mtf.append(P.edge_mtf50(lsf, settings.f_number, settings.pixel_pitch_um) * per_mm)
         gains = P.demosaic_noise_gains(lay, LETTERS, model.matrix_rel, "bilinear")[:, 1]
         area = P.demosaic_area_noise_gains(lay, LETTERS, model.matrix_rel, "bilinear")[:, 1]

@@ -18,6 +18,7 @@ import numpy as np
 
 import cfa_mitsuba as cm
 from cfa_mitsuba.isp import colour_matrix, pipeline
+from cfa_mitsuba.sensor import ExposureProgram
 from cfa_mitsuba.study.chain import CameraChain, ChainSettings
 
 
@@ -37,7 +38,7 @@ def main() -> None:
     ap.add_argument("--luminances", default="12,50,100")
     args = ap.parse_args()
     img = cm.render.render_cached("puppy", width=120, height=106, spp=8)
-    chain = CameraChain(ChainSettings(exposure_policy=args.policy))
+    chain = CameraChain(ChainSettings(exposure_program=ExposureProgram(args.policy)))
     lums = [float(v) for v in args.luminances.split(",")]
     new_rule = pipeline._fit_noise
     print(f"policy {args.policy}; puppy 120 x 106, 8 spp; bilinear; {args.seeds} realisations")

@@ -147,7 +147,7 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     prof.enable()
     for t in tasks:
-        for k, v in evaluate_task(t)["timing"].items():
+        for k, v in evaluate_task(t).timing.items():
             stages[k] = stages.get(k, 0.0) + v
     prof.disable()
     wall = time.perf_counter() - t0

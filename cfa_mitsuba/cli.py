@@ -17,7 +17,7 @@ import argparse
 import importlib
 import sys
 
-from .errors import CfaMitsubaError
+from .errors import CfaMitsubaError, one_line
 
 #: Sub-commands in the order ``--help`` lists them (module names under commands/).
 COMMANDS = (
@@ -78,7 +78,7 @@ def main(argv=None) -> int:
     try:
         return int(args._run(args) or 0)
     except CfaMitsubaError as exc:
-        msg = " ".join(str(exc).split())  # one line, whatever the message held
+        msg = one_line(exc)  # one line, whatever the message held
         sys.stderr.write(f"{args._prog}: error: {msg}\n")
         return 2
     except OSError as exc:  # unreadable input, unwritable output, full disk

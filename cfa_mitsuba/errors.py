@@ -10,7 +10,7 @@ escapes is a bug and keeps its traceback.
 
 from __future__ import annotations
 
-__all__ = ["CfaMitsubaError", "require", "require_finite"]
+__all__ = ["CfaMitsubaError", "require", "require_finite", "one_line"]
 
 import numpy as np
 
@@ -35,3 +35,20 @@ def require_finite(array, what: str) -> np.ndarray:
         bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
         raise CfaMitsubaError(f"{what} contains {bad} NaN or infinite value(s)")
     return arr
+
+
+def one_line(exc, limit: int | None = None) -> str:
+    """An exception's (or any object's) message as one line: every run of
+    whitespace, newlines included, becomes one space; cut to ``limit``
+    characters when given; an exception with no message gives its type's
+    name, so a one-line error never ends in an empty reason.
+
+    >>> one_line(OSError("cannot read\\n  the file"))
+    'cannot read the file'
+    >>> one_line(KeyError())
+    'KeyError'
+    """
+    text = " ".join(str(exc).split())
+    if limit is not None:
+        text = text[:limit]
+    return text or (type(exc).__name__ if isinstance(exc, BaseException) else "")

@@ -15,12 +15,19 @@ back to a file.
 
 from __future__ import annotations
 
-__all__ = ["SpectralImage", "OpticalImage", "RawImage", "RenderedImage"]
+__all__ = ["SpectralImage", "OpticalImage", "RawImage", "RenderedImage", "NATURAL"]
 
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+
+#: The kind of a natural scene (the puppy, a user's Mitsuba XML, a measured
+#: image); each chart is a kind of its own.  A scene declares its kind
+#: (``render.Scene.kind``), a metric record the kinds that feed it
+#: (``metrics.MetricRecord.scenes``): a value both stages read, so it lives
+#: with the values passed between them, not in either stage.
+NATURAL = "natural"
 
 
 @dataclass

@@ -15,12 +15,14 @@ from __future__ import annotations
 import io
 import json
 import zipfile
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
 
-__all__ = ["REFERENCE", "EXPECTED", "input_bytes", "load_input", "input_path"]
+__all__ = ["REFERENCE", "EXPECTED", "input_bytes", "load_input", "input_path", "COLOUR_PAIRS", "XYZ_PAIRS",
+           "EDGES", "WHITE", "entries", "colour_pair", "xyz_pair", "edge_image"]
 
 REFERENCE = Path(__file__).resolve().parent / "data" / "reference"
 EXPECTED = json.loads((REFERENCE / "expected.json").read_text())
@@ -52,3 +54,36 @@ def input_path(rel: str, folder: Path) -> Path:
     path = Path(folder) / Path(rel).name
     path.write_bytes(input_bytes(rel))
     return path
+
+
+# -- the pairs and edges the metrics' test files read -------------------------------------------
+
+COLOUR_PAIRS = sorted(EXPECTED["colour_pairs"])
+XYZ_PAIRS = sorted(EXPECTED["xyz_pairs"])
+EDGES = sorted(EXPECTED["slanted_edges"])
+WHITE = [95.05, 100.0, 108.9]
+
+
+def entries(section, pair, metric, *, oracle=None, primary=None):
+    out = [e for e in EXPECTED[section][pair][metric]
+           if (oracle is None or e["oracle"] == oracle) and (primary is None or e["primary"] == primary)]
+    assert out, (section, pair, metric, oracle)
+    return out
+
+
+@lru_cache(maxsize=None)
+def colour_pair(pid):
+    p = EXPECTED["colour_pairs"][pid]
+    return load_input(p["reference"]), load_input(p["distorted"])
+
+
+@lru_cache(maxsize=None)
+def xyz_pair(pid):
+    p = EXPECTED["xyz_pairs"][pid]
+    return load_input(p["reference"]), load_input(p["distorted"])
+
+
+@lru_cache(maxsize=None)
+def edge_image(eid):
+    p = EXPECTED["slanted_edges"][eid]
+    return load_input(p.get("file_npy") or p["file"])

@@ -26,7 +26,8 @@ M = cm.metrics
 WL = spectra.DEFAULT_WAVELENGTHS
 D65 = spectra.illuminant("D65", WL)
 WHITE_100 = D65 * (100.0 / spectra.luminance_cd_m2(D65, WL))  # a 100 cd/m^2 white, W/(m^2 sr nm)
-METHODS = ("bilinear", "laplacian", "adaptive-laplacian", "pocs")
+#: Every registered method: a new one is covered without editing a list.
+METHODS = tuple(n for n, _ in cm.isp.list_demosaics())
 LUMINANCES = (0.01, 0.1, 1.0, 10.0, 100.0, 1e3, 1e4, 1e5)
 
 CASES: dict[str, callable] = {}

@@ -34,7 +34,7 @@ def _():
     s = sweep(100.0)
     out = _sweep_row(100.0)
     assert s["saturated"] == 0 and s["raw"].max() < 4095
-    # bayer's ISETCam RGB filters: their fit alone misses the chart by 2.57 dE00 (tests/test_colour.py)
+    # bayer's ISETCam RGB filters: their fit alone misses the chart by 2.57 dE00 (tests/isp/test_colour_matrix.py)
     assert s["de00"] < 3.0 and s["ssim"] > 0.9 and s["haarpsi"] > 0.8
     # MTF50 102.4 cy/mm (docs/stability.md; one fixed noise realisation): within 3 %
     assert isinstance(s["mtf"], tuple) and s["mtf"][1] == "image" and s["mtf"][0] == pytest.approx(102.4, rel=0.03)

@@ -6,7 +6,11 @@
   -> report (-> design), commands on top; io, spectra, values, colorimetry
   (with its compiled loops, colour_kernels),
   errors and the version are shared leaves that import no stage;
-- no source file over 500 lines (package, tests, benchmarks).
+- no source file over 500 lines (package, tests, benchmarks);
+- no test module hard-codes a registry's member list (the one rule that
+  imports the package: the registries are filled when it loads); a test
+  takes the members from the registry, the paper's sets from the paper's
+  data, a config's from the config.
 """
 
 from __future__ import annotations
@@ -202,3 +206,60 @@ def test_the_render_cache_of_this_run_is_its_own():
     assert cache.name == "cfa-mitsuba-test-cache"
     assert cache.parent.name.startswith("pytest-") and cache.parent.name[len("pytest-"):].isdigit(), cache
     assert cache.parent != Path.home() / ".cache"
+
+
+def registry_members() -> dict[str, frozenset]:
+    """{registry: the names of its members}: every registry a user adds to
+    (metrics, with and without the values read from details, and the scored
+    ones; demosaics, denoisers, sharpeners, CFAs, axes, scenes, sensor
+    presets, spectra sets)."""
+    import cfa_mitsuba as cm
+    from cfa_mitsuba.isp.denoise import list_denoisers
+    from cfa_mitsuba.isp.sharpen import list_sharpeners
+    from cfa_mitsuba.study.axes import AXES
+
+    found = {
+        "metrics": cm.metrics.metric_names(), "metrics and values": cm.metrics.metric_names(secondary=True),
+        "scored metrics": cm.metrics.scored_metrics(), "demosaics": [n for n, _ in cm.isp.list_demosaics()],
+        "denoisers": [n for n, _ in list_denoisers()], "sharpeners": [n for n, _ in list_sharpeners()],
+        "CFAs": cm.sensor.list_cfas(), "axes": list(AXES), "scenes": [n for n, _ in cm.render.list_scenes()],
+        "sensor presets": cm.sensor.list_sensor_presets(), "spectra sets": cm.sensor.list_spectra_sets(),
+    }
+    return {k: frozenset(v) for k, v in found.items() if len(v) >= 3}
+
+
+def hard_coded_member_lists(path: Path, members: dict[str, frozenset], root: Path = REPO) -> list[str]:
+    """``file:line registry`` for each literal list, tuple, set or dict (its
+    keys) of names that is a registry's whole member list: a test that
+    spells one out breaks, or silently leaves the new member out, when a
+    member is added."""
+    bad = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, (ast.List, ast.Tuple, ast.Set)):
+            items = node.elts
+        elif isinstance(node, ast.Dict):
+            items = node.keys
+        else:
+            continue
+        names = {e.value for e in items if isinstance(e, ast.Constant) and isinstance(e.value, str)}
+        if len(names) < 3 or len(names) != len(items):
+            continue
+        bad += [f"{path.relative_to(root)}:{node.lineno} {k}" for k, v in members.items() if names == v]
+    return bad
+
+
+def test_no_test_module_hard_codes_a_registry_member_list():
+    members = registry_members()
+    bad = [b for p in sorted((REPO / "tests").rglob("*.py")) for b in hard_coded_member_lists(p, members)]
+    assert not bad, "test modules that spell out a registry's members:\n" + "\n".join(bad)
+
+
+def test_the_member_list_rule_catches_a_planted_list(tmp_path):
+    members = registry_members()
+    demosaics = sorted(members["demosaics"])
+    planted = tmp_path / "test_planted.py"
+    planted.write_text(f"METHODS = {tuple(demosaics)!r}\nUNITS = {{{', '.join(f'{n!r}: 1' for n in demosaics)}}}\n"
+                       f"SOME = {demosaics[:2]!r}\n")
+    found = hard_coded_member_lists(planted, members, root=tmp_path)
+    assert [f.split()[-1] for f in found] == ["demosaics", "demosaics"]  # the tuple and the dict, not the subset
+

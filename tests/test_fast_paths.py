@@ -124,7 +124,7 @@ def test_a_kernel_that_is_no_outer_product_is_not_split():
 def test_processed_srgb_is_encoded_on_first_read():
     import cfa_mitsuba as cm
     from cfa_mitsuba.isp.colour_matrix import xyz_to_srgb as display
-    from test_isp_process import WHITE, synthetic_raw
+    from synthetic_raw import WHITE, synthetic_raw
 
     radiance = np.broadcast_to(WHITE * 0.4, (12, 14, WHITE.size)) * np.linspace(0.5, 1.5, 14)[None, :, None]
     out = cm.isp.process(synthetic_raw(radiance, "rgbw1"), "bilinear")

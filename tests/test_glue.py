@@ -155,7 +155,7 @@ def test_process_least_squares_flag_is_a_plain_fit(tmp_path):
     import sys
 
     sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-    from test_isp_process import WHITE, synthetic_raw
+    from synthetic_raw import WHITE, synthetic_raw
 
     from cfa_mitsuba.cli import main
     from cfa_mitsuba.io.raw_npz import save_raw_npz
@@ -184,7 +184,7 @@ def test_process_precision_flag_reaches_the_demosaic(tmp_path):
     import sys
 
     sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-    from test_isp_process import WHITE, synthetic_raw
+    from synthetic_raw import WHITE, synthetic_raw
 
     from cfa_mitsuba.cli import main
     from cfa_mitsuba.io.raw_npz import save_raw_npz

@@ -1,59 +1,122 @@
-"""The registries are the only places a new metric, demosaic, CFA or axis is
-named: a toy of each, registered at run time, goes through a tiny study
-without any other edit (docs/architecture.md walks the same steps).  The
-generic tests also loop over every registered axis."""
+"""The registries are the only places a new metric, demosaic, denoiser, CFA or
+axis is named: a toy of each, registered at run time as the docs say, passes
+every generic check of its kind (tests/registry_checks.py, the same checks
+the registered members pass) and goes through a tiny study without any other
+edit (docs/architecture.md walks the same steps); the design search reads a
+demosaic's linearity from its record."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 import pytest
+from scipy import ndimage
 
 import cfa_mitsuba as cm
-from cfa_mitsuba.study.axes import AXES, Axis, positive, register_axis, unregister_axis
-from cfa_mitsuba.study.checker import _Checker
-from cfa_mitsuba.study.conditions import Condition
+import registry_checks as checks
+from cfa_mitsuba.metrics._common import as_pair, as_white
+from cfa_mitsuba.study.axes import Axis, positive, register_axis, unregister_axis
 
 
 def mean_abs_y(reference_xyz, test_xyz, white_xyz, *, patches=None, scale: float = 1.0):
     """Toy metric: mean |dY| / Y_white over the chart's patches (x ``scale``)."""
-    ref, test = np.asarray(reference_xyz), np.asarray(test_xyz)
-    d = np.abs(ref[..., 1] - test[..., 1]) / float(white_xyz[1])
+    ref, test = as_pair(reference_xyz, test_xyz)  # the house's input check: shapes, NaN, infinities
+    d = np.abs(ref[..., 1] - test[..., 1]) / float(as_white(white_xyz)[1])
     if patches:
         return scale * float(np.mean([d[y0:y1, x0:x1].mean() for y0, x0, y1, x1 in patches]))
     return scale * float(d.mean())
 
 
 def nearest(raw, cfa, *, shift: int = 0):
-    """Toy demosaic: each channel from its nearest sample to the left/up in the tile."""
+    """Toy demosaic: each channel from its nearest sample (a baseline: no
+    accuracy bar), in the mosaic's own precision."""
     pattern = np.asarray(cfa.pattern)
     h, w = raw.shape
     tiled = np.tile(pattern, (h // pattern.shape[0] + 1, w // pattern.shape[1] + 1))[:h, :w]
-    out = np.empty((h, w, len(cfa.channels)))
+    out = np.empty((h, w, len(cfa.channels)), dtype=raw.dtype)
     for k, name in enumerate(cfa.channels):
-        filled = np.where(tiled == name, raw, np.nan)
-        filled = pd.DataFrame(filled).ffill(axis=1).bfill(axis=1).ffill(axis=0).bfill(axis=0).to_numpy()
-        out[..., k] = np.roll(filled, shift, axis=1)
+        _, (iy, ix) = ndimage.distance_transform_edt(tiled != name, return_indices=True)
+        out[..., k] = np.roll(raw[iy, ix], shift, axis=1)
     return out
+
+
+def box(plane, *, sigma, size: int = 3):
+    """Toy denoiser: a box filter mixed in by the strength."""
+    return plane + min(float(sigma), 1.0) * (ndimage.uniform_filter(plane, size, mode="reflect") - plane)
 
 
 @pytest.fixture()
 def toys():
+    from cfa_mitsuba.isp.demosaic import unregister_demosaic
+    from cfa_mitsuba.isp.denoise import DenoiseMethod, register_denoiser, unregister_denoiser
+
     record = cm.metrics.MetricRecord(
         name="toy-dy", function=mean_abs_y, scenes=("macbeth",), inputs="xyz", unit="", higher_is_better=False,
-        scored=False, label="toy ΔY", description="toy metric of the registry test")
+        identical_value=0.0, scored=False, label="toy ΔY", description="toy metric of the registry test")
     try:
         cm.metrics.register_metric(record)
-        cm.isp.register_demosaic("toy-nearest", nearest, description="toy demosaic of the registry test")
+        cm.isp.register_demosaic("toy-nearest", nearest, description="toy demosaic of the registry test",
+                                 linear=True)
+        register_denoiser(DenoiseMethod(name="toy-box", function=box, description="toy denoiser of the registry test",
+                                        strength=0.5, tuning="none: a toy", licence="this test's"))
         axis = register_axis(Axis(name="toy_well_e", applies_to="sensor", field="well_capacity_e",
                                   label="well capacity", unit="e⁻", short="wc", check=positive))
         yield record, axis
     finally:
         cm.metrics.unregister_metric("toy-dy")
-        from cfa_mitsuba.isp.demosaic import unregister_demosaic
-
         unregister_demosaic("toy-nearest")
+        unregister_denoiser("toy-box")
         unregister_axis("toy_well_e")
+
+
+def test_each_toy_passes_the_generic_checks_of_its_kind(toys):
+    record, axis = toys
+    checks.check_metric(record)
+    for cfa in cm.sensor.list_cfas():
+        checks.check_demosaic("toy-nearest", cfa)
+        checks.check_demosaic_accuracy("toy-nearest", cfa)  # a baseline: no bar to meet
+    checks.check_demosaic_ramp("toy-nearest")
+    checks.check_demosaic_refusals("toy-nearest")
+    checks.check_denoiser("toy-box")
+    checks.check_axis(axis)
+    # and the registries list them where the command line and the study look
+    assert "toy-dy" in cm.metrics.metrics_for_scene("macbeth")
+    assert ("toy-nearest", "toy demosaic of the registry test") in cm.isp.list_demosaics()
+    from cfa_mitsuba.isp.denoise import list_denoisers
+
+    assert "toy-box" in [n for n, _ in list_denoisers()]
+
+
+def test_a_toy_cfa_passes_the_generic_checks():
+    wl = cm.spectra.DEFAULT_WAVELENGTHS
+    own = cm.sensor.get_cfa("rgbw1")
+    curves = {ch: (wl, q) for ch, q in zip(own.channels, own.sensitivities(wl))}
+    c = cm.sensor.make_cfa("toy-rgbw", "R G / W B", curves, description="toy 2x2 RGBW")
+    try:
+        cm.sensor.register_cfa(c)
+        checks.check_cfa("toy-rgbw")
+        for name, _ in cm.isp.list_demosaics():
+            checks.check_demosaic(name, "toy-rgbw")
+            checks.check_demosaic_accuracy(name, "toy-rgbw")
+    finally:
+        from cfa_mitsuba.sensor.cfa import _REGISTRY
+
+        _REGISTRY.pop("toy-rgbw", None)
+
+
+def test_the_design_search_reads_linear_from_the_record(toys):
+    """A demosaic whose record says it is linear is predicted by its own
+    impulse responses (the search once kept its own list and put laplacian
+    in place of any other); a nonlinear one by the Laplacian's."""
+    from cfa_mitsuba.design import responses
+
+    assert responses.linear_core("toy-nearest") == "toy-nearest"
+    assert responses.linear_core("pocs") == "laplacian" and responses.linear_core("bilinear") == "bilinear"
+    layout = np.array([[0, 1], [1, 2]])
+    gains = responses.demosaic_noise_gains(layout, ("R", "G", "B"), np.eye(3), "toy-nearest")
+    bilinear = responses.demosaic_noise_gains(layout, ("R", "G", "B"), np.eye(3), "bilinear")
+    # nearest copies each sample whole (gain 1 per output, averaged over the phases), bilinear averages
+    assert np.all(np.isfinite(gains)) and gains[1, 1] == pytest.approx(1.0) and bilinear[1, 1] < gains[1, 1]
 
 
 def test_a_toy_metric_demosaic_and_axis_run_through_a_tiny_study(toys, tmp_path):
@@ -112,26 +175,3 @@ def test_pocs_iterations_is_the_pocs_option():
     assert "iterations" not in old.chain_settings().isp_options("bilinear")
     with pytest.raises(cm.CfaMitsubaError, match="pocs_iterations is its old name"):
         parse_config({**base, "demosaics": {"pocs": {"iterations": 4}}, "isp": {"pocs_iterations": 4}})
-
-
-@pytest.mark.parametrize("name", list(AXES))
-def test_every_axis_has_a_default_a_check_and_a_place(name):
-    """Each registered axis: its default comes from the stage's parameters,
-    the check accepts that default (where it is a value) and refuses a
-    wrong type in one line, and a condition carries it to the chain."""
-    from cfa_mitsuba.study.chain import ChainSettings
-
-    axis = AXES[name]
-    default = axis.default_value()
-    assert getattr(Condition(), name) == default
-    ck = _Checker("axes.toml")
-    if default is not None:
-        assert axis.check(ck, default, f"sweep[0].{name}[0]") == default
-    with pytest.raises(cm.CfaMitsubaError, match=rf"axes.toml: sweep\[0\].{name}\[0\]: "):
-        axis.check(ck, {"not": "a value"}, f"sweep[0].{name}[0]")
-    settings = ChainSettings()
-    assert getattr(settings.base_condition(), name) == axis.value_in(settings) or axis.applies_to == "capture"
-    if axis.applies_to in ("optics", "sensor"):
-        optics, sensor = settings.for_condition(Condition())
-        assert getattr(optics if axis.applies_to == "optics" else sensor, axis.field) == default
-    assert Condition().label(Condition()) == "L100"

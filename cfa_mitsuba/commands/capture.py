@@ -7,6 +7,7 @@ import argparse
 import math
 import sys
 
+from ..errors import one_line
 from .argtypes import non_negative_float, non_negative_int, positive_float, positive_int
 
 HELP = "capture a spectral EXR with a CFA sensor (or the ideal XYZ sensor) into a raw .npz"
@@ -30,9 +31,9 @@ numbers; docs/sensor.md, "Bring your own sensor") the same way.
 Without --luminance the EXR's radiance is kept.  --exposure auto runs the
 exposure program (--exposure-policy program, the default): the brightest
 pixel's well to 95 % at the captured luminance, the time capped at
---max-exposure-s (1/30 s), then analogue gain up to --max-analog-gain (16),
-then digital gain.  --exposure-policy reference (or --reference-luminance)
-chooses ISETCam's exposure at the reference luminance (100 cd/m^2) and keeps
+--max-exposure-s, then analogue gain up to --max-analog-gain, then digital
+gain (defaults in --help).  --exposure-policy reference (or --reference-luminance)
+chooses ISETCam's exposure at the reference luminance (see --help) and keeps
 it at any --luminance; each: ISETCam's at the captured luminance; bayer:
 the program's time and gains for Bayer (docs/sensor.md s. 3.2).  The lens (field of view, distance, f-number) and the
 oversampling come from the options, else from the sidecar, else from the
@@ -75,15 +76,18 @@ def add_arguments(parser) -> None:
                         help="scale the scene to this mean luminance (default: keep the EXR's radiance)")
     parser.add_argument("--exposure", type=_exposure, default="auto", metavar="S|auto",
                         help="exposure in seconds, or auto (default)")
+    # the policies and the program's defaults are ExposureProgram's (checked when the command runs, so that
+    # building the parser imports no stage)
     parser.add_argument("--reference-luminance", type=positive_float, default=None, metavar="CD_M2",
                         help="for --exposure-policy reference: the mean luminance at which auto exposure is chosen "
-                             "(default 100; giving it selects that policy)")
-    parser.add_argument("--exposure-policy", choices=("program", "bayer", "reference", "each"), default=None,
-                        help="how --exposure auto chooses the time and gains (default program)")
-    parser.add_argument("--max-exposure-s", type=positive_float, default=1.0 / 30.0, metavar="S",
-                        help="the program's longest exposure (default 1/30)")
-    parser.add_argument("--max-analog-gain", type=positive_float, default=16.0, metavar="G",
-                        help="the program's highest analogue gain, >= 1 (default 16)")
+                             "(default: the exposure program's; giving it selects that policy)")
+    parser.add_argument("--exposure-policy", default=None, metavar="POLICY",
+                        help="how --exposure auto chooses the time and gains: program (the default), bayer, "
+                             "reference or each (docs/sensor.md s. 3.2)")
+    parser.add_argument("--max-exposure-s", type=positive_float, default=None, metavar="S",
+                        help="the program's longest exposure (default: a 30 frame/s video frame)")
+    parser.add_argument("--max-analog-gain", type=positive_float, default=None, metavar="G",
+                        help="the program's highest analogue gain, >= 1 (default: ISO 100 -> 1600)")
     parser.add_argument("--noise", choices=("off", "shot", "all"), default="all",
                         help="off: none; shot: photon noise only, no ADC; all (default): the full sensor")
     parser.add_argument("--oversample", type=positive_int, metavar="K",
@@ -191,7 +195,7 @@ def run(args) -> int:
     from ..errors import CfaMitsubaError
     from ..io.raw_npz import save_raw_npz
     from ..optics import OpticsParams, compute_optics
-    from ..sensor import capture, capture_ideal
+    from ..sensor import ExposureProgram, capture, capture_ideal
 
     out = Path(args.out)
     _check_output(out, args.out)
@@ -220,14 +224,14 @@ def run(args) -> int:
         if ideal:
             raw = capture_ideal(oi, luminance_cd_m2=args.luminance, exposure_s=args.exposure, sensor=sensor)
         else:
-            policy = args.exposure_policy or ("reference" if args.reference_luminance is not None else "program")
-            ref = {"reference_luminance_cd_m2": args.reference_luminance} if args.reference_luminance else {}
+            program = ExposureProgram.from_keywords(
+                args.exposure_policy, args.reference_luminance, reference_given=args.reference_luminance is not None,
+                max_exposure_s=args.max_exposure_s, max_analog_gain=args.max_analog_gain)
             raw = capture(oi, cfa, luminance_cd_m2=args.luminance, exposure_s=args.exposure, noise=args.noise,
-                          seed=args.seed, sensor=sensor, exposure_policy=policy, max_exposure_s=args.max_exposure_s,
-                          max_analog_gain=args.max_analog_gain, **ref)
+                          seed=args.seed, sensor=sensor, exposure_program=program)
         save_raw_npz(out, raw)
     for w in caught:
-        sys.stderr.write(f"{args._prog}: warning: {' '.join(str(w.message).split())}\n")
+        sys.stderr.write(f"{args._prog}: warning: {one_line(w.message)}\n")
 
     st, meta, opt = raw.settings, raw.meta, raw.meta["optics"]
     h, w = raw.raw.shape[:2]

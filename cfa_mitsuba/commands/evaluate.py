@@ -63,7 +63,7 @@ def run(args) -> int:
     from ..errors import CfaMitsubaError
     from ..isp import list_demosaics
     from ..sensor import get_cfa
-    from ..study.runner import evaluate_renders
+    from ..study.evaluate_renders import evaluate_renders
 
     for c in args.cfa:
         get_cfa(c)  # refuse unknown CFAs before any work

@@ -58,6 +58,7 @@ import numpy as np
 
 from .. import spectra
 from . import proxy as P
+from . import responses as R
 
 #: The differentiable objectives (all lower is better) and the charts of the colour error.
 OBJECTIVES = ("colour", "noise", "noise_area", "snr10", "snr10_area")
@@ -115,7 +116,7 @@ def noise_forms(layout: np.ndarray, n_channels: int, method: str = "bilinear", l
     demosaic (module doc): K[c] such that the proxy's noise gain of channel
     c on output j is m_j^T K[c] m_j for the colour matrix column m_j, read
     off the demosaic's responses to an impulse at each tile position (the
-    proxy's blocks, :func:`.proxy._impulse_responses`)."""
+    proxy's blocks, :func:`.responses._impulse_responses`)."""
     from scipy.ndimage import uniform_filter
 
     from ..isp import demosaic
@@ -124,8 +125,8 @@ def noise_forms(layout: np.ndarray, n_channels: int, method: str = "bilinear", l
     layout = np.asarray(layout)
     h, w = layout.shape
     names = tuple(str(i) for i in range(n_channels))
-    tile = P._Tile(np.asarray(names, dtype=object)[layout], names)
-    bh, bw, n = P._block(h, h), P._block(w, w), h * w
+    tile = R._Tile(np.asarray(names, dtype=object)[layout], names)
+    bh, bw, n = R._block(h, h), R._block(w, w), h * w
     raw = np.zeros((bh, bw * n))
     r0, c0 = (bh // h // 2) * h, (bw // w // 2) * w
     for k in range(n):
@@ -205,7 +206,7 @@ class GradientProxy:
         """The luminance (cd/m^2) of YSNR 10 (per pixel, or referred to an area)."""
         gains, white_e = self._gains(qe, area)
         s = self.settings
-        dim = dataclasses.replace(s, luminance_cd_m2=1.0, luminance_ratio=1.0 / s.reference_luminance_cd_m2)
+        dim = dataclasses.replace(s, luminance_cd_m2=1.0, luminance_ratio=1.0 / s.exposure.reference_luminance_cd_m2)
         a = P.grey_electrons(self._model(qe, white_e), dim)
         b = anp.sum(gains / a)
         c = s.read_noise_e ** 2 * anp.sum(gains / a ** 2)

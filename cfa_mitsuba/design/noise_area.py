@@ -43,14 +43,14 @@ __all__ = ["AREA_LAG_PX", "area_noise_gains"]
 import numpy as np
 
 #: The largest lag L (px) summed: the metric's default (metrics/snr.py
-#: ``ysnr(correlation_px=4)``; tests/test_design_noise.py checks they agree).
+#: ``ysnr(correlation_px=4)``; tests/design/test_responses.py checks they agree).
 AREA_LAG_PX = 4
 
 
 def area_noise_gains(resp: np.ndarray, layout: np.ndarray, n_channels: int, lag: int = AREA_LAG_PX) -> np.ndarray:
     """(C, 3) area noise gains A (module doc) from ``resp`` (bh, n, bw, 3),
     the responses to an impulse at each of the tile's n positions, each in
-    its own block of zeros (proxy.py ``_impulse_responses``); ``layout``
+    its own block of zeros (responses.py ``_impulse_responses``); ``layout``
     (h, w) the channel index of each position.  NPS_j(0) = sum_c A[c, j] v_c
     for relative variances v_c (relative^2 x px^2)."""
     from scipy.ndimage import uniform_filter

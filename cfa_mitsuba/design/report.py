@@ -67,12 +67,12 @@ def _values_table(table, objectives, constraints) -> str:
 def _thumb(study_dir: Path, out: Path, config, label: str) -> str:
     """The camera output of ``label`` on the first natural scene (or the first
     scene) at the first objective's luminance and demosaic, if the study kept it."""
-    from ..study.tasks import safe_label
+    from ..study.details_layout import output_folder
 
     o = config.objectives[0]
     scenes = [s.name for s in config.study.scenes if "ssim" in s.metrics] or [o.scene]
     demosaic = config.study.demosaics[0] if o.demosaic == "best" else o.demosaic
-    p = study_dir / "details" / scenes[0] / safe_label(label) / demosaic / f"L{o.luminance:g}.png"
+    p = output_folder(study_dir / "details", scenes[0], label, demosaic) / f"L{o.luminance:g}.png"
     if not p.exists():
         return ""
     return f"<br><img src='{_e(p.relative_to(out))}' style='width:300px' alt='camera output'>"

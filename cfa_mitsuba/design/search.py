@@ -21,6 +21,7 @@ from __future__ import annotations
 
 __all__ = ["SearchResult", "run_search", "proxy_settings", "fixed_models", "cfa_proxies", "used_proxies"]
 
+import dataclasses
 import functools
 import json
 from dataclasses import dataclass, field
@@ -59,25 +60,25 @@ def proxy_settings(config) -> P.ProxySettings:
     """The study's optics, sensor and exposure policy (the study's own
     default, the exposure program, when the config names none), at the
     lowest luminance of an objective that the noise proxy predicts; the
-    noise proxy takes the best of the objectives' linear demosaics."""
+    noise proxy takes the best of the objectives' demosaics, each predicted
+    by its linear core (itself when its record says it is linear)."""
     st = config.study
     chain = st.chain_settings()
     sensor = chain.sensor
     lums = [o.luminance for o in config.objectives if {"noise", "noise_area"} & set(o.proxies)] or list(st.luminances)
-    policy = chain.exposure_policy
-    ref = float(st.capture.get("reference_luminance_cd_m2", 100.0))
-    ratio = 1.0 if policy == "each" else min(lums) / ref
+    program = chain.exposure_program
+    if program.policy == "fixed":  # no scene to fix a time for: the proxy predicts the program's exposure
+        program = dataclasses.replace(program, policy="program")
+    ratio = 1.0 if program.policy == "each" else min(lums) / program.reference_luminance_cd_m2
     edge = min([o.luminance for o in config.objectives if o.scene == "slanted-edge"] or [100.0])
     f_number = float(st.optics.get("f_number", 4.0))
     wanted = [d for o in config.objectives
               if {"noise", "noise_area", "snr10", "snr10_area", "blur", "neg_capacity"} & set(o.proxies)
               for d in (st.demosaics if o.demosaic == "best" else (o.demosaic,))]
-    demosaics = tuple(dict.fromkeys(d if d in P.LINEAR_DEMOSAICS else "laplacian" for d in wanted)) or ("bilinear",)
+    demosaics = tuple(dict.fromkeys(P.linear_core(d) for d in wanted)) or ("bilinear",)
     return P.ProxySettings(f_number, float(sensor.pixel_pitch_um), float(sensor.well_capacity_e),
-                           float(sensor.read_noise_e), ratio, policy=policy, luminance_cd_m2=float(min(lums)),
-                           max_exposure_s=float(chain.max_exposure_s),
-                           fill_factor=float(sensor.fill_factor), demosaics=demosaics,
-                           reference_luminance_cd_m2=ref, edge_luminance_cd_m2=edge,
+                           float(sensor.read_noise_e), ratio, exposure=program, luminance_cd_m2=float(min(lums)),
+                           fill_factor=float(sensor.fill_factor), demosaics=demosaics, edge_luminance_cd_m2=edge,
                            edge_both=any(o.orientation == "both" for o in config.objectives))
 
 

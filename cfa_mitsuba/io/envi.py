@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CfaMitsubaError
+from ..errors import CfaMitsubaError, one_line
 from . import guard
 from .cube import SourceCube, check_memory, check_wavelengths
 
@@ -76,7 +76,7 @@ def read_envi(path, wavelengths=None) -> SourceCube:
     try:
         img = envi.open(str(p))
     except Exception as exc:  # spectral raises its own exception types, FileNotFoundError included
-        raise CfaMitsubaError(f"{where}: cannot open: {' '.join(str(exc).split())}") from None
+        raise CfaMitsubaError(f"{where}: cannot open: {one_line(exc)}") from None
     rows, cols, n = (int(v) for v in img.shape)
     notices: list[str] = []
     header_wl = _header_wavelengths(img.metadata, n, where, notices)
@@ -91,7 +91,7 @@ def read_envi(path, wavelengths=None) -> SourceCube:
     except MemoryError:
         raise CfaMitsubaError(f"{where}: too large for memory") from None
     except Exception as exc:  # a data file shorter than the header says
-        raise CfaMitsubaError(f"{where}: cannot read its data file: {' '.join(str(exc).split()) or type(exc).__name__}") from None
+        raise CfaMitsubaError(f"{where}: cannot read its data file: {one_line(exc)}") from None
     scale = 1.0
     factor = img.metadata.get("reflectance scale factor")
     if factor is not None:

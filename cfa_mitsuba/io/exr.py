@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import colorimetry, spectra
-from ..errors import CfaMitsubaError
+from ..errors import CfaMitsubaError, one_line
 from ..values import SpectralImage
 from .atomic import atomic_output, write_error
 from .channels import parse_spectral_channel  # noqa: F401  (re-exported: the layout's reader and writer)
@@ -228,7 +228,7 @@ def spectral_exr_size(path) -> tuple[int, int, int]:
             (x0, y0), (x1, y1) = (tuple(int(v) for v in c) for c in header["dataWindow"])
             bands = sum(1 for c in header.get("channels", ()) if parse_spectral_channel(c.name) is not None)
     except Exception as exc:  # OpenEXR raises plain exceptions on bad files
-        raise CfaMitsubaError(f"{str(path)!r} is not a readable OpenEXR file: {' '.join(str(exc).split())[:200]}") from None
+        raise CfaMitsubaError(f"{str(path)!r} is not a readable OpenEXR file: {one_line(exc, 200)}") from None
     return y1 - y0 + 1, x1 - x0 + 1, bands
 
 

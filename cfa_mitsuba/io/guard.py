@@ -48,7 +48,7 @@ import struct
 import zlib
 from pathlib import Path
 
-from ..errors import CfaMitsubaError
+from ..errors import CfaMitsubaError, one_line
 
 #: Largest text file read (CSV, TOML, header, sidecar), bytes.
 MAX_TEXT_BYTES = 64 << 20
@@ -277,5 +277,5 @@ def decoding(path, what: str | None = None, extra: tuple = ()):
     except MemoryError:
         raise CfaMitsubaError(f"{_label(path, what)}: too large to decode in the memory available") from None
     except _DECODE_ERRORS + tuple(extra) as exc:
-        text = _text(exc)[:200] or type(exc).__name__
+        text = one_line(exc, 200)
         raise CfaMitsubaError(f"{_label(path, what)} is corrupt or not what its header says: {text}") from None

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CfaMitsubaError
+from ..errors import CfaMitsubaError, one_line
 from .atomic import atomic_output
 from .sidecar import json_default
 
@@ -174,8 +174,7 @@ def read_image(path, *, key: str | None = None) -> ImageFile:
             try:
                 loaded = np.load(fh, allow_pickle=False)
             except (ValueError, OSError, EOFError) as exc:
-                raise CfaMitsubaError(f"{str(p)!r} is not a readable numpy file: "
-                                      f"{' '.join(str(exc).split())}") from None
+                raise CfaMitsubaError(f"{str(p)!r} is not a readable numpy file: {one_line(exc)}") from None
             if suffix == ".npy":
                 arr = loaded
                 meta = {}

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CfaMitsubaError
+from ..errors import CfaMitsubaError, one_line
 from .cube import SourceCube, check_memory
 from .illuminant import illuminant_from_attribute
 
@@ -94,7 +94,7 @@ def read_exr_cube(path) -> tuple[SourceCube, dict]:
     except CfaMitsubaError:
         raise
     except Exception as exc:  # OpenEXR raises plain exceptions on bad files
-        raise CfaMitsubaError(f"{where} is not a readable OpenEXR file: {' '.join(str(exc).split())}") from None
+        raise CfaMitsubaError(f"{where} is not a readable OpenEXR file: {one_line(exc)}") from None
 
     notices = []
     if found["S0"]:

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CfaMitsubaError
+from ..errors import CfaMitsubaError, one_line
 from .cube import SourceCube, check_memory, check_wavelengths
 from .illuminant import Illuminant
 
@@ -73,7 +73,7 @@ class _V5:
         except MemoryError:
             raise CfaMitsubaError(f"{where}: too large for memory") from None
         except Exception as exc:  # scipy raises ValueError, TypeError, ... on broken files
-            raise CfaMitsubaError(f"{where}: not a readable MATLAB file: {' '.join(str(exc).split())}") from None
+            raise CfaMitsubaError(f"{where}: not a readable MATLAB file: {one_line(exc)}") from None
 
     def get(self, dotted: str):
         parts = dotted.split(".")
@@ -103,7 +103,7 @@ class _V73:
         try:
             self.f = h5py.File(str(p), "r")
         except Exception as exc:
-            raise CfaMitsubaError(f"{where}: not a readable HDF5 file: {' '.join(str(exc).split())}") from None
+            raise CfaMitsubaError(f"{where}: not a readable HDF5 file: {one_line(exc)}") from None
 
     def _node(self, dotted: str):
         node = self.f

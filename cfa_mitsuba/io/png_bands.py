@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CfaMitsubaError
+from ..errors import CfaMitsubaError, one_line
 from . import guard
 from .cube import SourceCube, check_memory, check_wavelengths
 
@@ -76,7 +76,7 @@ def _read_png(path: Path, where: str) -> tuple[np.ndarray, int]:
     except CfaMitsubaError as exc:
         raise CfaMitsubaError(f"{where}: {exc}") from None
     except Exception as exc:  # Pillow raises several types on broken files
-        raise CfaMitsubaError(f"{where}: cannot read {path.name!r}: {' '.join(str(exc).split())}") from None
+        raise CfaMitsubaError(f"{where}: cannot read {path.name!r}: {one_line(exc)}") from None
     if arr.ndim == 3:
         if arr.shape[2] in (2, 4):  # grey + alpha, RGBA: drop alpha
             arr = arr[..., :-1]
@@ -106,7 +106,7 @@ def read_png_folder(folder, wavelengths=None) -> SourceCube:
         except CfaMitsubaError as exc:
             raise CfaMitsubaError(f"{where}: {exc}") from None
         except Exception as exc:
-            raise CfaMitsubaError(f"{where}: cannot read {f.name!r}: {' '.join(str(exc).split())}") from None
+            raise CfaMitsubaError(f"{where}: cannot read {f.name!r}: {one_line(exc)}") from None
     if len(sizes) != 1:
         raise CfaMitsubaError(f"{where}: the band images differ in size ({', '.join(f'{w}x{h}' for w, h in sorted(sizes))})")
     w, h = sizes.pop()

@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import CfaMitsubaError
+from ..errors import CfaMitsubaError, one_line
 from .guard import MAX_JSON_BYTES, MAX_JSON_DEPTH, load_json_text  # noqa: F401 (re-exported)
 
 _NUM = {"type": "number"}
@@ -128,7 +128,7 @@ def _header(fh, where: str):
             return npf.read_array_header_2_0(fh)
         return npf._read_array_header(fh, version)  # 3.0: utf-8 field names; no public reader
     except (ValueError, OSError, EOFError, SyntaxError, TypeError) as exc:
-        raise CfaMitsubaError(f"{where}: not a readable numpy array header ({' '.join(str(exc).split())[:120]})")
+        raise CfaMitsubaError(f"{where}: not a readable numpy array header ({one_line(exc, 120)})")
 
 
 def _kind(path: Path) -> str:

@@ -9,7 +9,8 @@ reduction (``denoise=``, ``list_denoisers()``) and sharpening
 definitions, the generalisations and the measured numbers.
 """
 
-from .demosaic import collect_demosaics, demosaic, get_demosaic, list_demosaics, register_demosaic  # noqa: F401
+from .demosaic import (AccuracyBar, DemosaicMethod, collect_demosaics, demosaic, get_demosaic,  # noqa: F401
+                       get_demosaic_record, list_demosaics, register_demosaic)
 from .colour_matrix import (  # noqa: F401
     COLOUR_FITS,
     ColourFit,

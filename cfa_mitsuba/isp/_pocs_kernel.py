@@ -6,14 +6,14 @@ strided copy of each observed phase, subtract, square, mean).
 Written by hand for speed only.  The channel's new values are the same
 IEEE operations as before (reference + detail, or the mosaic where the
 channel is observed), so the demosaic's output is bit for bit the same
-(tests/test_pocs_kernel.py); only the sum of squared changes, which decides when
+(tests/isp/test_pocs.py); only the sum of squared changes, which decides when
 to stop, is added in another order (a difference of about 1e-16 relative).
 
 :func:`lowpass_project` does a whole round for a detail threshold of 0 row
 by row: the low-pass of the channel's difference from the reference (the
 sums of :mod:`.column_filter`'s two passes) and the projection, without
 writing the low-passed image out (4-8 % of a POCS demosaic on the puppy's
-size; tests/test_pocs_kernel.py checks the same channel), and without the
+size; tests/isp/test_pocs.py checks the same channel), and without the
 difference image it filters: its rows are made in a ring of rows as the
 pass needs them (1.30 -> 1.18 ms a round on the puppy's size).  Its sum of
 squared changes is each row's sum in eight interleaved partial sums, then

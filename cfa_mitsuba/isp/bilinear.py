@@ -29,7 +29,7 @@ __all__ = ["bilinear", "bilinear_image", "interpolate_channel"]
 import numpy as np
 
 from ._memo import LastImage
-from .demosaic import DemosaicMethod
+from .demosaic import AccuracyBar, DemosaicMethod
 from .mosaic import Mosaic, apply_stencils, extend, geometry, tent_radius, tent_stencil
 
 
@@ -89,5 +89,5 @@ def bilinear_image(raw: np.ndarray, mosaic: Mosaic) -> np.ndarray:
 
 
 #: This module's method (registered by :func:`.demosaic.collect_demosaics`).
-DEMOSAICS = (DemosaicMethod(name="bilinear", function=bilinear, order=1,
+DEMOSAICS = (DemosaicMethod(name="bilinear", function=bilinear, order=1, linear=True, accuracy=AccuracyBar(),
                             description="normalised convolution per channel, tent wide enough for each channel's gaps"),)

@@ -12,7 +12,7 @@ columns and about 3x along the rows on a camera image
 Both make ndimage's own sums in ndimage's own order (for a symmetric kernel:
 the centre tap times the sample, then, from the outermost pair inwards, the
 pair's sum times its weight), so the results are identical
-(tests/test_column_filter.py asserts equality).  A float32 image is
+(tests/isp/test_column_filter.py asserts equality).  A float32 image is
 filtered in float32 (the kernel rounded to float32, the sums in float32:
 twice the SIMD lanes and half the memory traffic), within float32 rounding
 of ndimage, which sums in float64 whatever the input; every other input is

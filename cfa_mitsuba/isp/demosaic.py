@@ -5,18 +5,23 @@
 borders) and returns (H, W, C) in ``cfa.channels`` order.  It applies no
 gains of its own and keeps every observed sample as it was.
 
-A method is one registry entry: a function ``f(raw, cfa, **options)`` that
-receives the checked float64 mosaic and a CFA (``pattern``, ``channels``)
-and returns (H, W, C).  A method of the package is one module of ``isp/``
-declaring ``DEMOSAICS = (DemosaicMethod(...), ...)`` beside its function
-(:func:`collect_demosaics` registers them when the package loads); a
-user's or a test's is added with :func:`register_demosaic`.
+A method is one registry record (:class:`DemosaicMethod`): a function
+``f(raw, cfa, **options)`` that receives the checked float64 mosaic and a
+CFA (``pattern``, ``channels``) and returns (H, W, C), and what the rest of
+the program needs to know of it: whether it is linear in the mosaic (the
+design proxy predicts a linear method's noise and sharpness exactly from its
+impulse responses) and the accuracy it promises on smooth images
+(:class:`AccuracyBar`; none for a baseline such as nearest neighbour).  A
+method of the package is one module of ``isp/`` declaring ``DEMOSAICS =
+(DemosaicMethod(...), ...)`` beside its function (:func:`collect_demosaics`
+registers them when the package loads); a user's or a test's is added with
+:func:`register_demosaic`.
 """
 
 from __future__ import annotations
 
-__all__ = ["demosaic", "register_demosaic", "list_demosaics", "get_demosaic", "DemosaicMethod", "collect_demosaics", "unregister_demosaic",
-           "demosaic_parameters", "PRECISIONS"]
+__all__ = ["demosaic", "register_demosaic", "list_demosaics", "get_demosaic", "get_demosaic_record", "DemosaicMethod",
+           "AccuracyBar", "collect_demosaics", "unregister_demosaic", "demosaic_parameters", "PRECISIONS"]
 
 import inspect
 from dataclasses import dataclass
@@ -29,25 +34,62 @@ from .mosaic import geometry
 
 
 @dataclass(frozen=True)
-class _Entry:
-    name: str
-    function: Callable
-    description: str
+class AccuracyBar:
+    """What a method promises on smooth, white-balanced achromatic content,
+    where every channel equals the scene (the generic demosaic tests hold
+    each method that declares a bar to it, on every CFA).
 
+    smooth_max, smooth_mean : the largest and the mean error inside (6 px
+        from the borders) on a smooth image of modulation 0.2 (periods of
+        96 and 112 px plus a ramp), on layouts without same-colour blocks.
+    border_max : the largest error anywhere, the borders included.
+    block_max, block_mean, block_border_max : the same per unit of block
+        size b on the block layouts (b x b same-colour blocks: their
+        clustered samples make every method's error first order in the slope).
+    uneven_max, uneven_mean, uneven_border_max : the same on the other
+        layouts whose channels' samples sit unevenly around a pixel (sparse
+        colour, same-colour quadrants, runs along diagonals: bilinear
+        interpolation misses a linear ramp there, so the error is first
+        order in the slope too; tests/registry_checks.py tells them apart).
+    ramp_margin_px : a linear ramp is exact (to 1e-9) this far from the
+        borders on Bayer.
+    """
 
-_REGISTRY: dict[str, _Entry] = {}
+    smooth_max: float = 4e-3
+    smooth_mean: float = 1.5e-3
+    border_max: float = 0.05
+    block_max: float = 0.015
+    block_mean: float = 2e-3
+    block_border_max: float = 0.03
+    uneven_max: float = 0.02
+    uneven_mean: float = 4e-3
+    uneven_border_max: float = 0.1
+    ramp_margin_px: int = 3
 
 
 @dataclass(frozen=True, kw_only=True)
 class DemosaicMethod:
-    """A method's declaration in its module (``DEMOSAICS``): its name, its
-    function, a one-line description and its place in listings (``order``;
-    the paper's four first)."""
+    """A demosaicing method: its declaration in its module (``DEMOSAICS``)
+    and its record in the registry.
+
+    name, function, description : the method.
+    order : its place in listings (the paper's four first).
+    linear : whether the output is linear in the mosaic (the design proxy
+        reads its noise gains and edge response off its impulse responses;
+        a nonlinear method is predicted by the Laplacian's, its linear core).
+    accuracy : the :class:`AccuracyBar` it meets on smooth images, or None
+        for a baseline that promises none (nearest neighbour).
+    """
 
     name: str
     function: Callable
     description: str
     order: int = 1000
+    linear: bool = False
+    accuracy: AccuracyBar | None = None
+
+
+_REGISTRY: dict[str, DemosaicMethod] = {}
 
 
 def collect_demosaics(package: str) -> None:
@@ -62,15 +104,18 @@ def collect_demosaics(package: str) -> None:
             found.extend(getattr(importlib.import_module(f"{package}.{info.name}"), "DEMOSAICS", ()))
     for m in sorted(found, key=lambda m: m.order):
         if m.name not in _REGISTRY:
-            register_demosaic(m.name, m.function, description=m.description)
+            register_demosaic(m.name, m.function, description=m.description, linear=m.linear, accuracy=m.accuracy)
 
 
-def register_demosaic(name: str, function: Callable | None = None, *, description: str = "", replace: bool = False):
+def register_demosaic(name: str, function: Callable | None = None, *, description: str = "", linear: bool = False,
+                      accuracy: AccuracyBar | None = None, replace: bool = False):
     """Add a demosaicing method under ``name``.
 
     ``function(raw, cfa, **options) -> (H, W, C)``; ``raw`` is a checked 2-D
-    float64 mosaic, ``cfa`` has ``pattern`` and ``channels``.  Usable as a
-    decorator (``@register_demosaic("mine", description="...")``).
+    float64 mosaic, ``cfa`` has ``pattern`` and ``channels``.  ``linear`` and
+    ``accuracy`` as :class:`DemosaicMethod`'s (default: nonlinear, no
+    accuracy bar).  Usable as a decorator (``@register_demosaic("mine",
+    description="...")``).
 
     Examples
     --------
@@ -89,7 +134,8 @@ def register_demosaic(name: str, function: Callable | None = None, *, descriptio
         if name in _REGISTRY and not replace:
             raise CfaMitsubaError(f"a demosaicing method named {name!r} is already registered")
         desc = description or (inspect.getdoc(fn) or "").split("\n", 1)[0]
-        _REGISTRY[name] = _Entry(name, fn, desc)
+        _REGISTRY[name] = DemosaicMethod(name=name, function=fn, description=desc, linear=bool(linear),
+                                         accuracy=accuracy)
         return fn
 
     return add(function) if function is not None else add
@@ -105,11 +151,16 @@ def list_demosaics() -> list[tuple[str, str]]:
     return [(e.name, e.description) for e in _REGISTRY.values()]
 
 
-def get_demosaic(name: str) -> Callable:
-    """The function registered under ``name``."""
+def get_demosaic_record(name: str) -> DemosaicMethod:
+    """The :class:`DemosaicMethod` registered under ``name``."""
     if name not in _REGISTRY:
         raise CfaMitsubaError(f"unknown demosaicing method {name!r} (known: {', '.join(_REGISTRY)})")
-    return _REGISTRY[name].function
+    return _REGISTRY[name]
+
+
+def get_demosaic(name: str) -> Callable:
+    """The function registered under ``name``."""
+    return get_demosaic_record(name).function
 
 
 #: Keywords the processing fills for a method (its luminance reference, the
@@ -192,7 +243,7 @@ def demosaic(raw, cfa, method: str = "bilinear", *, precision: str = "double", *
         float32 from the mosaic rounded to float32 (the built-in methods
         keep float32 throughout: half the memory traffic and twice the SIMD
         lanes; the estimates within a few float32 roundings of the mosaic's
-        range, tests/test_demosaic_precision.py).  The result is
+        range, tests/isp/test_demosaic_precision.py).  The result is
         float64 either way, and the observed samples are the mosaic's own
         float64 values.  A study demosaics in 'single' unless its ``[isp]
         demosaic_precision`` says otherwise (docs/study.md).

@@ -233,7 +233,7 @@ def process(raw_image: RawImage, demosaic: str = "bilinear", *, white_balance: s
 
     Examples
     --------
-    See ``tests/test_isp_process.py``; from a file::
+    See ``tests/isp/test_pipeline.py``; from a file::
 
         import cfa_mitsuba as cm
         from cfa_mitsuba.io.raw_npz import load_raw_npz

@@ -58,8 +58,8 @@ from scipy import ndimage
 
 from ..errors import CfaMitsubaError
 from .bilinear import bilinear_image
-from .demosaic import DemosaicMethod
-from .laplacian import MHC_ALPHA, reference_adaptive, reference_for
+from .demosaic import AccuracyBar, DemosaicMethod
+from .laplacian_reference import MHC_ALPHA, reference_adaptive, reference_for
 from .mosaic import geometry
 
 _H0 = np.array([1.0, 2.0, 1.0]) / 4.0
@@ -228,5 +228,6 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
 
 #: This module's method (registered by :func:`.demosaic.collect_demosaics`).
 DEMOSAICS = (DemosaicMethod(name="pocs", function=pocs, order=4,
+                            accuracy=AccuracyBar(ramp_margin_px=16),  # its low-pass spreads the border's fold
                             description="alternating projections onto observation and detail sets (Gunturk et al. "
                                         "2002)"),)

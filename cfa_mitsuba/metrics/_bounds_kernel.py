@@ -5,7 +5,7 @@ Written by hand for speed only: numpy answers it with two reductions
 (``a.min()`` and ``a.max()``), two passes over memory; this is one pass, and
 on a camera image (636 x 720 x 3 float64) 0.5 ms against 0.9 ms.  NaN fails
 the comparisons, as it fails numpy's (``min`` and ``max`` return NaN), so
-the answer is the same for every input (tests/test_metric_input_checks.py).
+the answer is the same for every input (tests/metrics/test_input_checks.py).
 """
 
 from __future__ import annotations

@@ -76,7 +76,7 @@ def median_and_p95(values: np.ndarray) -> tuple[float, float]:
     """``np.median(values)`` and ``np.percentile(values, 95)`` of a 1-D
     finite float64 array from one partition where numpy makes two (a
     S-CIELAB map spent 15 ms of its 100 in them, measured): numpy's own
-    formulas, so the same bits (tests/test_result_summary.py checks
+    formulas, so the same bits (tests/metrics/test_result.py checks
     equality): the middle value or the mean of the middle pair, and the
     'linear' method's interpolation between the order statistics either side
     of (n - 1) x 0.95, from the upper one where the fraction is at least 1/2

@@ -10,7 +10,7 @@ three products summed left to right in float64, then rounded to float32
 once; numpy's matrix product may sum in another order, so a value can
 differ in its last float64 bit before that rounding (and, rarely, in its
 last float32 bit after): far inside the single-precision bound that
-tests/test_scielab_precision.py checks.
+tests/metrics/test_scielab.py checks.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 (Numba), written by hand for speed only: the same IEEE operations in the
 same order as scikit-image 0.26's ``structural_similarity`` (no fused
 multiply-add: Numba compiles without fast-math), so the map and its mean
-are bit-identical to it (tests/test_ssim_moments.py compares with ``==``),
+are bit-identical to it (tests/metrics/test_ssim.py compares with ``==``),
 in about a tenth of the time of its fifteen whole-image temporaries."""
 
 from __future__ import annotations

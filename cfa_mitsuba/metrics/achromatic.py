@@ -83,7 +83,7 @@ def achromatic(reference_xyz, test_xyz, white_xyz, *, row: int | None = None, bo
 #: This module's metric records (collected by :mod:`.registry`).
 RECORDS = (
     MetricRecord(name="achromatic", function=achromatic, scenes=("gray-bar",), inputs="xyz", unit="L*",
-                 higher_is_better=False, scored=True, label="AR error", order=6, decimals=3,
+                 higher_is_better=False, identical_value=0.0, scored=True, label="AR error", order=6, decimals=3,
                  description="achromatic reproduction error, mean |ΔL*| along the gray bar",
                  paper="ΔR (s. 2.2.6, Fig 14)", score_range=(1.0, 0.5),
                  practical_difference=(("L*", 0.8),),

@@ -140,6 +140,7 @@ PRACTICAL_DE = ("0.8 dE00: the 50:50 % perceptibility threshold of CIEDE2000 (Pa
 #: This module's metric records (collected by :mod:`.registry`).
 _DELTA_E = MetricRecord(
     name="delta-e", function=delta_e, scenes=("macbeth",), inputs="xyz", unit="dE00", higher_is_better=False,
+    identical_value=0.0,
     scored=True, label="ΔE00", order=1, decimals=2, paper="ΔE (s. 2.2.1, Fig 8)", score_range=(6.0, 2.2),
     range_units=("dE00", "dE76"), description="colour error, mean CIEDE2000 over the 24 ColorChecker patches",
     practical_difference=(("dE00", 0.8), ("dE76", 2.3), ("dEab", 2.3)),

@@ -17,7 +17,7 @@ __all__ = ["check_options"]
 
 import numpy as np
 
-from ..errors import CfaMitsubaError
+from ..errors import CfaMitsubaError, one_line
 
 _WHITE = (95.05, 100.0, 108.9)
 
@@ -46,7 +46,7 @@ def check_options(name: str, options: dict) -> None:
         return
     except (CfaMitsubaError, ValueError, TypeError, KeyError, IndexError) as exc:
         error = (f"unknown value {exc.args[0]!r}" if isinstance(exc, KeyError) and exc.args
-                 else " ".join(str(exc).split()) or type(exc).__name__)
+                 else one_line(exc))
     try:
         evaluate(name, _inputs())
     except (CfaMitsubaError, ValueError, TypeError, KeyError, IndexError):

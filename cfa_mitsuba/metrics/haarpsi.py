@@ -143,7 +143,7 @@ def haarpsi(reference, test, *, data_range: float = 255.0, subsample: bool = Tru
 #: This module's metric records (collected by :mod:`.registry`).
 RECORDS = (
     MetricRecord(name="haarpsi", function=haarpsi, scenes=(NATURAL,), inputs="srgb8", unit="",
-                 higher_is_better=True, scored=True, label="HaarPSI", order=8, decimals=3,
+                 higher_is_better=True, identical_value=1.0, scored=True, label="HaarPSI", order=8, decimals=3,
                  description="Haar wavelet perceptual similarity (Reisenhofer 2018), 1 = identical",
                  paper="HaarPSI (s. 2.2.8, Fig 15)", score_range=(0.0, 1.0),
                  reference_cache=("reference_maps", haarpsi_reference_maps),

@@ -134,6 +134,7 @@ def mdsi(reference, test, *, data_range: float = 255.0, combination: str = "sum"
 #: This module's metric records (collected by :mod:`.registry`).
 RECORDS = (
     MetricRecord(name="mdsi", function=mdsi, scenes=(NATURAL,), inputs="srgb8", unit="", higher_is_better=False,
+                 identical_value=0.0,
                  scored=True, label="MDSI", order=7, decimals=3,
                  description="mean deviation similarity index (Nafchi 2016), 0 = identical",
                  paper="MDSI (s. 2.2.7, Fig 15)", score_range=(0.5, 0.0),

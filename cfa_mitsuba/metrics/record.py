@@ -14,7 +14,7 @@ __all__ = ["MetricRecord", "NATURAL", "INPUT_KINDS"]
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from ..render.types import NATURAL  # the kind of a natural scene (puppy, user XML, measured image)
+from ..values import NATURAL  # the kind of a natural scene (puppy, user XML, measured image)
 
 #: What a metric function takes positionally, by the record's ``inputs``:
 #: 'xyz' (reference XYZ, test XYZ, white XYZ), 'srgb8' (reference and test
@@ -40,6 +40,11 @@ class MetricRecord:
     inputs : one of :data:`INPUT_KINDS`.
     unit : unit of the headline value ('' for unitless indices).
     higher_is_better : direction of "better".
+    identical_value : the value when the camera image is the reference
+        itself (its best: 0 for an error, 1 for a similarity); None for a
+        metric that measures the camera image alone (sharpness, moire,
+        noise, texture against the chart's exact pattern).  The generic
+        metric tests hold every metric to it.
     scored : whether it enters the normalised scores (the paper's eight).
     label, description, decimals, paper : how tables and plots show it.
     order : position in tables (the paper's section order; secondary values
@@ -94,6 +99,7 @@ class MetricRecord:
     unit: str
     higher_is_better: bool
     scored: bool
+    identical_value: float | None = None
     label: str
     description: str
     order: int = 1000

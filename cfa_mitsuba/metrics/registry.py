@@ -121,7 +121,7 @@ def record_json(r: MetricRecord) -> dict:
     fn = None if r.function is None else f"{r.function.__module__.rsplit('.', 1)[0]}.{r.function.__name__}"
     return {
         "name": r.name, "scenes": list(r.scenes), "inputs": r.inputs, "unit": r.unit,
-        "higher_is_better": r.higher_is_better, "scored": r.scored,
+        "higher_is_better": r.higher_is_better, "scored": r.scored, "identical_value": r.identical_value,
         "score_range": None if r.score_range is None else {"worst": r.score_range[0], "best": r.score_range[1],
                                                            "scaling": r.range_scaling},
         "label": r.label, "description": r.description, "paper": r.paper,

@@ -282,7 +282,7 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
         whose transforms run in float32.  Filtering is linear, so only the
         rounding differs, and it scales with the difference, not the image:
         about twice as fast per test image, the dE map moves by less than
-        1e-5 dE00 (tests/test_scielab_precision.py).  A study uses ``'single'`` unless
+        1e-5 dE00 (tests/metrics/test_scielab.py).  A study uses ``'single'`` unless
         its ``[metrics.scielab]`` says otherwise (the record's
         ``study_options``; docs/study.md).
     reference_lab : optional, :func:`scielab_reference` (or its CIELAB,
@@ -367,6 +367,7 @@ def scielab(reference_xyz, test_xyz, white_xyz, *, samples_per_degree: float, ma
 #: This module's metric records (collected by :mod:`.registry`).
 _SCIELAB = MetricRecord(
     name="scielab", function=scielab, scenes=(NATURAL,), inputs="xyz", unit="dE00", higher_is_better=False,
+    identical_value=0.0,
     scored=True, label="S-CIELAB", order=2, decimals=2, paper="ΔEs (s. 2.2.2, Fig 10)", score_range=(9.5, 2.5),
     range_units=("dE00", "dE76"), reference_cache=("reference_lab", scielab_reference),
     study_options=(("fft_precision", "single"),), summary_options=(("order_statistics", False),),

@@ -52,7 +52,7 @@ def _gaussian(x: np.ndarray) -> np.ndarray:
     1.5, truncate 3.5: 11 taps, 'reflect'), which is ndimage's ``gaussian_filter``: the column pass, then
     the row pass.  Both passes are the compiled ones of
     :mod:`cfa_mitsuba.isp.column_filter` (ndimage's sums in its order: the
-    same bits, 4x and 2x faster); tests/test_ssim_moments.py checks the
+    same bits, 4x and 2x faster); tests/metrics/test_ssim.py checks the
     result equals scikit-image's."""
     from ..isp.column_filter import correlate_along_rows, correlate_columns
 
@@ -92,7 +92,7 @@ def _ssim_plane(x, ux, uxx, y) -> float:
     """scikit-image 0.26's ``structural_similarity`` (gaussian_weights=True,
     sigma 1.5, population covariance, data_range 255) term for term, with the
     reference's window moments given: the same float64 operations in the same
-    order (tests/test_ssim_moments.py checks the values equal)."""
+    order (tests/metrics/test_ssim.py checks the values equal)."""
     from ._ssim_kernel import index_map
 
     uy, uyy, uxy = _gaussian(y), _gaussian(y * y), _gaussian(x * y)
@@ -157,6 +157,7 @@ def ssim(reference, test, *, data_range: float = 255.0, channel: str = "gray",
 #: This module's metric records (collected by :mod:`.registry`).
 RECORDS = (
     MetricRecord(name="ssim", function=ssim, scenes=(NATURAL,), inputs="srgb8", unit="", higher_is_better=True,
+                 identical_value=1.0,
                  scored=True, label="SSIM", order=3, decimals=3,
                  description="structural similarity (Wang 2004) of the 8-bit sRGB luma",
                  paper="SSIM (s. 2.2.3, Fig 10)", score_range=(0.0, 1.0),

@@ -8,16 +8,10 @@ radiance meters and add their shapes.
 
 from __future__ import annotations
 
-__all__ = ["load_scene", "inspect_settings", "first_line"]
+__all__ = ["load_scene", "inspect_settings"]
 
-from ..errors import CfaMitsubaError
+from ..errors import CfaMitsubaError, one_line
 from .types import Built
-
-
-def first_line(exc: BaseException) -> str:
-    """An exception's message as one line of at most 300 characters."""
-    text = " ".join(str(exc).split())
-    return text[:300]
 
 
 def load_scene(mi, built: Built, film: dict, sampler: dict, integrator: dict, *, sensor: dict | None = None,
@@ -34,7 +28,7 @@ def load_scene(mi, built: Built, film: dict, sampler: dict, integrator: dict, *,
     try:
         return mi.load_dict(d)
     except Exception as exc:  # pragma: no cover - built-in scenes load
-        raise CfaMitsubaError(f"Mitsuba cannot load the scene: {first_line(exc)}") from None
+        raise CfaMitsubaError(f"Mitsuba cannot load the scene: {one_line(exc, 300)}") from None
 
 
 def inspect_settings(width: int, height: int) -> tuple[dict, dict, dict]:

@@ -37,7 +37,7 @@ channels as sRGB and upsamples them.  Measurements: docs/scenes.md,
 
 Texel orientation: ``weights[r, c]`` sits at uv ((c + 0.5) / W, (r + 0.5) /
 H), i.e. row r at v = (r + 0.5) / H (Mitsuba's bitmap convention, checked in
-tests/test_render_texture.py).
+tests/render/test_texture.py).
 """
 
 from __future__ import annotations

@@ -17,6 +17,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..values import NATURAL  # noqa: F401  (the scenes' natural kind, shared with the metric records)
+
 #: Sensor pixel pitch (m) that defines a 3D scene's lens: the focal length
 #: that images the scene's field of view onto its film width in pixels of
 #: this pitch (the optics stage's default pitch, 2.2 um).
@@ -36,11 +38,6 @@ def focal_length_m(width_px: int, fov_deg: float) -> float:
     tan(fov / 2)."""
     return 0.5 * width_px * LENS_PIXEL_PITCH_M / math.tan(math.radians(fov_deg) / 2)
 
-
-#: The kind of a natural scene (the puppy, a user's Mitsuba XML, a measured
-#: image); each chart is a kind of its own.  Which metrics a kind feeds is
-#: said once, in the metric records (``metrics.MetricRecord.scenes``).
-NATURAL = "natural"
 
 
 @dataclass(frozen=True)

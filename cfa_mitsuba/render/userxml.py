@@ -72,11 +72,11 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import CfaMitsubaError
+from ..errors import CfaMitsubaError, one_line
 from . import variant as _variant
 from . import stockroute as _stockroute
 from . import xmlscan
-from .loading import first_line, inspect_settings
+from .loading import inspect_settings
 from .types import MAX_FOV_DEG, NATURAL, Built, RenderConfig, Scene, focal_length_m
 
 #: BSDF plugins whose sampling is wavelength-independent (Mitsuba 3.9): a
@@ -205,7 +205,7 @@ def _read(path: Path, allow_outside_paths: bool, defines=(), asset_root=None) ->
         mi.parser.transform_upgrade(config, state)
         mi.parser.transform_resolve(config, state)
     except Exception as exc:  # Mitsuba reports parse errors as RuntimeError, with file and line
-        _fail(main, f"Mitsuba cannot read it: {first_line(exc)}")
+        _fail(main, f"Mitsuba cannot read it: {one_line(exc, 300)}")
     finally:
         mi.set_file_resolver(saved)
     parsed = {Path(os.path.realpath(str(f))) for f in state.files}
@@ -280,7 +280,7 @@ def _read(path: Path, allow_outside_paths: bool, defines=(), asset_root=None) ->
     try:
         fov = float(mi.parse_fov(sp, size[0] / size[1]))
     except Exception as exc:  # Mitsuba refuses a field of view outside (0, 180)
-        _fail(main, f"{at(s)}, {shown}: cannot read its field of view ({first_line(exc)}); cfa-mitsuba needs more "
+        _fail(main, f"{at(s)}, {shown}: cannot read its field of view ({one_line(exc, 300)}); cfa-mitsuba needs more "
                     f"than 0 and less than {MAX_FOV_DEG:g} degrees")
     if not 0 < fov < MAX_FOV_DEG:
         _fail(main, f"{at(s)}, {shown}: a horizontal field of view of {fov:.4g} degrees; cfa-mitsuba needs more than "
@@ -411,7 +411,7 @@ def _instantiate(mi, read: _Read, radius: float | None, film, sampler, integrato
             root[name] = mi.load_dict(shape)
         return mi.parser.instantiate(mi.parser.ParserConfig(mi.variant()), state)
     except Exception as exc:  # Mitsuba reports plugin errors as RuntimeError
-        raise CfaMitsubaError(f"Mitsuba cannot load the scene {str(read.scan.main)!r}: {first_line(exc)}") from None
+        raise CfaMitsubaError(f"Mitsuba cannot load the scene {str(read.scan.main)!r}: {one_line(exc, 300)}") from None
 
 
 #: (scene identity, variant) of the scene files this process has seen load in a child process.

@@ -84,11 +84,10 @@ def f_numbers(metrics, luminance=None) -> dict:
 def condition_lines(metrics, cfa_facts: dict | None = None, config: dict | None = None, luminance=None) -> list[str]:
     """The sentences: each family's exposure regime, then the f-number of every scene."""
     _, lum = _base_rows(metrics, luminance)
-    cfg = config or {}
-    sensor = cfg.get("sensor") or {}
-    capture = cfg.get("capture") or {}
-    policy = capture.get("exposure_policy", sensor.get("exposure_policy", "program"))
-    cap = float(capture.get("max_exposure_s") or sensor.get("max_exposure_s") or 1 / 30) if policy == "program" else None
+    from ..study.config import exposure_program_of
+
+    program = exposure_program_of(config)
+    cap = program.max_exposure_s if program.policy == "program" else None
     out = []
     regimes = family_regimes(metrics, cfa_facts, luminance)
     if regimes and lum is not None:
@@ -108,14 +107,15 @@ def condition_lines(metrics, cfa_facts: dict | None = None, config: dict | None 
 def exposure_policy_sentence(config: dict | None) -> str:
     """What the study's exposure policy did at each luminance (config.json's
     ``capture``; docs/study.md, "Exposure policies")."""
+    from ..study.config import exposure_program_of
+
     cfg = config or {}
     cap = {**(cfg.get("sensor") or {}), **(cfg.get("capture") or {})}
     if str(cap.get("exposure", "auto")) != "auto":
         return f"Every capture used the fixed exposure {cap.get('exposure')} s, no gain."
-    policy = cap.get("exposure_policy", "program")
-    t_max = float(cap.get("max_exposure_s") or 1 / 30)
-    g_max = float(cap.get("max_analog_gain") or 16)
-    ref = cap.get("reference_luminance_cd_m2", 100.0)
+    program = exposure_program_of(cfg)  # the program's own defaults where config.json names none
+    policy, t_max, g_max, ref = (program.policy, program.max_exposure_s, program.max_analog_gain,
+                                 program.reference_luminance_cd_m2)
     return {
         "program": f"Each CFA was metered at each luminance by the exposure program: the time grows as light "
                    f"falls up to {_fraction(t_max)}, then the analogue gain up to {g_max:g}, then digital gain, so "

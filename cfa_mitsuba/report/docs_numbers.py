@@ -25,7 +25,7 @@ format spec (``.1f``, ``d``, ``,d``; none: ``str``):
 Paths are relative to the repository root.  ``python3 -m
 cfa_mitsuba.report.docs_numbers`` rewrites every marked span from its
 source; ``--check`` changes nothing and exits 1 listing each span whose
-text differs from its source (tests/test_docs_numbers.py runs the check);
+text differs from its source (tests/report/test_docs_numbers.py runs the check);
 ``--tour`` also re-runs every command-line tour block of README.md and
 docs/*.md (:mod:`.docs_tour`) and writes its output into the block.
 

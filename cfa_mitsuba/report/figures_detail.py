@@ -370,7 +370,7 @@ def gray_bar_profiles(res: Results):
            f"as a broad grey line and each camera in its CFA's colour; the shaded ends are left out of the AR error "
            f"(demosaicing border effects). Bottom: the mean |ΔL*| (camera − ideal) within each of the ten "
            f"steps; the scored AR error is their pixel-weighted mean over the analysed columns (Table 2).")
-    return ReportFigure("gray-bar", "achromatic", title, cap, fig)
+    return ReportFigure("achromatic", "achromatic", title, cap, fig)
 
 
 # -- thumbnails --------------------------------------------------------------------------------------

@@ -4,7 +4,9 @@ one row per (scene, metric), one column per demosaic, a line per CFA.
 
 Luminance has its own figure (:func:`.figures_scores.luminance_sweep`, the
 paper's sweep); here every other axis is drawn at the scores' luminance,
-the other axes held at the study's own values.
+the other axes held at the study's own values.  What the figure knows of an
+axis (its label and unit, numbers or categories, realisations or a scale,
+the caption's note) is its record's (:class:`~cfa_mitsuba.study.axes.Axis`).
 """
 
 from __future__ import annotations
@@ -13,15 +15,10 @@ __all__ = ["axis_sweep", "axis_rows"]
 
 import numpy as np
 
-from ..study.axes import AXES, axis_unit
+from ..study.axes import AXES, get_axis
 from .figure import Absent, ReportFigure, cfa_legend, label_sweep_panel, legend_rows, panel_grid
 from .results import SCORED_METRICS, Results
 from .style import cfa_styles, metric_display
-
-_LABELS = {"f_number": "f-number", "pixel_pitch_um": "pixel pitch", "exposure": "exposure time",
-           "read_noise_e": "read noise", "seed": "noise seed (realisation)", "spectra": "spectra set",
-           "readout": "read-out mode"}
-
 
 def axis_rows(res: Results, axis: str):
     """The rows of metrics.csv where ``axis`` varies and every other axis but
@@ -43,8 +40,21 @@ def axis_rows(res: Results, axis: str):
     return m[keep]
 
 
+def _numeric(record, values) -> bool:
+    """Whether the values are drawn on a numeric scale: a numeric axis whose
+    values are all numbers (an exposure sweep with 'auto' is categories)."""
+    if not record.numeric:
+        return False
+    try:
+        values.astype(float)
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
 def axis_sweep(res: Results, axis: str):
-    title = f"Metrics against {_LABELS.get(axis, axis)}"
+    record = get_axis(axis)
+    title = f"Metrics against {record.label}"
     m = axis_rows(res, axis)
     pairs = [(s, k) for (s, k), g in m.groupby(["scene", "metric"], sort=False)  # varied for one CFA, not across
              if g.groupby("cfa")[axis].agg(lambda v: v.astype(str).nunique()).max() > 1 and k in SCORED_METRICS]
@@ -58,9 +68,9 @@ def axis_sweep(res: Results, axis: str):
     fig, axes = panel_grid(rows, cols, 2.7, 2.0, left=0.95, right=0.15,
                            top=0.35 + 0.2 * legend_rows(len(res.cfas), ncol), bottom=0.5, wspace=0.15, hspace=0.35,
                            width=6.0)
-    numeric = axis not in ("exposure", "spectra", "readout") or (axis == "exposure" and not (m[axis].astype(str) == "auto").any())
+    numeric = _numeric(record, m[axis])
     drawn = []
-    unit = axis_unit(axis)
+    unit = record.unit
     for r, (scene, metric) in enumerate(pairs):
         info = metric_display(metric)
         g = m[(m["scene"] == scene) & (m["metric"] == metric)]
@@ -79,21 +89,16 @@ def axis_sweep(res: Results, axis: str):
                 order = np.argsort(np.asarray(x, dtype=float))
                 st = cst[cfa]
                 ax.plot(np.asarray(x, dtype=float)[order], gc["value"].to_numpy()[order], color=st["color"],
-                        marker=st["marker"], linestyle="none" if axis == "seed" else st["linestyle"],
+                        marker=st["marker"], linestyle="none" if record.realisations else st["linestyle"],
                         linewidth=1.2, markersize=3.5)
                 if cfa not in drawn:
                     drawn.append(cfa)
             if not numeric:
                 ax.set_xticks(range(len(levels)))
                 ax.set_xticklabels(levels, fontsize=7)
-            label_sweep_panel(ax, r, c, rows, d, f"{_LABELS.get(axis, axis)}" + (f" ({unit})" if unit else ""),
-                              info, scene)
+            label_sweep_panel(ax, r, c, rows, d, record.label + (f" ({unit})" if unit else ""), info, scene)
     cfa_legend(fig, cst, [c for c in res.cfas if c in drawn], ncol=ncol)
     lum = f" at {res.primary_luminance:g} cd/m²" if res.primary_luminance is not None else ""
-    cap = (f"Each scored metric that a sweep measured at several values of {_LABELS.get(axis, axis)}{lum}, "
-           "every other axis at the study's own value. "
-           + ("Each point is one noise realisation of the same camera: their spread is the noise of the value."
-              if axis == "seed" else
-              "The f-number sets both the diffraction OTF and, for a 3D scene, the thin-lens defocus of its "
-              "render." if axis == "f_number" else ""))
+    cap = (f"Each scored metric that a sweep measured at several values of {record.label}{lum}, "
+           "every other axis at the study's own value. " + record.note)
     return ReportFigure(f"sweep-{axis}", "sweep", title, cap, fig)

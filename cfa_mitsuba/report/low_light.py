@@ -13,8 +13,9 @@ import html
 
 import numpy as np
 
+from ..metrics import get_metric
 from .figure import ReportFigure, cfa_legend, legend_rows, panel_grid
-from .results import Results
+from .results import SCORED_METRICS, Results
 from .style import cfa_styles
 
 
@@ -109,8 +110,9 @@ def _field_axes(ax, snr, last: bool, plain) -> None:
 
 
 def _policy(res: Results) -> str:
-    sensor = (res.config or {}).get("capture") or {}
-    return str(sensor.get("exposure_policy") or "program")
+    from ..study.config import exposure_program_of
+
+    return exposure_program_of(res.config).policy
 
 
 def _fmt(v, spec: str) -> str:
@@ -152,7 +154,7 @@ def _capture_html(res: Results) -> str | None:
     m = res.all_metrics if res.all_metrics is not None else res.metrics
     if "exposure_s" not in m.columns:
         return None
-    scene = _sweep_scene(m[m["scene"] != "gray-bar"]) or _sweep_scene(m)
+    scene = _sweep_scene(m[m["metric"].isin(SCORED_METRICS)]) or _sweep_scene(m)
     if scene is None:
         return None
     g = m[m["scene"] == scene]
@@ -189,8 +191,9 @@ def _spectra_html(res: Results) -> str | None:
     return f'<table class="data"><thead><tr><th>CFA</th><th>spectra set</th></tr></thead><tbody>{rows}</tbody></table>'
 
 
-#: What the low-light comparison reads: (metric, scene kind it comes from, higher is better).
-VERSUS_METRICS = (("ysnr", "gray-bar", True), ("chroma_snr", "gray-bar", True), ("scielab", "puppy", False))
+#: What the low-light comparison reads, each on the rows of the scenes its
+#: record names (its direction, higher or lower better, from the record too).
+VERSUS_METRICS = ("ysnr", "chroma_snr", "scielab")
 
 
 def _levels(levels, empty: str = "never") -> str:
@@ -211,7 +214,8 @@ def versus_reference(metrics, reference: str = "bayer") -> list[dict]:
         md = m[m["demosaic"] == dem]
         for cfa in [c for c in dict.fromkeys(md["cfa"]) if c != reference]:
             row = {"demosaic": dem, "cfa": cfa}
-            for metric, _, higher in VERSUS_METRICS:
+            for metric in VERSUS_METRICS:
+                higher = get_metric(metric).higher_is_better
                 g = md[md["metric"] == metric]
                 a = g[g["cfa"] == cfa].set_index("luminance")
                 b = g[g["cfa"] == reference].set_index("luminance")
@@ -235,11 +239,11 @@ def _versus_html(res: Results) -> str | None:
     m = res.all_metrics if res.all_metrics is not None else res.metrics
     if "bayer" not in set(m["cfa"]) or "ysnr" not in set(m["metric"]):
         return None
-    head = "".join(f"<th>{_e(k)}: better / worse than Bayer at (cd/m²)</th>" for k, _, _ in VERSUS_METRICS)
+    head = "".join(f"<th>{_e(k)}: better / worse than Bayer at (cd/m²)</th>" for k in VERSUS_METRICS)
     rows = [f'<div class="tablewrap"><table class="data wraphead"><thead><tr><th>demosaic</th><th>CFA</th>{head}<th>ΔE00 (Bayer)</th>'
             "<th>MTF50 (Bayer)</th></tr></thead><tbody>"]
     for r in versus_reference(m[m["cfa"].isin(res.cfas) & m["demosaic"].isin(res.demosaics)]):
-        cells = "".join(f"<td>{_levels(r[f'{k}_wins'])} / {_levels(r[f'{k}_losses'])}</td>" for k, _, _ in VERSUS_METRICS)
+        cells = "".join(f"<td>{_levels(r[f'{k}_wins'])} / {_levels(r[f'{k}_losses'])}</td>" for k in VERSUS_METRICS)
         cost = "".join(f"<td>{_fmt(r[k][0], '.3g')} ({_fmt(r[k][1], '.3g')})</td>" if k in r else "<td>—</td>"
                        for k in ("delta-e", "mtf"))
         rows.append(f"<tr><td>{_e(r['demosaic'])}</td><th>{_e(r['cfa'])}</th>{cells}{cost}</tr>")

@@ -27,6 +27,7 @@ import numpy as np
 from ..errors import CfaMitsubaError
 from ..io.guard import read_csv, read_json, read_toml
 from ..metrics import get_metric
+from ..study.details_layout import output_folder
 from .claim_verdicts import at_most_verdict, best_verdict, order_verdict, spread_verdict
 
 PAPER_DIR = Path(__file__).resolve().parents[1] / "data" / "paper"
@@ -152,15 +153,19 @@ class Run:
         ``censored`` column (read under study/censored.py's rule) where the
         study wrote one, else the first realisation's ``passed`` flag."""
         m = self.metrics
-        if "censored" in m.columns:
-            sel = m[(m["metric"] == metric) & (m["demosaic"] == demosaic) & (m["cfa"] == cfa)]
-            return bool(len(sel)) and str(sel["censored"].iloc[0]).lower() in ("true", "1")
-        if metric != "moire":
+        sel = m[(m["metric"] == metric) & (m["demosaic"] == demosaic) & (m["cfa"] == cfa)]
+        if not len(sel):
             return False
-        f = self.path / "details" / "chirp" / cfa / demosaic / "L100.json"
+        if "censored" in m.columns:
+            return str(sel["censored"].iloc[0]).lower() in ("true", "1")
+        if get_metric(metric).censored_key is None:  # a metric always measured
+            return False
+        # a table written before the censored column: the first realisation's details, on the scene of the row
+        row = sel.iloc[0]
+        f = output_folder(self.path / "details", row["scene"], cfa, demosaic) / f"L{float(row['luminance']):g}.json"
         try:
-            return read_json(f, allow_nan=True)["moire"].get("passed") is False
-        except (OSError, ValueError, KeyError):
+            return read_json(f, allow_nan=True)[metric].get("passed") is False
+        except (OSError, ValueError, KeyError, AttributeError, CfaMitsubaError):
             return False
 
     def scores_of(self, demosaic: str):

@@ -80,7 +80,7 @@ def _intro(results: list[dict], isetcam: dict) -> list[str]:
          "gave, run in GNU Octave) and `docs/data/isetcam-parity-stages.json` (our stage values, "
          "`python -m cfa_mitsuba.study.parity_stages`); do not edit by hand.", "",
          "Each case is a TOML file under `tests/parity/isetcam/` (the format: `cfa_mitsuba/study/parity.py`); the test "
-         "suite runs them all (`tests/test_parity.py`). *Expected* is always ISETCam's number (the script's assert, or "
+         "suite runs them all (`tests/study/test_parity.py`). *Expected* is always ISETCam's number (the script's assert, or "
          "ISETCam run by us where the script asserts nothing), never ours. `mode = \"isetcam\"` runs ISETCam's "
          "mechanisms where they differ from ours (below); `mode = \"default\"` is this project as shipped.", "",
          "## The cases", ""]

@@ -30,7 +30,7 @@ import numpy as np
 from ..errors import CfaMitsubaError
 from ..metrics import scored_metrics
 from ..study.conditions import AXES
-from ..study.tasks import safe_label
+from ..study.details_layout import ideal_folder, output_folder, safe_label
 
 #: The paper's eight metrics in the order of its tables and radar plots (the metric records).
 SCORED_METRICS = scored_metrics()
@@ -138,8 +138,8 @@ class Results:
     # -- per-evaluation details ---------------------------------------------
     def detail_path(self, scene: str, cfa: str | None, demosaic: str | None, luminance: float,
                     suffix: str = ".json") -> Path:
-        base = self.root / "details" / safe_label(scene)
-        folder = base / "ideal" if cfa is None else base / safe_label(cfa) / str(demosaic)
+        details = self.root / "details"
+        folder = ideal_folder(details, scene) if cfa is None else output_folder(details, scene, cfa, demosaic)
         return folder / f"{lum_tag(luminance)}{suffix}"
 
     def detail(self, scene: str, cfa: str | None, demosaic: str | None, luminance: float) -> dict | None:

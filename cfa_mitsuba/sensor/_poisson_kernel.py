@@ -120,7 +120,7 @@ def pp_guard(lam):
     at 10, 2.2e-7 at 100, 1.6e-8 at 500, 1e-11 at 1e5, 3.7e-11 up to 1e6:
     measured against ``scipy.special.pdtr`` at every count within 12 sd of
     the mean, ``python benchmarks/poisson_pp_error.py``; asserted in
-    tests/test_sensor_noise.py)."""
+    tests/sensor/test_noise.py)."""
     r = 10.0 / lam
     return max(2e-4 * r * math.sqrt(r), 5e-10)
 
@@ -171,7 +171,7 @@ _Q_TAIL = 0.02425
 def _start_z(u):
     """The normal quantile of ``u`` (0 < u < 1) for the Cornish-Fisher start
     only, by P. J. Acklam's rational approximation (relative error below
-    1.2e-9; tests/test_sensor_noise.py compares it with ``scipy.special.ndtri``).
+    1.2e-9; tests/sensor/test_noise.py compares it with ``scipy.special.ndtri``).
     Written here because the start needs no more: every count is then
     decided by a CDF, so the counts do not depend on it (a start one count
     off costs one step), and it takes a few ns in this pass where

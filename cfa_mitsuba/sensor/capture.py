@@ -20,12 +20,14 @@ i.e. the irradiance referred back to radiance by the on-axis optics factor,
 so that Y is in cd/m^2 of the scene: a uniform white field of luminance Lw
 reads Y = Lw on the axis (less the relative illumination off it), after the
 same OTF and pixel-area integration as the camera.
+
+How 'auto' exposure chooses the time and gains is :mod:`.metering`'s (it
+runs the :class:`~.exposure_program.ExposureProgram` it is given).
 """
 
 from __future__ import annotations
 
-__all__ = ["capture", "capture_ideal", "capture_many", "auto_exposure", "metered_exposure", "optical_image_for",
-           "DEFAULT_REFERENCE_LUMINANCE_CD_M2", "AUTO_EXPOSURE_LEVEL", "IDEAL_NOMINAL_EXPOSURE_S"]
+__all__ = ["capture", "capture_ideal", "capture_many", "optical_image_for", "IDEAL_NOMINAL_EXPOSURE_S"]
 
 import copy
 import math
@@ -39,32 +41,20 @@ from ..optics import OpticsParams, compute_optics, integrate_pixels
 from ..values import OpticalImage, RawImage, SpectralImage
 from .catalogue import get_cfa
 from .cfa import CFA
-from .exposure_program import (DEFAULT_MAX_ANALOG_GAIN, DEFAULT_MAX_EXPOSURE_S, EXPOSURE_POLICIES,
-                               PEDESTAL_SIGMAS, ExposureChoice, run_program)
+from .exposure_program import ExposureChoice, ExposureProgram
+from .metering import (AUTO_EXPOSURE_LEVEL, DEFAULT_REFERENCE_LUMINANCE_CD_M2, _UNSET, auto_exposure,  # noqa: F401
+                       choose_auto_exposure, electrons_per_irradiance, metered_exposure, pedestal_for_gain,
+                       program_of, resolve_exposure)
 from .noise import collect_electrons, read_out, temporal_rng
 from .params import NOISE_MODES, SensorParams
 from .photometry import add_photometry as _photometry, saturation_rel as _saturation_rel
 from .physics import apply_crosstalk, channel_map, crosstalk_fractions, with_ir_cut
 from .readout import binned_pattern, read_binned, require_block_layout
 
-#: Auto exposure is chosen for the scene scaled to this mean luminance and
-#: kept for any other luminance, so that dim scenes really are noisier
-#: (Bae 2020 sweeps 3..400 cd/m^2 around 100 cd/m^2).
-DEFAULT_REFERENCE_LUMINANCE_CD_M2 = 100.0
-#: ISETCam ``autoExposure(oi, sensor, 0.95, 'luminance')``: the brightest
-#: pixel reaches 95 % of the well.
-AUTO_EXPOSURE_LEVEL = 0.95
 #: Exposure recorded for the ideal sensor under 'auto': its XYZ scale does
 #: not depend on exposure; ISETCam's ideal sensors integrate 1 s
 #: (``sensorCreateIdeal``).
 IDEAL_NOMINAL_EXPOSURE_S = 1.0
-
-
-def _electrons_per_irradiance(wl: np.ndarray, sensor: SensorParams) -> np.ndarray:
-    """(B,) electrons per second per unit QE per W/(m^2 nm) of band irradiance:
-    A FF (lambda / h c) dlambda."""
-    return (sensor.pixel_area_m2 * sensor.fill_factor * _spectra.photons_per_joule(wl)
-            * _spectra.band_widths(wl))
 
 
 def _mosaic_response(pix: np.ndarray, weights_bc: np.ndarray, cfa: CFA) -> np.ndarray:
@@ -129,113 +119,6 @@ def _luminance_scale(oi: OpticalImage, luminance_cd_m2) -> float:
     return float(luminance_cd_m2) / scene
 
 
-def auto_exposure(oi: OpticalImage, spectra_cb: np.ndarray, sensor: SensorParams,
-                  reference_luminance_cd_m2: float | None = DEFAULT_REFERENCE_LUMINANCE_CD_M2,
-                  luminance_scale: float = 1.0) -> float:
-    """Exposure (s) that fills the brightest pixel's well to 95 %.
-
-    ISETCam's rule (``autoExposure.m``, 'luminance'): the scene pixel of
-    highest luminance, without OTF or off-axis falloff, taken as a uniform
-    field on the axis; the exposure brings its most sensitive channel to
-    0.95 x well (dark current left out).  The scene is first scaled to
-    ``reference_luminance_cd_m2`` (mean luminance), or by
-    ``luminance_scale`` when that is None.
-
-    Parameters
-    ----------
-    oi : from :func:`cfa_mitsuba.optics.compute_optics`.
-    spectra_cb : (C, B) quantum efficiencies of the sensor's channels.
-    sensor : the pixel.
-    """
-    meta = oi.meta
-    wl = np.asarray(oi.wavelengths, dtype=np.float64)
-    if reference_luminance_cd_m2 is None:
-        scale = float(luminance_scale)
-    else:
-        require(isinstance(reference_luminance_cd_m2, numbers.Real) and not isinstance(reference_luminance_cd_m2, bool)
-                and math.isfinite(reference_luminance_cd_m2) and reference_luminance_cd_m2 > 0,
-                f"reference luminance must be positive, got {reference_luminance_cd_m2!r}")
-        scene = float(meta["scene_luminance_cd_m2"])
-        require(scene > 0, "auto exposure needs light: the scene is black (give a fixed exposure)")
-        scale = float(reference_luminance_cd_m2) / scene
-    irradiance = np.asarray(meta["brightest_radiance"]) * np.asarray(meta["on_axis_factor"]) * scale
-    rate = np.asarray(spectra_cb) @ (irradiance * _electrons_per_irradiance(wl, sensor))  # e-/s per channel
-    peak = float(rate.max())
-    require(peak > 0, "auto exposure needs light the sensor sees: the brightest pixel gives no signal")
-    return AUTO_EXPOSURE_LEVEL * sensor.well_capacity_e / peak
-
-
-def _resolve_exposure(exposure_s, auto) -> tuple[ExposureChoice, str]:
-    """(the choice, 'auto' or 'fixed'): ``auto()`` gives the choice for 'auto'."""
-    if isinstance(exposure_s, str):
-        if exposure_s.strip().lower() != "auto":
-            raise CfaMitsubaError(f"exposure must be a time in seconds or 'auto', got {exposure_s!r}")
-        return auto(), "auto"
-    ok = isinstance(exposure_s, numbers.Real) and not isinstance(exposure_s, bool)
-    ok = ok and math.isfinite(exposure_s) and exposure_s > 0
-    require(ok, f"exposure must be a positive number of seconds or 'auto', got {exposure_s!r}")
-    return ExposureChoice(float(exposure_s)), "fixed"
-
-
-#: ``capture``'s reference luminance when the caller gives none: the policy
-#: is then the program (a caller that names a reference luminance, or None,
-#: keeps the old 'reference' / 'each' rule unless it names a policy).
-_UNSET = object()
-
-
-def _policy_of(exposure_policy, reference) -> str:
-    if exposure_policy is None:
-        return "program" if reference is _UNSET else ("each" if reference is None else "reference")
-    require(exposure_policy in EXPOSURE_POLICIES,
-            f"unknown exposure policy {exposure_policy!r} (choose {', '.join(EXPOSURE_POLICIES)})")
-    return exposure_policy
-
-
-def metered_exposure(oi: OpticalImage, pix: np.ndarray, spectra_cb: np.ndarray, sensor: SensorParams,
-                     luminance_scale: float) -> float:
-    """The time (s) that brings the brightest pixel's most sensitive channel
-    to 95 % of the well at base gain, at the captured luminance: the shorter
-    of ISETCam's rule (:func:`auto_exposure`, the brightest scene pixel as a
-    uniform field on the axis) and the brightest pixel of the optical image
-    itself (``pix`` (H, W, B) W/(m^2 nm), after the OTF and the off-axis
-    falloff), any channel at any pixel, so that no well fills."""
-    wl = np.asarray(oi.wavelengths, dtype=np.float64)
-    t_rule = auto_exposure(oi, spectra_cb, sensor, None, luminance_scale)
-    w = (np.asarray(spectra_cb) * _electrons_per_irradiance(wl, sensor)[None, :]).T * luminance_scale  # (B, C)
-    # (C, B) x (B, N) rather than (N, B) x (B, C): the same dot products (to the last bit), 6x faster in
-    # OpenBLAS's skinny kernels (measured at 636 x 720 x 31)
-    peak = float((w.T @ pix.reshape(-1, pix.shape[-1]).T).max())
-    if not (math.isfinite(peak) and peak > 0):
-        return t_rule
-    return min(t_rule, AUTO_EXPOSURE_LEVEL * sensor.well_capacity_e / peak)
-
-
-def _auto_choice(oi, pix, qe, sensor, s, policy, reference, limits) -> ExposureChoice:
-    """The exposure ``policy`` chooses (module doc of :mod:`.exposure_program`)."""
-    if policy in ("reference", "each"):
-        ref = None if policy == "each" else (DEFAULT_REFERENCE_LUMINANCE_CD_M2 if reference is _UNSET else reference)
-        return ExposureChoice(auto_exposure(oi, qe, sensor, None if policy == "each" else ref, s))
-    require(float(oi.meta["scene_luminance_cd_m2"]) > 0,
-            "auto exposure needs light: the scene is black (mean luminance 0; give a fixed exposure)")
-    if policy == "bayer":  # the same camera with Bayer's filters: its program, for every CFA
-        qe = with_ir_cut(get_cfa("bayer"), sensor.ir_cut).sensitivities(np.asarray(oi.wavelengths, dtype=np.float64))
-    return run_program(metered_exposure(oi, pix, qe, sensor, s), *limits)
-
-
-def pedestal_for_gain(sensor: SensorParams) -> SensorParams:
-    """The sensor with its black level raised, where needed, to
-    :data:`~.exposure_program.PEDESTAL_SIGMAS` dark-noise sigmas (read noise
-    and DSNU, in DN at its analogue gain) above code 0, as a designer sets
-    the pedestal for the highest gain in use: otherwise the ADC's clip at 0
-    cuts the dark tail, biasing the mean up and the noise down (at gain 16
-    the default 64 DN is one read-noise sigma).  Solves b = k s g (max - b) /
-    well for b (DN per electron = g (max - b) / well)."""
-    sigma_e = math.hypot(sensor.read_noise_e, sensor.dsnu_e)
-    k = PEDESTAL_SIGMAS * sigma_e * sensor.analog_gain
-    need = math.ceil(k * sensor.max_dn / (sensor.well_capacity_e + k))
-    return sensor.with_(black_level_dn=float(need)) if need > sensor.black_level_dn else sensor
-
-
 def _scaled_meta(oi: OpticalImage, s: float) -> dict:
     meta = copy.deepcopy(oi.meta)
     scene = float(meta["scene_luminance_cd_m2"])
@@ -275,14 +158,14 @@ def _check_seed(seed) -> int:
 _LAST_SIGNAL: list = [None]
 
 
-def _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, policy, reference_luminance_cd_m2, limits):
+def _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, program):
     """What a capture computes before any noise: (exposure choice, exposure
     mode, the sensor at the chosen gain, mean photo-electrons (H, W),
     electrons per radiance (C, B), per-pixel wells and gains or None, (H,
     W)); the arrays read-only."""
     pix = _pixel_irradiance(oi, sensor.fill_factor)
-    choice, mode = _resolve_exposure(
-        exposure_s, lambda: _auto_choice(oi, pix, qe, sensor, s, policy, reference_luminance_cd_m2, limits))
+    choice, mode = resolve_exposure(
+        exposure_s, lambda: choose_auto_exposure(oi, pix, qe, sensor, s, program))
     exposure = choice.exposure_s
     if choice.analog_gain != 1.0:  # the program's gain on top of the sensor's own, its pedestal raised to match
         sensor = pedestal_for_gain(sensor.with_(analog_gain=sensor.analog_gain * choice.analog_gain))
@@ -291,7 +174,7 @@ def _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, policy, reference
     require(h >= th and w >= tw, f"the sensor ({w} x {h} pixels) is smaller than the CFA tile ({tw} x {th})")
     factor = np.asarray(oi.meta["on_axis_factor"], dtype=np.float64)
     with np.errstate(over="ignore", invalid="ignore"):
-        k = _electrons_per_irradiance(wl, sensor) * (exposure * s)  # (B,)
+        k = electrons_per_irradiance(wl, sensor) * (exposure * s)  # (B,)
         weights = (qe * k).T  # (B, C)
         photo = _mosaic_response(pix, weights, cfa)
         if sensor.crosstalk or sensor.crosstalk_700nm:  # before the charge is counted (physics.py)
@@ -299,7 +182,7 @@ def _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, policy, reference
             t = (wl - 400.0) / 300.0
             by_wl = _mosaic_response(pix, weights * t[:, None], cfa) if k[1] != k[0] else None
             photo = apply_crosstalk(photo, by_wl, float(k[0]), float(k[1] - k[0]))
-        epr = qe * (factor * _electrons_per_irradiance(wl, sensor) * exposure)[None, :]
+        epr = qe * (factor * electrons_per_irradiance(wl, sensor) * exposure)[None, :]
     _require_representable(photo, epr, exposure=exposure, scale=s)
 
     well = gain = None
@@ -316,9 +199,9 @@ def _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, policy, reference
 
 def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposure_s="auto",
             noise: str = "all", seed: int = 0, sensor: SensorParams | None = None,
-            optics: OpticsParams | None = None, oversample=None, reference_luminance_cd_m2=_UNSET,
-            exposure_policy: str | None = None, max_exposure_s: float = DEFAULT_MAX_EXPOSURE_S,
-            max_analog_gain: float = DEFAULT_MAX_ANALOG_GAIN) -> RawImage:
+            optics: OpticsParams | None = None, oversample=None, exposure_program: ExposureProgram | None = None,
+            reference_luminance_cd_m2=_UNSET, exposure_policy: str | None = None, max_exposure_s: float | None = None,
+            max_analog_gain: float | None = None) -> RawImage:
     """Capture a raw mosaic.
 
     Parameters
@@ -331,19 +214,22 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     luminance_cd_m2 : scale the scene to this mean luminance (cd/m^2);
         None keeps its radiance.
     exposure_s : seconds, or ``"auto"``: the time and gains the exposure
-        policy chooses (:mod:`.exposure_program`).
+        program chooses (:mod:`.exposure_program`).
     noise : ``off``, ``shot`` or ``all`` (:mod:`cfa_mitsuba.sensor.noise`).
     seed : temporal noise seed (non-negative int); the fixed pattern comes
         from ``sensor.sensor_seed``.
     sensor : :class:`SensorParams` (defaults documented there).
     optics, oversample : for a SpectralImage, as in ``compute_optics``.
+    exposure_program : the :class:`~.exposure_program.ExposureProgram`
+        (policy, limits, reference luminance), passed whole; default
+        ``ExposureProgram()``, the program.  Or, for a one-off call, its
+        settings as keywords (a value not given keeps the program's default):
     reference_luminance_cd_m2 : for the 'reference' policy, the mean
-        luminance at which auto exposure is chosen (default 100); None: at
-        the captured luminance ('each').  Given without a policy, it selects
-        'reference' (or 'each' for None), the rule before the program.
-    exposure_policy : :data:`~.exposure_program.EXPOSURE_POLICIES`; default
-        'program' (unless a reference luminance is given, above).
-    max_exposure_s, max_analog_gain : the program's limits (1/30 s, 16).
+        luminance at which auto exposure is chosen; None: at the captured
+        luminance ('each').  Given without a policy, it selects 'reference'
+        (or 'each' for None), the rule before the program.
+    exposure_policy : :data:`~.exposure_program.EXPOSURE_POLICIES`.
+    max_exposure_s, max_analog_gain : the program's limits.
 
     Returns
     -------
@@ -363,15 +249,14 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     s = _luminance_scale(oi, luminance_cd_m2)
     wl = np.asarray(oi.wavelengths, dtype=np.float64)
     qe = cfa.sensitivities(wl)  # (C, B)
-    policy = _policy_of(exposure_policy, reference_luminance_cd_m2)
-    limits = (max_exposure_s, max_analog_gain)
-    inputs = (cfa.name, cfa.pattern.shape, cfa.pattern.tobytes(), qe.tobytes(), s, exposure_s, sensor, policy,
-              reference_luminance_cd_m2, limits, repr(oi.meta.get("on_axis_factor")))
+    program = program_of(exposure_program, exposure_policy, reference_luminance_cd_m2, max_exposure_s,
+                          max_analog_gain)
+    inputs = (cfa.name, cfa.pattern.shape, cfa.pattern.tobytes(), qe.tobytes(), s, exposure_s, sensor, program,
+              repr(oi.meta.get("on_axis_factor")))
     last = _LAST_SIGNAL[0]
     if last is None or last[0] is not oi or last[1] != inputs:  # not another noise seed of the last capture
         _LAST_SIGNAL[0] = None
-        _LAST_SIGNAL[0] = last = (oi, inputs, _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, policy,
-                                                                 reference_luminance_cd_m2, limits))
+        _LAST_SIGNAL[0] = last = (oi, inputs, _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, program))
     choice, mode, sensor, photo, epr, well, gain, (h, w) = last[2]
     epr = epr.copy()  # returned in the RawImage, which its caller may change
     exposure = choice.exposure_s
@@ -401,20 +286,17 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
     meta["readout"] = {"mode": sensor.readout, "block": block, "binning": sensor.binning if sensor.readout == "bin"
                        else None, "native_tile": cfa.tile_text(), "full_shape": [h, w],
                        "pixel_pitch_um": sensor.pixel_pitch_um * (block if sensor.readout == "bin" else 1)}
+    recorded = program.record(mode)
     settings = {
         "cfa": {"name": cfa.name, "description": cfa.description, "tile": cfa.tile_text(), "spectra": cfa.spectra},
         "noise": noise,
         "exposure_mode": mode,
         "exposure_s": exposure,
-        "exposure_policy": policy if mode == "auto" else "fixed",
+        "exposure_policy": recorded.pop("exposure_policy"),
         "analog_gain": choice.analog_gain,
         "digital_gain": choice.digital_gain,
         "metered_exposure_s": choice.metered_exposure_s,
-        "max_exposure_s": float(max_exposure_s) if mode == "auto" and policy in ("program", "bayer") else None,
-        "max_analog_gain": float(max_analog_gain) if mode == "auto" and policy in ("program", "bayer") else None,
-        "reference_luminance_cd_m2": (
-            (DEFAULT_REFERENCE_LUMINANCE_CD_M2 if reference_luminance_cd_m2 is _UNSET else reference_luminance_cd_m2)
-            if mode == "auto" and policy == "reference" else None),
+        **recorded,  # the limits or the reference luminance, where the policy used them
         "auto_exposure_level": AUTO_EXPOSURE_LEVEL if mode == "auto" else None,
         "luminance_cd_m2": meta["luminance_cd_m2"],
         "luminance_scale": s,
@@ -449,7 +331,7 @@ def capture_ideal(image, *, luminance_cd_m2: float | None = None, exposure_s="au
     sensor = sensor or SensorParams()
     oi = optical_image_for(image, sensor, optics, oversample)
     s = _luminance_scale(oi, luminance_cd_m2)
-    choice, mode = _resolve_exposure(exposure_s, lambda: ExposureChoice(IDEAL_NOMINAL_EXPOSURE_S))
+    choice, mode = resolve_exposure(exposure_s, lambda: ExposureChoice(IDEAL_NOMINAL_EXPOSURE_S))
     exposure = choice.exposure_s
     wl = np.asarray(oi.wavelengths, dtype=np.float64)
     pix = _pixel_irradiance(oi, sensor.fill_factor)

@@ -141,7 +141,7 @@ def poisson_quantile(mean: np.ndarray, u: np.ndarray) -> np.ndarray:
        (relative) of one of those, by ``pdtr`` itself.
 
     So the counts are those of stepping with ``pdtr`` throughout
-    (tests/test_sensor_noise.py compares with ``scipy.stats.poisson.ppf``).
+    (tests/sensor/test_noise.py compares with ``scipy.stats.poisson.ppf``).
 
     Peizer, D. B., Pratt, J. W., "A normal approximation for binomial, F,
     beta, and other common, related tail probabilities, I", J. Amer. Statist.

@@ -18,6 +18,13 @@ Where an axis applies (``applies_to``):
               passes each where it belongs)
 ============  ================================================================
 
+An axis record also carries its behaviour, so that no code names an axis
+to special-case it: whether its values are numbers (a line in the sweep
+figure) or categories (ticks), whether they are a scale or realisations,
+the value in effect when a condition leaves it to the scene (the f-number a
+render's sidecar records), the render setting it also sets on a 3D scene
+(thin-lens defocus), and which CFAs a value applies to (a block read-out).
+
 Adding an axis is one record in :data:`AXES` (and its test); the config
 check, the sweep, the chain, the tables and the report follow.  Sweeping a
 sensor field, for instance::
@@ -90,6 +97,18 @@ def _readout(ck, v, key):
     return ck.string(v, key, READOUT_MODES)
 
 
+def _readout_applies(pattern, mode) -> bool:
+    """``full`` reads any CFA; ``remosaic`` and ``bin`` the block layouts only."""
+    from ..sensor.readout import readout_applies
+
+    return readout_applies(pattern, mode)
+
+
+def _optics_f_number(meta: dict):
+    """The f-number the optics used (the render's sidecar, else the optics default)."""
+    return (meta.get("optics") or {}).get("f_number")
+
+
 @dataclass(frozen=True, kw_only=True)
 class Axis:
     """One study axis.
@@ -108,6 +127,21 @@ class Axis:
         ``[[sweep]]`` list checked (the config's one-line errors).
     default : the default for a ``capture`` axis (the others read theirs
         from the stage's parameters, :meth:`default_value`).
+    numeric : whether the values are numbers on a scale (a line against
+        them in the sweep figure) or categories (one tick each); a numeric
+        axis may still hold a word ('auto' exposure), drawn as categories.
+    realisations : whether each value is a realisation of the same camera
+        (the noise seed), not a setting: points, not a line.
+    note : a sentence the sweep figure's caption adds about this axis.
+    scene_value : for an axis a condition may leave to the scene (None),
+        ``scene_value(meta)`` reads the value in effect from the ideal
+        image's meta (metrics.csv records that value).
+    render_setting : the render setting the axis also sets on a
+        path-traced (3D) scene, when a condition gives a value (the
+        f-number: the thin lens's defocus); None: renders do not depend on it.
+    cfa_applies : ``cfa_applies(pattern, value) -> bool``: whether a value
+        applies to a CFA (its tile of filter names); a CFA a value does not
+        apply to is left out of that condition.  None: every value, every CFA.
     """
 
     name: str
@@ -118,6 +152,12 @@ class Axis:
     check: Callable[[Any, Any, str], Any]
     field: str = ""
     default: Any = None
+    numeric: bool = True
+    realisations: bool = False
+    note: str = ""
+    scene_value: Callable[[dict], Any] | None = None
+    render_setting: str | None = None
+    cfa_applies: Callable[[Any, Any], bool] | None = None
 
     def __post_init__(self):
         if self.applies_to not in APPLIES_TO:
@@ -164,6 +204,17 @@ class Axis:
             return settings.options_of_metrics().get(metric, {}).get(option, self.default_value())
         return self.default
 
+    def in_effect(self, value, meta: dict):
+        """The value in effect: ``value``, or the scene's own when the
+        condition left it to the scene (:attr:`scene_value`)."""
+        if value is None and self.scene_value is not None:
+            return self.scene_value(meta)
+        return value
+
+    def applies(self, pattern, value) -> bool:
+        """Whether ``value`` applies to a CFA of tile ``pattern`` (:attr:`cfa_applies`)."""
+        return self.cfa_applies is None or bool(self.cfa_applies(pattern, value))
+
 
 def _dataclass_default(cls, name: str):
     for f in dataclasses.fields(cls):
@@ -178,14 +229,20 @@ def _dataclass_default(cls, name: str):
 AXES: dict[str, Axis] = {a.name: a for a in (
     Axis(name="luminance", applies_to="capture", label="luminance", unit="cd/m²", short="L", check=positive,
          default=100.0),
-    Axis(name="f_number", applies_to="optics", label="f-number", unit="", short="f", check=_f_number),
+    Axis(name="f_number", applies_to="optics", label="f-number", unit="", short="f", check=_f_number,
+         scene_value=_optics_f_number, render_setting="f_number",
+         note="The f-number sets both the diffraction OTF and, for a 3D scene, the thin-lens defocus of its render."),
     Axis(name="pixel_pitch_um", applies_to="sensor", label="pixel pitch", unit="µm", short="p", check=_pixel_pitch),
-    Axis(name="exposure", applies_to="capture", label="exposure", unit="s", short="t", check=_exposure,
+    Axis(name="exposure", applies_to="capture", label="exposure time", unit="s", short="t", check=_exposure,
          default="auto"),
     Axis(name="read_noise_e", applies_to="sensor", label="read noise", unit="e⁻", short="rn", check=non_negative),
-    Axis(name="seed", applies_to="capture", label="noise seed", unit="", short="seed", check=_seed, default=0),
-    Axis(name="spectra", applies_to="capture", label="spectra set", unit="", short="s-", check=_spectra),
-    Axis(name="readout", applies_to="sensor", label="read-out", unit="", short="ro-", check=_readout),
+    Axis(name="seed", applies_to="capture", label="noise seed (realisation)", unit="", short="seed", check=_seed,
+         default=0, realisations=True,
+         note="Each point is one noise realisation of the same camera: their spread is the noise of the value."),
+    Axis(name="spectra", applies_to="capture", label="spectra set", unit="", short="s-", check=_spectra,
+         numeric=False),
+    Axis(name="readout", applies_to="sensor", label="read-out mode", unit="", short="ro-", check=_readout,
+         numeric=False, cfa_applies=_readout_applies),
 )}
 
 

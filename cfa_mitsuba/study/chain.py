@@ -3,7 +3,12 @@
 
 The study's evaluation tasks, the convergence study and the benchmarks all
 run through :class:`CameraChain`; settings travel as frozen dataclasses
-(:class:`ChainSettings`, :class:`~.conditions.Condition`).
+(:class:`ChainSettings`, :class:`~.conditions.Condition`).  A study's task
+is evaluated whole by :meth:`CameraChain.run` (the ideal image and its rows,
+the spectra set and read-out in effect, every realisation, demosaic and
+metric), which returns typed values (:mod:`.task_values`); the worker
+(:mod:`.tasks`) only loads the render, writes the details and hands the rows
+back.
 
 The optical image does not depend on the CFA or the demosaic, so a chain
 computes it once per (scene, optics-relevant condition) and keeps it, with
@@ -14,8 +19,9 @@ puppy-sized optical image is about 0.2 GB).
 
 from __future__ import annotations
 
-__all__ = ["ChainSettings", "CameraChain", "Evaluation"]
+__all__ = ["ChainSettings", "CameraChain", "Evaluation", "condition_columns", "condition_applies", "capture_columns"]
 
+import json
 import os
 import time
 from collections import OrderedDict
@@ -25,6 +31,7 @@ import numpy as np
 
 from .axes import AXES
 from .conditions import Condition
+from .task_values import CameraOutput, TaskEvaluation, realisation_seeds
 
 #: Set to 1 to recompute the optical image for every capture (what the
 #: study did before the chain shared it): for benchmarks/bench_study.py only.
@@ -44,13 +51,10 @@ class ChainSettings:
     ``optics`` and ``sensor`` are :class:`~cfa_mitsuba.optics.OpticsParams`
     and :class:`~cfa_mitsuba.sensor.params.SensorParams` (their f-number,
     pitch and read noise are replaced by the condition's); ``noise`` is
-    'off', 'shot' or 'all'; ``exposure_policy`` how 'auto' exposure is
-    chosen (:data:`~cfa_mitsuba.sensor.exposure_program.EXPOSURE_POLICIES`:
-    'program', the default, within ``max_exposure_s`` and
-    ``max_analog_gain``; 'bayer'; 'reference'; 'each');
-    ``reference_luminance_cd_m2`` is where the 'reference' policy chooses it
-    (None: at each capture's own luminance, ISETCam's plain auto exposure,
-    the 'each' policy); ``isp`` the processing options (white balance,
+    'off', 'shot' or 'all'; ``exposure_program`` how 'auto' exposure is
+    chosen (:class:`~cfa_mitsuba.sensor.exposure_program.ExposureProgram`,
+    passed whole to every capture; None: its defaults, the program);
+    ``isp`` the processing options (white balance,
     white preserving, ...) as sorted (key, value) pairs; ``demosaic_options``
     each method's own options (``[demosaics.<name>]``);
     ``mean_match`` scales each camera output to the ideal's mean (ISETCam);
@@ -62,11 +66,8 @@ class ChainSettings:
     optics: object = None
     sensor: object = None
     noise: str = "all"
-    reference_luminance_cd_m2: float | None = 100.0
+    exposure_program: object = None
     isp: tuple = ()
-    exposure_policy: str = "program"
-    max_exposure_s: float = 1.0 / 30.0
-    max_analog_gain: float = 16.0
     mean_match: bool = True
     spectra_sets: tuple = ()
     metric_options: tuple = ()
@@ -74,8 +75,11 @@ class ChainSettings:
 
     def __post_init__(self):
         from ..optics import OpticsParams
+        from ..sensor.exposure_program import ExposureProgram
         from ..sensor.params import SensorParams
 
+        if self.exposure_program is None:
+            object.__setattr__(self, "exposure_program", ExposureProgram())
         if self.optics is None:
             object.__setattr__(self, "optics", OpticsParams())
         if self.sensor is None:
@@ -111,6 +115,16 @@ class ChainSettings:
         from ..sensor import get_cfa
 
         return dict(self.spectra_sets).get(get_cfa(cfa).spectra)
+
+    def spectra_in_effect(self, cfa, cond: Condition) -> str:
+        """The spectra set a capture of ``cfa`` uses under ``cond``
+        (:meth:`spectra_for`), else the CFA's own ('' for none)."""
+        chosen = self.spectra_for(cfa, cond)
+        if chosen is not None:
+            return chosen
+        from ..sensor import get_cfa
+
+        return str(get_cfa(cfa).spectra or "")
 
     def base_condition(self, *, luminance: float = 100.0, exposure="auto", seed: int = 0) -> Condition:
         """The condition these settings describe at ``luminance``: every
@@ -199,6 +213,33 @@ def _shared(ideal) -> dict:
     return ideal.__dict__.setdefault("_metric_shared", {})
 
 
+def condition_columns(cond: Condition, ideal_meta: dict) -> dict:
+    """The condition axes as metrics.csv columns: the values in effect (an
+    axis the condition left to the scene read from the ideal image's meta,
+    :meth:`.axes.Axis.in_effect`: the f-number the optics used)."""
+    return {name: axis.in_effect(getattr(cond, name), ideal_meta) for name, axis in AXES.items()}
+
+
+def condition_applies(cfa, cond: Condition) -> bool:
+    """Whether every axis value of ``cond`` applies to ``cfa``
+    (:meth:`.axes.Axis.applies`: a block read-out to the block layouts
+    only, so a sweep over it leaves the other CFAs out of its conditions)."""
+    from ..sensor import get_cfa
+
+    pattern = get_cfa(cfa).pattern
+    return all(axis.applies(pattern, getattr(cond, name)) for name, axis in AXES.items())
+
+
+def capture_columns(raw) -> dict:
+    """metrics.csv's columns of the capture (:data:`.tables.CAPTURE_COLUMNS`)."""
+    st = raw.settings or {}
+    return {"exposure_s": float(raw.exposure_s), "analog_gain": float(st.get("analog_gain") or 1.0),
+            "digital_gain": float(st.get("digital_gain") or 1.0),
+            "clipped_fraction": raw.meta.get("clipped_fraction", raw.meta.get("saturated_fraction")),
+            "scene_illuminance_lux": raw.meta.get("scene_illuminance_lux"),
+            "sensor_exposure_lux_s": raw.meta.get("sensor_exposure_lux_s")}
+
+
 class CameraChain:
     """The chain after the render for one set of :class:`ChainSettings`.
 
@@ -259,7 +300,7 @@ class CameraChain:
         """The raw mosaic of ``cfa`` (a name, TOML path or CFA) under ``cond``
         (another spectra set, when the condition or the settings name one; ``noise`` overrides
         the settings' noise mode).  ``seed`` is the capture's noise seed, derived from the
-        condition's study seed by :func:`~.tasks.realisation_seeds` (the one seed path:
+        condition's study seed by :func:`~.task_values.realisation_seeds` (the one seed path:
         ``cond.seed`` is its input and is not used here)."""
         from ..sensor import capture, get_cfa
 
@@ -268,17 +309,8 @@ class CameraChain:
         if spectra is not None:
             cfa = get_cfa(cfa, spectra=spectra)
         return self._timed("capture_s", capture, oi, cfa, luminance_cd_m2=cond.luminance, exposure_s=cond.exposure,
-                           noise=noise or self.settings.noise, seed=seed, sensor=sensor, **self.exposure_keywords())
-
-    def exposure_keywords(self) -> dict:
-        """The keywords of :func:`cfa_mitsuba.sensor.capture` that choose an 'auto' exposure."""
-        st = self.settings
-        policy = "each" if st.exposure_policy == "reference" and st.reference_luminance_cd_m2 is None \
-            else st.exposure_policy
-        kw = {"exposure_policy": policy, "max_exposure_s": st.max_exposure_s, "max_analog_gain": st.max_analog_gain}
-        if policy == "reference":
-            kw["reference_luminance_cd_m2"] = st.reference_luminance_cd_m2
-        return kw
+                           noise=noise or self.settings.noise, seed=seed, sensor=sensor,
+                           exposure_program=self.settings.exposure_program)
 
     def process(self, raw, method: str, cond: Condition | None = None, **options):
         """:func:`cfa_mitsuba.isp.process` of ``raw`` (a RawImage, or a
@@ -337,6 +369,54 @@ class CameraChain:
         results = self._timed("metrics_s", m.evaluate_many, metric_names, self.inputs(ideal, cam, cond), failures,
                               options=options)
         return results, failures, float(scale)
+
+    def run(self, task, scene_image, *, ideal_details: bool = False) -> TaskEvaluation:
+        """Evaluate one study task whole (:class:`~.task_values.EvaluationTask`):
+        the CFA captured in every realisation (when the condition's read-out
+        applies to it), each capture processed by every demosaic and measured
+        against the ideal; the ideal against itself when the task asks
+        (``ideal_rows``); the ideal's own results for the metrics that keep
+        its curves when ``ideal_details``.  ``scene_image``: the render (a
+        SpectralImage, or a function returning one, called only when the
+        optical image is not already made).  Returns the
+        :class:`~.task_values.TaskEvaluation`; the first realisation's
+        outputs keep their images and curves when the task keeps details."""
+        from .. import metrics as m
+        from ..metrics import result_rows
+
+        cond = task.condition
+        scene_key = json.dumps(task.source, sort_keys=True)
+        ideal, outputs = None, []
+        if condition_applies(task.cfa, cond):
+            seeds = realisation_seeds(cond.seed, task.scene, cond.luminance, task.realisations,
+                                      task.realisation_offset)
+            for i, seed in enumerate(seeds):
+                keep = task.keeps_details and i == 0  # the first realisation's curves and images
+                for raw, ideal, method, ev in self.evaluate(scene_image, task.cfa, task.demosaics, task.metrics, cond,
+                                                            seed, scene_key, details=keep):
+                    index = task.realisation_offset + i
+                    if not hasattr(ev, "results"):
+                        # No output to measure (a channel the scene white leaves dark) or no scale for it (a
+                        # black ideal interior): every metric of this output is unmeasurable.
+                        failed = [{"metric": name, "error": str(ev)} for name in task.metrics]
+                        outputs.append(CameraOutput(method, index, seed, {}, [], failed))
+                        continue
+                    outputs.append(CameraOutput(method, index, seed, capture_columns(raw), result_rows(ev.results),
+                                                list(ev.failures), ev if keep else None, raw if keep else None))
+        elif task.ideal_rows or ideal_details:
+            ideal = self.ideal(self.optical(scene_image, cond, scene_key), cond, scene_key)
+        ideal_rows, ideal_results = [], None
+        if ideal is not None:
+            options = self.settings.metric_options_for(cond)
+            if task.ideal_rows:
+                ideal_rows = result_rows(m.evaluate_many(task.metrics, self.inputs(ideal, ideal.xyz, cond), [],
+                                                         options=options))
+            if ideal_details:
+                kept = [n for n in task.metrics if m.get_metric(n).ideal_details]
+                ideal_results = m.evaluate_many(kept, self.inputs(ideal, ideal.xyz, cond), options=options)
+        return TaskEvaluation(task, None if ideal is None else condition_columns(cond, ideal.meta),
+                              self.settings.spectra_in_effect(task.cfa, cond), outputs, ideal_rows, ideal,
+                              ideal_results, self.timing)
 
     def evaluate(self, scene_image, cfa, demosaics, metric_names, cond: Condition, seed: int, scene_key=None, *,
                  details: bool = True):

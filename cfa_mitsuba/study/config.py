@@ -14,7 +14,8 @@ relative to the config file.
 
 from __future__ import annotations
 
-__all__ = ["StudyConfig", "SceneSpec", "SweepSpec", "load_config", "parse_config", "IMAGE_METRICS"]
+__all__ = ["StudyConfig", "SceneSpec", "SweepSpec", "load_config", "parse_config", "IMAGE_METRICS",
+           "exposure_program_of"]
 
 import dataclasses
 from dataclasses import dataclass, field
@@ -26,17 +27,6 @@ from .sweeps import SweepSpec, _sweeps
 
 from .scene_specs import IMAGE_METRICS, SceneSpec, parse_scenes, render_common as render_common_of  # noqa: F401
 
-#: How a study chooses the exposure: 'program' (a camera's exposure program:
-#: auto exposure at each luminance, the time capped at ``max_exposure_s``,
-#: then analogue gain up to ``max_analog_gain``, then digital gain; the
-#: default; :mod:`cfa_mitsuba.sensor.exposure_program`), 'bayer' (every CFA at
-#: the time and gains the program gives Bayer), 'reference' (ISETCam's auto
-#: exposure, chosen once at the reference luminance and kept at every
-#: luminance), 'each' (ISETCam's auto exposure at each luminance, its default
-#: in a sweep), 'fixed' (the given time).
-EXPOSURE_POLICIES = ("program", "bayer", "reference", "each", "fixed")
-#: The policy of a config that names none.
-DEFAULT_EXPOSURE_POLICY = "program"
 #: Noise realisations of every capture unless a config says otherwise (each
 #: value is their mean with a 95 % interval: study/intervals.py).
 DEFAULT_SEEDS = 3
@@ -75,41 +65,45 @@ class StudyConfig:
     render_seeds: int = DEFAULT_RENDER_SEEDS
     worker_max_tasks: int | None = None  # a local worker is recycled after this many tasks (study.executors)
     worker_max_memory: int | None = None  # ... or once its resident memory passes this many bytes
+    #: the :class:`~cfa_mitsuba.sensor.exposure_program.ExposureProgram`,
+    #: parsed once from ``[sensor]`` (None: the program's defaults)
+    exposure_program: object = None
+
+    def __post_init__(self):
+        if self.exposure_program is None:
+            from ..sensor.exposure_program import ExposureProgram
+
+            object.__setattr__(self, "exposure_program", ExposureProgram())
 
     def to_dict(self) -> dict:
-        return dataclasses.asdict(self)
+        """The config as run (config.json): the exposure program's keys in
+        ``capture``, where ``[sensor]`` gives them."""
+        out = dataclasses.asdict(self)
+        del out["exposure_program"]
+        out["capture"] = {**out["capture"], **self.exposure_program.config_keys()}
+        return out
 
     def chain_settings(self):
-        """The :class:`~.chain.ChainSettings` of this study (all but the axes)."""
-        from ..optics import OpticsParams
-        from ..sensor.params import SensorParams
-        from .chain import ChainSettings
+        """The :class:`~.chain.ChainSettings` of this study (all but the axes),
+        built once: every task, condition and table of the study shares it."""
+        if "_chain_settings" not in self.__dict__:
+            from ..optics import OpticsParams
+            from ..sensor.params import SensorParams
+            from .chain import ChainSettings
 
-        return ChainSettings(
-            optics=OpticsParams(**self.optics), sensor=SensorParams(**self.sensor),
-            noise=self.capture.get("noise", "all"),
-            reference_luminance_cd_m2=(None if self.capture.get("exposure_policy") == "each"
-                                       else float(self.capture.get("reference_luminance_cd_m2", 100.0))),
-            **_exposure_settings(self.capture),
-            isp=dict(self.isp), mean_match=self.mean_match,
-            spectra_sets=dict(self.capture.get("spectra_sets", {})), metric_options=dict(self.metric_options),
-            demosaic_options=dict(self.demosaic_options))
+            self.__dict__["_chain_settings"] = ChainSettings(
+                optics=OpticsParams(**self.optics), sensor=SensorParams(**self.sensor),
+                noise=self.capture.get("noise", "all"), exposure_program=self.exposure_program,
+                isp=dict(self.isp), mean_match=self.mean_match,
+                spectra_sets=dict(self.capture.get("spectra_sets", {})), metric_options=dict(self.metric_options),
+                demosaic_options=dict(self.demosaic_options))
+        return self.__dict__["_chain_settings"]
 
     def base_condition(self, luminance: float | None = None):
         """The study's own condition (no sweep) at ``luminance`` (default: the first)."""
         lum = self.luminances[0] if luminance is None else luminance
         return self.chain_settings().base_condition(luminance=lum, exposure=self.capture.get("exposure", "auto"),
                                                     seed=self.seed)
-
-
-def _exposure_settings(capture: dict) -> dict:
-    """The :class:`~.chain.ChainSettings` fields of the exposure policy."""
-    from ..sensor.exposure_program import DEFAULT_MAX_ANALOG_GAIN, DEFAULT_MAX_EXPOSURE_S
-
-    policy = capture.get("exposure_policy", DEFAULT_EXPOSURE_POLICY)
-    return {"exposure_policy": DEFAULT_EXPOSURE_POLICY if policy == "fixed" else policy,
-            "max_exposure_s": float(capture.get("max_exposure_s", DEFAULT_MAX_EXPOSURE_S)),
-            "max_analog_gain": float(capture.get("max_analog_gain", DEFAULT_MAX_ANALOG_GAIN))}
 
 
 def _dataclass_table(ck: _Checker, data, key: str, cls, extra: dict) -> dict:
@@ -311,11 +305,34 @@ def one_f_number(optics_table):
     return out
 
 
-def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, dict, dict]:
-    """(optics, sensor, capture): ``[optics]``, ``[sensor]`` (a preset and
-    its overrides) and the capture settings kept in ``[sensor]`` (noise,
-    exposure and its policy, spectra-set replacements)."""
+#: The ``[sensor]`` keys of the exposure program (:class:`~cfa_mitsuba.sensor.exposure_program.ExposureProgram`).
+_PROGRAM_KEYS = ("exposure_policy", "max_exposure_s", "max_analog_gain", "reference_luminance_cd_m2")
+
+
+def exposure_program_of(config: dict | None):
+    """The :class:`~cfa_mitsuba.sensor.exposure_program.ExposureProgram` a
+    results folder's config.json describes: its ``capture`` keys (and, in a
+    config.json written before ``capture`` held them, ``sensor``'s) over the
+    program's own defaults; the defaults alone when they do not make a valid
+    program.  The report reads a study's exposure from here, so no default
+    of the program is written twice."""
+    from ..sensor.exposure_program import ExposureProgram
+
+    cfg = config or {}
+    keys = {**(cfg.get("sensor") or {}), **(cfg.get("capture") or {})}
+    try:
+        return ExposureProgram.from_table({k: keys[k] for k in _PROGRAM_KEYS if keys.get(k) is not None})
+    except (CfaMitsubaError, TypeError):
+        return ExposureProgram()
+
+
+def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, dict, dict, object]:
+    """(optics, sensor, capture, exposure program): ``[optics]``, ``[sensor]``
+    (a preset and its overrides), the capture settings kept in ``[sensor]``
+    (noise, exposure, spectra-set replacements) and its exposure program,
+    parsed once."""
     from ..optics import OpticsParams
+    from ..sensor.exposure_program import EXPOSURE_POLICIES, ExposureProgram
     from ..sensor.params import NOISE_MODES, SensorParams
 
     optics = _dataclass_table(ck, one_f_number(data.get("optics", {})), "optics", OpticsParams, {})
@@ -343,7 +360,7 @@ def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, di
     sensor_all = _sensor_values(ck, preset, sensor_all, cfas, base)
     if preset is not None:
         capture["sensor_preset"] = preset.name
-    policy = capture.get("exposure_policy", DEFAULT_EXPOSURE_POLICY)
+    policy = capture.get("exposure_policy", ExposureProgram.policy)
     fixed = capture.get("exposure", "auto") != "auto"
     if policy == "fixed" and not fixed:
         ck.fail("sensor.exposure", "exposure_policy 'fixed' needs an exposure time in seconds here")
@@ -359,7 +376,8 @@ def _optics_sensor(ck: _Checker, data: dict, cfas, base: Path) -> tuple[dict, di
     for key in ("max_exposure_s", "max_analog_gain"):
         if key in capture and policy not in ("program", "bayer"):
             ck.fail(f"sensor.{key}", f"applies to exposure_policy \"program\" or \"bayer\", not {policy!r}")
-    return optics, sensor_all, capture
+    program = ExposureProgram.from_table({k: capture.pop(k) for k in _PROGRAM_KEYS if k in capture})
+    return optics, sensor_all, capture, program
 
 
 def _worker_recycling(ck: _Checker, data: dict) -> tuple[int | None, int | None]:
@@ -449,10 +467,10 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
     demosaics, demosaic_options = _demosaics(ck, data["demosaics"], isp_cfg)
     luminances = ck.number_list(data.get("luminances", [100.0]), "luminances")
     sweeps = tuple(_sweeps(ck, data.get("sweep", []), scenes))
-    optics, sensor_all, capture = _optics_sensor(ck, data, cfas, base)
+    optics, sensor_all, capture, program = _optics_sensor(ck, data, cfas, base)
     from .physical import check_physical, check_realisations  # issue 27: values no camera meets, by key
 
-    check_physical(ck.fail, luminances, sweeps, capture)
+    check_physical(ck.fail, luminances, sweeps, program)
     check_realisations(ck.fail, seeds, capture.get("noise", "all"))
     mean_match = ck.boolean(data.get("mean_match", True), "mean_match")
     options = metric_options(ck, data.get("metrics", {}))
@@ -465,6 +483,7 @@ def parse_config(data: dict, *, where: str = "config", base: Path | None = None)
         ranges=ranges, clip_scores=clip, output=output, workers=workers, seeds=seeds, range_policy=policy,
         metric_options=options, demosaic_options=demosaic_options, render_seeds=render_seeds,
         worker_max_tasks=max_tasks, worker_max_memory=max_memory,
+        exposure_program=program,
     )
 
 

@@ -239,7 +239,7 @@ def _pocs_step(p, chain, out: _Rows, log, ideal, raw) -> dict:
 def _context_step(p, chain, out: _Rows, log, oi, ideal, study_seed, ref, ref_vals, default_imgs):
     """Sensor-noise spread and the spread between CFAs (the scale a render
     error is read against): (noise std per metric, CFA values)."""
-    from .tasks import task_seed
+    from .task_values import task_seed
 
     noise_std = {}
     if p.noise_seeds:
@@ -288,7 +288,7 @@ def run_convergence(plan: ConvergencePlan, *, log=None, progress: bool = False) 
     lines (default: stderr); ``progress``: a bar on a terminal, advanced by
     each of those lines."""
     from ..io.progress import progress_bar, stderr_log
-    from .tasks import task_seed
+    from .task_values import task_seed
 
     bar = progress_bar(_steps(plan), "convergence", enabled=progress)
     write = log or stderr_log()
@@ -332,7 +332,7 @@ def _difference_deviation(chain, p, ref, renders, metrics) -> tuple[dict, dict]:
     two CFAs; rms over renders of the mean over CFAs of d_c, a shift common
     to every CFA, which cannot).
     """
-    from .tasks import task_seed
+    from .task_values import task_seed
 
     def values(img):
         oi = chain.optical(img)

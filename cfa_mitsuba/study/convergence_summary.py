@@ -335,7 +335,7 @@ def write_outputs(result: ConvergenceResult, out_dir) -> dict:
     returns {kind: path}.  The plot is the report stage's
     (:func:`cfa_mitsuba.report.convergence.write_convergence` writes all)."""
     from ..io import atomic_output, check_writable_dir
-    from .tasks import safe_label
+    from .details_layout import safe_label
 
     out = check_writable_dir(out_dir)
     stem = f"convergence_{safe_label(result.plan.name)}"

@@ -2,7 +2,8 @@
 order: what :mod:`.mtf_table`, :mod:`.patches` and :mod:`.steps` turn into
 tidy tables (mtf.csv, patches.csv, steps.csv).
 
-A task keeps the curves of its first realisation only (tasks.py), so these
+A task keeps the curves of its first realisation only (chain.py, tasks.py;
+the folders: details_layout.py), so these
 tables describe one capture per (scene, CFA, demosaic, condition), the one
 the report draws; metrics.csv holds every realisation's values.
 """
@@ -15,7 +16,8 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from .tasks import EvaluationTask, safe_label
+from .details_layout import ideal_folder, output_folder
+from .task_values import EvaluationTask
 
 #: The columns that name an evaluation in the detail tables.
 KEY_COLUMNS = ("scene", "cfa", "demosaic", "condition", "luminance")
@@ -63,12 +65,12 @@ def detail_entries(tasks, details_dir, *, ideal: bool = True):
         lum = float(t.condition.luminance)
         label = t.cfa_label or t.cfa
         for method in t.demosaics:
-            data = _read(root / t.scene / safe_label(label) / method / f"{tag}.json")
+            data = _read(output_folder(root, t.scene, label, method) / f"{tag}.json")
             if data is not None:
                 yield DetailEntry(t.scene, label, method, tag, lum, data)
         if ideal and (t.scene, tag) not in seen_ideal:
             seen_ideal.add((t.scene, tag))
-            data = _read(root / t.scene / "ideal" / f"{tag}.json")
+            data = _read(ideal_folder(root, t.scene) / f"{tag}.json")
             if data is not None:
                 yield DetailEntry(t.scene, "ideal", "none", tag, lum, data)
 

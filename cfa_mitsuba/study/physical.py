@@ -23,10 +23,12 @@ __all__ = ["MAX_LUMINANCE_CD_M2", "check_physical", "check_realisations"]
 MAX_LUMINANCE_CD_M2 = 1e10
 
 
-def check_physical(fail, luminances, sweeps, capture: dict) -> None:
+def check_physical(fail, luminances, sweeps, program) -> None:
     """Refuse (through ``fail(key, reason)``, the config checker's) a
     luminance beyond :data:`MAX_LUMINANCE_CD_M2` in ``luminances``, a
-    sweep's luminance axis or ``sensor.reference_luminance_cd_m2``."""
+    sweep's luminance axis or the exposure program's
+    (``sensor.reference_luminance_cd_m2``); a sweep's 'auto' exposure under
+    the 'fixed' policy, which chooses none."""
     why = f"must be at most {MAX_LUMINANCE_CD_M2:g} cd/m^2 (the sun's disc is about 1.6e9)"
     for i, lum in enumerate(luminances):
         if lum > MAX_LUMINANCE_CD_M2:
@@ -35,8 +37,11 @@ def check_physical(fail, luminances, sweeps, capture: dict) -> None:
         for j, lum in enumerate(sw.values.get("luminance", ())):
             if lum > MAX_LUMINANCE_CD_M2:
                 fail(f"sweep[{i}].luminance[{j}]", f"{why}, got {lum:g}")
-    ref = capture.get("reference_luminance_cd_m2")
-    if ref is not None and ref > MAX_LUMINANCE_CD_M2:
+        if program.policy == "fixed" and "auto" in sw.values.get("exposure", ()):
+            fail(f"sweep[{i}].exposure", "'auto' needs an exposure policy that chooses the exposure; "
+                                         "exposure_policy \"fixed\" takes times in seconds")
+    ref = program.reference_luminance_cd_m2
+    if ref > MAX_LUMINANCE_CD_M2:
         fail("sensor.reference_luminance_cd_m2", f"{why}, got {ref:g}")
 
 

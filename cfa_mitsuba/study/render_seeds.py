@@ -16,17 +16,17 @@ def path_traced(scene) -> bool:
     slanted-edge and chirp renders that differ by at most 1.6e-7 of their
     range, float32 rounding; the puppy's differ by 19 % rms per pixel), so
     they are rendered once; a measured image is not rendered at all."""
-    from ..render.measured import is_measured_image
-
-    if is_measured_image(scene.file or scene.name):
-        return False
     return is_3d(scene)
 
 
 def is_3d(scene) -> bool:
-    """Whether the scene path-traces (max_depth > 1)."""
+    """Whether the scene path-traces (max_depth > 1); a measured image is no
+    scene file and does not."""
     from .. import render
+    from ..render.measured import is_measured_image
 
+    if is_measured_image(scene.file or scene.name):
+        return False
     access = {k: scene.render[k] for k in ("allow_outside_paths", "defines", "asset_root") if k in scene.render}
     return bool(render.get_scene(scene.file or scene.name, **access).is_3d)
 

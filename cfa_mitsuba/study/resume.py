@@ -18,12 +18,14 @@ import shutil
 import stat
 from pathlib import Path
 
+from .task_values import TaskResult
+
 #: The largest task file read back (a task's rows are a few kB; a study's
 #: biggest, a sweep task with every metric and several realisations, well
 #: under 1 MB).
 MAX_TASK_FILE_BYTES = 64 * 2**20
-#: Keys of an evaluation task's result (study.tasks.evaluate_task) and the
-#: type each holds.
+#: Keys of an evaluation task's result as saved (study.task_values.TaskResult.to_dict)
+#: and the type each holds.
 _SHAPE = {"rows": list, "failures": list, "ideal_rows": list, "timing": dict}
 
 
@@ -91,7 +93,7 @@ def _remove(f: Path) -> None:
 
 
 def load_finished(work: Path, task_ids, log) -> dict:
-    """{task id: result} of the finished tasks among ``task_ids`` under
+    """{task id: :class:`~.task_values.TaskResult`} of the finished tasks among ``task_ids`` under
     ``work``.  A file that is not a valid result is removed (when it is a
     file) and its task left to run again; one notice line says how many and
     why the first was refused."""
@@ -102,7 +104,7 @@ def load_finished(work: Path, task_ids, log) -> dict:
             continue
         result, why = _read(f)
         if why is None:
-            done[tid] = result
+            done[tid] = TaskResult.from_dict(result)
             continue
         bad.append(f"{f.name} {why}")
         _remove(f)

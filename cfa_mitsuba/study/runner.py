@@ -30,8 +30,7 @@ again and ends with the same ``metrics.csv`` as an uninterrupted run.
 
 from __future__ import annotations
 
-__all__ = ["StudyResult", "run_study", "plan_study", "evaluate_renders", "write_timing",
-           "timing_summary"]
+__all__ = ["StudyResult", "run_study", "plan_study", "write_timing", "timing_summary"]
 
 import hashlib
 import json
@@ -47,11 +46,11 @@ from ..metrics import scored_metrics
 from .config import StudyConfig
 from .cfa_facts import write_cfa_facts
 from .sensor_curves import write_sensor_curves
-from .tables import mean_table, order_rows, write_tables
+from .tables import order_rows, write_tables
 from .snr import write_snr_tables
 from .detail_tables import write_detail_tables
 from .render_seeds import is_3d as _is_3d, path_traced, render_seeded
-from .tasks import EvaluationTask, evaluate_group, evaluate_task, render_task
+from .tasks import EvaluationTask, evaluate_group, render_task
 
 #: Metrics that enter the scores (the paper's eight); other rows in
 #: metrics.csv (delta-l, delta-e76, scielab-interior) are reported only.
@@ -71,12 +70,18 @@ class StudyResult:
 
 
 def _source(scene, render_common: dict, cond=None) -> dict:
-    """The render a scene is evaluated on: its settings, plus the condition's
-    f-number for a 3D scene (thin-lens defocus; a chart's render does not
-    depend on it) when the condition sets one."""
+    """The render a scene is evaluated on: its settings, plus, for a 3D
+    scene, the render settings the condition's axes set when it gives them
+    (:attr:`.axes.Axis.render_setting`: the f-number's thin-lens defocus;
+    a chart's render depends on none)."""
+    from .axes import AXES
+
     settings = {**render_common, **scene.render}
-    if cond is not None and cond.f_number is not None and _is_3d(scene):
-        settings["f_number"] = float(cond.f_number)
+    given = {} if cond is None else {
+        axis.render_setting: float(getattr(cond, name)) if axis.numeric else getattr(cond, name)
+        for name, axis in AXES.items() if axis.render_setting is not None and getattr(cond, name) is not None}
+    if given and _is_3d(scene):  # asked only when a condition sets one (a measured image is no scene file)
+        settings.update(given)
     src = {"kind": "cache", "scene": scene.name, "settings": settings}
     if scene.file:
         src["file"] = scene.file
@@ -262,7 +267,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
 
     from .resume import load_finished  # issue 27: untrusted resume files are recomputed, one notice
 
-    done: dict[str, dict] = load_finished(work, [_task_id(t) for t in tasks], log) if work.is_dir() else {}
+    done: dict = load_finished(work, [_task_id(t) for t in tasks], log) if work.is_dir() else {}
     todo = [t for t in tasks if _task_id(t) not in done]
     reused = len(tasks) - len(todo)
 
@@ -306,9 +311,9 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         def got_eval(task, result):
             tid = _task_id(task)
             with atomic_output(work / f"{tid}.json") as tmp:
-                tmp.write_text(json.dumps(result))
+                tmp.write_text(json.dumps(result.to_dict()))
             done[tid] = result
-            for k, v in result["timing"].items():
+            for k, v in result.timing.items():
                 timing["tasks"][k] = timing["tasks"].get(k, 0.0) + v
 
         def got_group(group, results):
@@ -324,8 +329,9 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
             ceiling = f" or past {format_bytes(executor.max_memory)}" if executor.max_memory else ""
             log(f"workers recycled {executor.recycled} time(s) (after {executor.max_tasks} tasks{ceiling})")
 
-    rows = [r for task in tasks for r in done[_task_id(task)]["rows"]]
-    failures = [f for task in tasks for f in done[_task_id(task)].get("failures", [])]
+    results = [done[_task_id(task)] for task in tasks]
+    rows = [r for result in results for r in result.rows]
+    failures = [f for result in results for f in result.failures]
     _write_failures(out, failures, log)
     _require_a_measurement(rows, failures, out)
     order = {
@@ -333,7 +339,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         "demosaic": list(config.demosaics), "metric": list(SCORED_METRICS),
     }
     realisations = order_rows(rows, order)
-    ideal = order_rows([r for task in tasks for r in done[_task_id(task)].get("ideal_rows", [])], order)
+    ideal = order_rows([r for result in results for r in result.ideal_rows], order)
     if not render_info:  # everything was reused: the chirp's geometry for the MSP range
         render_info = {_render_label(s): render_task(s) for s in sources if s["scene"] == "chirp"}
     builtin = {s.name for s in config.scenes if s.file is None}
@@ -456,68 +462,3 @@ def timing_summary(result: StudyResult) -> str:
     inner = ", ".join(f"{k[:-2]} {v:.1f} s" for k, v in t.items())
     return (f"done in {p.get('total_s', 0):.1f} s ({'; '.join(parts)}); {n_tasks - reused} task(s) run, "
             f"{reused} reused; worker time: {inner}")
-
-
-def evaluate_renders(renders_dir, cfas, demosaics, out_dir, *, luminances=(None,), seed: int = 0,
-                     workers: int | None = None, progress: bool = True, log=None, realisations: int = 3):
-    """``cfa-mitsuba evaluate``: every spectral EXR in ``renders_dir`` (as
-    written by ``cfa-mitsuba render``) through the given CFAs and demosaics,
-    with the default optics, sensor and processing.  Each EXR feeds the
-    metrics its sidecar declares (a bare JCGT EXR: the image metrics).
-    ``luminances`` None keeps each render's own luminance; ``realisations``
-    noise realisations per capture (the mean and its 95 % interval, as in a
-    study).  Writes ``metrics.csv``; returns the table.
-    """
-    from .. import io
-    from .chain import ChainSettings
-    from ..metrics import metrics_for_scene
-    from .config import IMAGE_METRICS
-    from .executors import make_executor
-
-    log = log or (lambda msg: print(msg, file=sys.stderr))
-    rdir = Path(renders_dir)
-    if not rdir.is_dir():
-        raise CfaMitsubaError(f"--renders: no such directory {str(rdir)!r}")
-    exrs = sorted(rdir.glob("*.exr"))
-    if not exrs:
-        raise CfaMitsubaError(f"--renders: no .exr files in {str(rdir)!r}")
-    out = check_writable_dir(out_dir)
-    chain = ChainSettings()
-    tasks = []
-    for exr in exrs:
-        img = io.read_spectral_exr(exr)
-        meta = img.meta
-        scene = str(meta.get("scene") or exr.stem)
-        # the metrics its kind feeds (an EXR written before sidecars named the kind lists them)
-        metrics = list(metrics_for_scene(meta["kind"]) if meta.get("kind") else meta.get("metrics") or IMAGE_METRICS)
-        for lum in luminances:
-            level = float(lum) if lum is not None else float(meta.get("luminance_cd_m2") or 100.0)
-            for cfa in cfas:
-                tasks.append(EvaluationTask(
-                    source={"kind": "exr", "path": str(exr.resolve())}, scene=scene,
-                    condition=chain.base_condition(luminance=level, seed=seed), cfa=cfa, cfa_label=_cfa_label(cfa),
-                    demosaics=tuple(demosaics), metrics=tuple(metrics), chain=chain, realisations=realisations))
-    rows, failures = [], []
-
-    def got(task, result):
-        rows.extend(result["rows"])
-        failures.extend(result.get("failures", []))
-
-    with make_executor(workers=workers) as executor:
-        log(f"evaluate: {len(exrs)} render(s) x {len(cfas)} CFA(s) x {len(demosaics)} demosaic(s) "
-            f"on {executor.description}")
-        _run_tasks(executor, evaluate_task, tasks, "evaluate", progress, got)
-    order = {"scene": [], "cfa": [_cfa_label(c) for c in cfas], "demosaic": list(demosaics),
-             "metric": list(SCORED_METRICS)}
-    realisations = order_rows(rows, order)
-    metrics = mean_table(realisations)
-    write_cfa_facts(out, cfas, order["cfa"], chain, chain.base_condition())
-    with atomic_output(out / "metrics.csv") as tmp:
-        metrics.to_csv(tmp, index=False, float_format="%.10g")
-    # a metric that cannot be measured fails in every realisation: list it once, with the first one's reason
-    once: dict = {}
-    for f in failures:
-        once.setdefault(tuple(sorted((k, str(v)) for k, v in f.items() if k not in ("realisation", "error"))), f)
-    _write_failures(out, list(once.values()), log)
-    _require_a_measurement(rows, failures, out)
-    return metrics

@@ -8,7 +8,7 @@ import shutil
 
 from conftest import run_cli
 from io_progress_helpers import run_on_terminal
-from test_report_fixtures import study_dir
+from report_fixtures import study_dir
 
 
 def test_report_quiet_prints_only_the_path(tmp_path_factory, tmp_path):

@@ -77,7 +77,7 @@ def last_bit_change(reference: pd.Series, perturbations=(1, 2, 3)) -> pd.Series:
         chain._OPTICAL.items.clear()
         chain._IDEAL.items.clear()
         try:
-            rows = [r for t in plan for r in tasks.evaluate_task(dataclasses.replace(t, realisations=1))["rows"]]
+            rows = [r for t in plan for r in tasks.evaluate_task(dataclasses.replace(t, realisations=1)).rows]
         finally:
             tasks.load_scene_image = original
         return pd.DataFrame(rows).query("realisation == 0").set_index(KEYS)["value"]

@@ -13,10 +13,11 @@ import cfa_mitsuba as cm
 from cfa_mitsuba import colorimetry, spectra
 from cfa_mitsuba.design import gradient as G
 from cfa_mitsuba.design import proxy as P
+from cfa_mitsuba.sensor import ExposureProgram
 from cfa_mitsuba.design.spectra import GRID_NM, spline_qe
 
 WL = spectra.DEFAULT_WAVELENGTHS
-SETTINGS = P.ProxySettings(4.0, 2.2, 6200.0, 6.2, 0.1, policy="program", luminance_cd_m2=10.0,
+SETTINGS = P.ProxySettings(4.0, 2.2, 6200.0, 6.2, 0.1, exposure=ExposureProgram("program"), luminance_cd_m2=10.0,
                            demosaics=("bilinear",))
 
 

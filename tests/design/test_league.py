@@ -19,7 +19,7 @@ def test_the_league_config_holds_every_cfa_of_the_project():
 
     cfg = load_config(REPO / "configs" / "league.toml")
     assert list(cfg.cfas) == cm.sensor.list_cfas()
-    assert cfg.capture.get("exposure_policy") == "program"
+    assert cfg.exposure_program.policy == "program"
     lums = {float(v) for s in cfg.sweeps for v in s.values.get("luminance", ())} | set(cfg.luminances)
     assert min(lums) == 3 and max(lums) == 400
 

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import cfa_mitsuba as cm
+import registry_checks as checks
 from cfa_mitsuba.errors import CfaMitsubaError
 from cfa_mitsuba.isp.denoise import _tuning, check_denoise_options, get_denoiser, list_denoisers
 from cfa_mitsuba.isp.noise_profile import gat_forward, gat_inverse
@@ -22,9 +23,14 @@ def gray_bar():
     return cm.render.render_cached("gray-bar", width=320, height=96)
 
 
+@pytest.mark.parametrize("name", [n for n, _ in list_denoisers()])
+def test_every_denoiser_passes_the_generic_checks(name):
+    checks.check_denoiser(name)
+
+
 def test_the_denoisers_are_registered_with_their_domains_and_licences():
     names = [n for n, _ in list_denoisers()]
-    assert names[:4] == ["none", "wavelet", "nl-means", "wavelet-ti"]
+    assert names[0] == "none" and get_denoiser("none").function is None  # the default: no stage
     for n in names:
         m = get_denoiser(n)
         assert m.domains and set(m.domains) <= {"raw", "rgb"} and m.licence
@@ -100,8 +106,8 @@ def test_each_denoiser_raises_ysnr_at_3_cd_m2_on_bayer(gray_bar):
 
     base = ysnr("none")
     gains = {n: ysnr(n) / base for n in DENOISERS}
-    for n, g in gains.items():
-        assert g >= YSNR_GAIN[n], (n, g)
+    for n, g in gains.items():  # every denoiser gains; the shipped ones at least what they measured
+        assert g >= YSNR_GAIN.get(n, 1.0), (n, g)
     assert max(gains.values()) >= 2.0
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import re
 import shutil
 
-from test_report_fixtures import study_dir
+from report_fixtures import study_dir
 
 from cfa_mitsuba.report import build_report
 
@@ -28,7 +28,7 @@ def test_tables_and_the_primary_details_draw_every_figure(tmp_path_factory, tmp_
     page = build_report(out, formats=(), workers=1).read_text()
     absent = re.findall(r'<div class="absent"><b>([^<]*)</b>', page)
     assert absent == [], absent
-    for key in ("crops-puppy", "patch-errors", "step-snr", "mtf", "moire", "gray-bar", "scielab-maps",
+    for key in ("crops-puppy", "patch-errors", "step-snr", "mtf", "moire", "achromatic", "scielab-maps",
                 "outputs-puppy", "sensor-curves"):
         assert f'data-figure="{key}"' in page, key
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from test_report_fixtures import study_dir
+from report_fixtures import study_dir
 
 from cfa_mitsuba.report.crops import ZOOM, crop_cell, crop_sheet
 from cfa_mitsuba.report.results import load_results
