@@ -18,7 +18,7 @@ import pytest
 from distributed import Client, WorkerPlugin
 
 from conftest import REPO
-from test_study_run import dask_cluster  # noqa: F401 (the suite's one Dask cluster fixture)
+from dask_cluster import dask_cluster  # noqa: F401 (the suite's one Dask cluster fixture)
 
 SMALL = """\
 name = "small"
