@@ -323,11 +323,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         groups = _task_groups(todo, render_info, getattr(executor, "workers", 0) or 1)
         _run_tasks(executor, evaluate_group, groups, "evaluate", progress, got_group, size=len)
         timing["phases"]["evaluate_s"] = time.perf_counter() - t
-        if getattr(executor, "recycled", 0):  # a long run: workers renewed (study.executors)
-            from ..io.limits import format_bytes
-
-            ceiling = f" or past {format_bytes(executor.max_memory)}" if executor.max_memory else ""
-            log(f"workers recycled {executor.recycled} time(s) (after {executor.max_tasks} tasks{ceiling})")
+        _say_recycled(executor, log)
 
     results = [done[_task_id(task)] for task in tasks]
     rows = [r for result in results for r in result.rows]
@@ -357,6 +353,15 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     result = StudyResult(out, metrics, scores, timing, len(tasks), reused)
     write_timing(result)
     return result
+
+
+def _say_recycled(executor, log) -> None:
+    """A long run's one line on the workers it renewed (study.executors), if any."""
+    if getattr(executor, "recycled", 0):
+        from ..io.limits import format_bytes
+
+        ceiling = f" or past {format_bytes(executor.max_memory)}" if executor.max_memory else ""
+        log(f"workers recycled {executor.recycled} time(s) (after {executor.max_tasks} tasks{ceiling})")
 
 
 def _counted_twice(size, tasks: list) -> str:
