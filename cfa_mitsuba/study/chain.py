@@ -29,6 +29,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from . import roi
 from .axes import AXES
 from .conditions import Condition
 from .task_values import CameraOutput, TaskEvaluation, realisation_seeds
@@ -60,7 +61,9 @@ class ChainSettings:
     ``mean_match`` scales each camera output to the ideal's mean (ISETCam);
     ``spectra_sets`` maps a CFA's own spectra set to the set used instead
     (``[sensor.spectra_sets]``); ``metric_options`` the keyword options of
-    each metric (``[metrics.<name>]``); both as sorted pairs.
+    each metric (``[metrics.<name>]``); both as sorted pairs.  ``roi``:
+    demosaic and measure only the regions the metrics read where that gives
+    the whole image's values (:mod:`.roi`; False: whole images always).
     """
 
     optics: object = None
@@ -72,6 +75,7 @@ class ChainSettings:
     spectra_sets: tuple = ()
     metric_options: tuple = ()
     demosaic_options: tuple = ()
+    roi: bool = True
 
     def __post_init__(self):
         from ..optics import OpticsParams
@@ -432,7 +436,10 @@ class CameraChain:
             try:
                 if prepared is None:
                     prepared = self.prepare(raw, method, cond)  # once for every method (isp.prepare)
-                out = self.process(prepared, method, cond)
+                # only the windows the metrics read, when that gives the whole image's values (.roi)
+                rects = roi.plan(self, prepared, method, cond, ideal, metric_names, details=details)
+                out = (self.process(prepared, method, cond) if rects is None
+                       else roi.process_windows(self, prepared, method, cond, rects, ideal.xyz))
                 results, failures, scale = self.measure(ideal, out, metric_names, cond, details=details)
             except CfaMitsubaError as exc:
                 yield raw, ideal, method, exc

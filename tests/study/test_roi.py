@@ -1,0 +1,125 @@
+"""Regions of interest (study/roi.py): demosaicing and measuring only the
+windows the metrics read gives the whole image's values bit for bit, on
+every chart scene, every demosaic and CFAs of several tile sizes and
+families; what needs the whole image turns the windows off."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cfa_mitsuba as cm
+from cfa_mitsuba.metrics import metrics_for_scene, result_rows
+from cfa_mitsuba.study import roi
+from cfa_mitsuba.study.chain import CameraChain, ChainSettings
+from registry_checks import _quick_render_settings, _scene_of_kind
+
+#: every demosaic of the package (a toy another test registers is not one: their module names them)
+DEMOSAICS = tuple(name for name, _ in cm.isp.list_demosaics()
+                  if cm.isp.get_demosaic_record(name).function.__module__.startswith("cfa_mitsuba.isp."))
+#: 2x2 Bayer, 3x3 RGB, 4x4 RGBW, 6x6 X-Trans, and cmy2's 2x3 tile of six channels
+CFAS = ("bayer", "rgb4", "rgbw2", "xtrans", "cmy2")
+KINDS = ("macbeth", "slanted-edge", "chirp", "gray-bar")
+#: POCS with its early stop off: a bounded support (with the stop on it is demosaiced whole); two
+#: iterations, so that its windows stay smaller than these small images
+LOCAL_POCS = (("pocs", (("iterations", 2), ("tolerance", 0.0))),)
+
+
+#: renders taller than the quick study's where its camera image is too small for POCS's windows
+SIZES = {"slanted-edge": {"width": 512, "height": 448}, "chirp": {"width": 500, "height": 320}}
+
+
+def _image(kind: str):
+    name = _scene_of_kind(kind)
+    return cm.render.render_cached(name, **SIZES.get(kind, _quick_render_settings().get(name, {})))
+
+
+def _evaluate(image, cfa, metrics, settings, cond, seed=7):
+    chain = CameraChain(settings)
+    out = {}
+    for _, _, method, ev in chain.evaluate(image, cfa, DEMOSAICS, metrics, cond, seed, ("roi-test", id(image)),
+                                           details=False):
+        assert hasattr(ev, "results"), ev
+        out[method] = (result_rows(ev.results), ev.failures, ev.processed)
+    return out
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_windows_give_the_whole_images_values_to_the_last_bit(kind):
+    image = _image(kind)
+    metrics = list(metrics_for_scene(kind))
+    whole_settings = ChainSettings(mean_match=False, roi=False, demosaic_options=LOCAL_POCS)
+    roi_settings = ChainSettings(mean_match=False, demosaic_options=LOCAL_POCS)
+    cond = whole_settings.base_condition(luminance=100.0, seed=1)
+    for cfa in CFAS:
+        whole = _evaluate(image, cfa, metrics, whole_settings, cond)
+        part = _evaluate(image, cfa, metrics, roi_settings, cond)
+        for method in DEMOSAICS:
+            rows_w, failed_w, proc_w = whole[method]
+            rows_r, failed_r, proc_r = part[method]
+            windows = proc_r.meta.get("roi", {}).get("windows")
+            # the windows were used, and are smaller than the image; POCS on a luminance reference (no single
+            # densest channel: rgb4, cmy2) declares no support and is demosaiced whole
+            if cm.isp.get_demosaic_record(method).support(cm.sensor.get_cfa(cfa), dict(LOCAL_POCS[0][1])) is None:
+                assert method == "pocs" and cfa in ("rgb4", "cmy2") and windows is None
+                continue
+            assert windows, (kind, cfa, method)
+            h, w = proc_r.xyz.shape[:2]
+            assert sum((b[2] - b[0]) * (b[3] - b[1]) for b in windows) < h * w
+            th, tw = cm.sensor.get_cfa(cfa).pattern.shape
+            assert all(b[0] % th == 0 and b[1] % tw == 0 for b in windows), windows  # the tile's phase kept
+            assert rows_r == rows_w and failed_r == failed_w, (kind, cfa, method)
+            assert "roi" not in proc_w.meta
+
+
+def test_macbeth_windows_are_the_patches_and_the_supports_margin():
+    """The patches' windows: each patch interior widened by the method's
+    declared support and aligned outwards on the tile grid, overlapping
+    ones merged; every patch lies inside a window by at least the margin."""
+    geometry = {"patches": [(10, 10, 20, 20), (10, 40, 20, 50), (10, 23, 20, 25)]}
+    regions = cm.metrics.get_metric("delta-e").reads(geometry, (60, 80), {})
+    got = roi.windows(regions, 3, (60, 80), (6, 6))
+    assert got == [(6, 6, 24, 30), (6, 36, 24, 54)]  # the first and third merged
+    assert roi.windows([(0, 75, 3, 80)], 2, (60, 80), (4, 4)) == [(0, 72, 8, 80)]  # clipped at the edge
+    # a row across the image and a column band overlap but stay apart (their box would be the image)
+    cross = roi.windows([(30, 0, 31, 80), (2, 40, 58, 46)], 1, (60, 80), (2, 2))
+    assert cross == [(0, 38, 60, 48), (28, 0, 32, 80)]
+    assert roi.core((28, 0, 32, 80), 1, (60, 80)) == (29, 0, 31, 80)  # in by the margin, not at the edges
+
+
+@pytest.mark.parametrize("cfa", ("bayer", "xtrans"))
+def test_support_grows_with_pocs_iterations_and_is_whole_with_its_early_stop(cfa):
+    rec = cm.isp.get_demosaic_record("pocs")
+    c = cm.sensor.get_cfa(cfa)
+    r5, r10 = rec.support(c, {"tolerance": 0.0, "iterations": 5}), rec.support(c, {"tolerance": 0.0, "iterations": 10})
+    assert 0 < r5 < r10 and (r10 - r5) % 5 == 0  # the low-pass half-length per iteration
+    assert rec.support(c, {}) is None  # the default early stop reads the whole image
+    assert cm.isp.get_demosaic_record("bilinear").support(c, {}) >= 1
+
+
+def test_what_needs_the_whole_image_turns_the_windows_off():
+    """Mean-matching (every shipped config), a denoiser, kept details, a
+    natural scene's metrics and the switch itself each give the whole image."""
+    image = _image("macbeth")
+    cond = ChainSettings().base_condition(luminance=100.0, seed=1)
+    metrics = list(metrics_for_scene("macbeth"))
+
+    def windows_of(settings, details=False, names=metrics, method="bilinear"):
+        chain = CameraChain(settings)
+        oi = chain.optical(image, cond)
+        ideal = chain.ideal(oi, cond)
+        prepared = chain.prepare(chain.capture(oi, "bayer", cond, 3), method, cond)
+        return roi.plan(chain, prepared, method, cond, ideal, names, details=details)
+
+    assert windows_of(ChainSettings(mean_match=False))[0] == 1  # bilinear's margin on Bayer
+    assert windows_of(ChainSettings()) is None  # mean-matching reads the whole output
+    assert windows_of(ChainSettings(mean_match=False, roi=False)) is None
+    assert windows_of(ChainSettings(mean_match=False), details=True) is None
+    assert windows_of(ChainSettings(mean_match=False, isp={"denoise": "wavelet"})) is None
+    assert windows_of(ChainSettings(mean_match=False), names=["scielab"]) is None
+    assert windows_of(ChainSettings(mean_match=False), method="pocs") is None  # its early stop
+    assert roi.blocked_by(ChainSettings(mean_match=False), {}, _Prepared(), details=False) is None
+
+
+class _Prepared:
+    readout = {"mode": "full"}
