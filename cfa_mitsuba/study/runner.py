@@ -313,8 +313,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
             with atomic_output(work / f"{tid}.json") as tmp:
                 tmp.write_text(json.dumps(result.to_dict()))
             done[tid] = result
-            for k, v in result.timing.items():
-                timing["tasks"][k] = timing["tasks"].get(k, 0.0) + v
+            _add_timing(timing, task, result)
 
         def got_group(group, results):
             for task, result in zip(group, results):
@@ -353,6 +352,21 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     result = StudyResult(out, metrics, scores, timing, len(tasks), reused)
     write_timing(result)
     return result
+
+
+def _add_timing(timing: dict, task, result) -> None:
+    """Add a task's worker seconds per stage to timing.json's ``tasks`` and
+    to its scene's entry in ``scenes`` (with the captures, one per
+    realisation the task measured, and the camera outputs, a capture per
+    demosaic: the per-capture cost benchmarks/bench_study.py prints)."""
+    scene = timing.setdefault("scenes", {}).setdefault(task.scene, {"tasks": 0, "captures": 0, "outputs": 0})
+    captures = int(task.realisations) if result.rows else 0
+    scene["tasks"] += 1
+    scene["captures"] += captures
+    scene["outputs"] += captures * len(task.demosaics)
+    for k, v in result.timing.items():
+        timing["tasks"][k] = timing["tasks"].get(k, 0.0) + v
+        scene[k] = scene.get(k, 0.0) + v
 
 
 def _say_recycled(executor, log) -> None:
