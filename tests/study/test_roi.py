@@ -45,7 +45,10 @@ def _evaluate(image, cfa, metrics, settings, cond, seed=7):
 
 
 @pytest.mark.parametrize("kind", KINDS)
-def test_windows_give_the_whole_images_values_to_the_last_bit(kind):
+def test_windows_give_the_whole_images_values_to_the_last_bit(kind, monkeypatch):
+    # windows free of their fixed cost: used on these small images too, one per region (the values
+    # cannot depend on how the windows are cut, which this cuts as finely as it can)
+    monkeypatch.setattr(roi, "WINDOW_COST_PX", 0)
     image = _image(kind)
     metrics = list(metrics_for_scene(kind))
     whole_settings = ChainSettings(mean_match=False, roi=False, demosaic_options=LOCAL_POCS)
@@ -72,19 +75,22 @@ def test_windows_give_the_whole_images_values_to_the_last_bit(kind):
             assert "roi" not in proc_w.meta
 
 
-def test_macbeth_windows_are_the_patches_and_the_supports_margin():
+def test_macbeth_windows_are_the_patches_and_the_supports_margin(monkeypatch):
     """The patches' windows: each patch interior widened by the method's
-    declared support and aligned outwards on the tile grid, overlapping
-    ones merged; every patch lies inside a window by at least the margin."""
-    geometry = {"patches": [(10, 10, 20, 20), (10, 40, 20, 50), (10, 23, 20, 25)]}
-    regions = cm.metrics.get_metric("delta-e").reads(geometry, (60, 80), {})
-    got = roi.windows(regions, 3, (60, 80), (6, 6))
-    assert got == [(6, 6, 24, 30), (6, 36, 24, 54)]  # the first and third merged
-    assert roi.windows([(0, 75, 3, 80)], 2, (60, 80), (4, 4)) == [(0, 72, 8, 80)]  # clipped at the edge
-    # a row across the image and a column band overlap but stay apart (their box would be the image)
-    cross = roi.windows([(30, 0, 31, 80), (2, 40, 58, 46)], 1, (60, 80), (2, 2))
-    assert cross == [(0, 38, 60, 48), (28, 0, 32, 80)]
-    assert roi.core((28, 0, 32, 80), 1, (60, 80)) == (29, 0, 31, 80)  # in by the margin, not at the edges
+    declared support and aligned outwards on the tile grid, merged where
+    their box costs no more than the two (a window's fixed cost counted as
+    ``WINDOW_COST_PX`` pixels)."""
+    geometry = {"patches": [(10, 10, 20, 20), (10, 400, 20, 410), (10, 23, 20, 25)]}
+    regions = cm.metrics.get_metric("delta-e").reads(geometry, (600, 800), {})
+    assert roi.windows(regions, 3, (600, 800), (6, 6)) == [(6, 6, 24, 414)]  # one window costs less than two
+    monkeypatch.setattr(roi, "WINDOW_COST_PX", 0)
+    got = roi.windows(regions, 3, (600, 800), (6, 6))
+    assert got == [(6, 6, 24, 30), (6, 396, 24, 414)]  # the first and third merged; the second too far
+    assert roi.windows([(0, 775, 3, 800)], 2, (600, 800), (4, 4)) == [(0, 772, 8, 800)]  # clipped at the edge
+    # a row across the image and a column band stay apart where their box would cost more than the two
+    cross = roi.windows([(300, 0, 301, 800), (2, 400, 598, 406)], 1, (600, 800), (2, 2))
+    assert cross == [(0, 398, 600, 408), (298, 0, 302, 800)]
+    assert roi.core((298, 0, 302, 800), 1, (600, 800)) == (299, 0, 301, 800)  # in by the margin, not at the edges
 
 
 @pytest.mark.parametrize("cfa", ("bayer", "xtrans"))
@@ -97,9 +103,10 @@ def test_support_grows_with_pocs_iterations_and_is_whole_with_its_early_stop(cfa
     assert cm.isp.get_demosaic_record("bilinear").support(c, {}) >= 1
 
 
-def test_what_needs_the_whole_image_turns_the_windows_off():
+def test_what_needs_the_whole_image_turns_the_windows_off(monkeypatch):
     """Mean-matching (every shipped config), a denoiser, kept details, a
     natural scene's metrics and the switch itself each give the whole image."""
+    monkeypatch.setattr(roi, "WINDOW_COST_PX", 0)
     image = _image("macbeth")
     cond = ChainSettings().base_condition(luminance=100.0, seed=1)
     metrics = list(metrics_for_scene("macbeth"))
