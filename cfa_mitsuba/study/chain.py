@@ -29,7 +29,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from . import roi
+from . import image_store, roi
 from .axes import AXES
 from .conditions import Condition
 from .task_values import CameraOutput, TaskEvaluation, realisation_seeds
@@ -252,8 +252,9 @@ class CameraChain:
     reuse for that call.
     """
 
-    def __init__(self, settings: ChainSettings | None = None):
+    def __init__(self, settings: ChainSettings | None = None, *, image_store: str | None = None):
         self.settings = settings or ChainSettings()
+        self.image_store = image_store  # a study's folder of optical images (.image_store), shared by its workers
         self.timing = {"optics_s": 0.0, "capture_s": 0.0, "process_s": 0.0, "metrics_s": 0.0}
 
     def _timed(self, stage: str, fn, *args, **kwargs):
@@ -271,14 +272,20 @@ class CameraChain:
 
         optics, sensor = self.settings.for_condition(cond)
 
-        def make():
+        def compute():
             image = scene_image() if callable(scene_image) else scene_image
             return compute_optics(image, optics, pixel_pitch_um=sensor.pixel_pitch_um,
                                   fill_factor=sensor.fill_factor)
 
         if scene_key is None or os.environ.get(NO_MEMO_ENV) == "1":
-            return self._timed("optics_s", make)
+            return self._timed("optics_s", compute)
         key = (scene_key, optics, sensor.pixel_pitch_um, sensor.fill_factor)
+        fields = {"scene": str(scene_key), "optics": repr(optics), "pitch_um": float(sensor.pixel_pitch_um),
+                  "fill_factor": float(sensor.fill_factor)}
+
+        def make():  # from the study's store when another worker made it (.image_store)
+            return image_store.load_or_make(self.image_store, fields, compute)
+
         return self._timed("optics_s", _OPTICAL.get, key, make)
 
     def ideal(self, oi, cond: Condition, scene_key=None):

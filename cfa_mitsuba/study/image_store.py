@@ -1,0 +1,104 @@
+"""Optical images once per study, shared by its workers.
+
+The optical image depends on the render and the optics (not on the CFA, the
+demosaic, the luminance or the exposure), so a study makes it once per
+(render, optics) and every worker that needs it reads it from the study's
+``.work/images/`` folder: the tasks of one render and condition already go
+to one worker (:func:`.tasks.evaluate_group`), and this shares the optical
+image across conditions too (a luminance sweep's nine levels, spread over
+the workers).  Locally and on a Dask cluster that sees the study's folder;
+a worker that cannot read or write it computes the image itself (the same
+values).  The folder is emptied when a study starts (:func:`fresh`), so an
+image is never read from another run's renders.
+
+Each image is one ``.npz`` (its arrays) and its meta as JSON inside it,
+written to a temporary name in the folder and renamed into place (atomic:
+a reader sees the whole file or none); read back, every array and meta
+value is the computed one bit for bit (an image whose meta would not round
+trip through JSON is not stored).  ``CFA_MITSUBA_NO_IMAGE_STORE=1`` turns
+the store off.
+"""
+
+from __future__ import annotations
+
+__all__ = ["FOLDER", "NO_STORE_ENV", "fresh", "load_or_make"]
+
+import io as _io
+import json
+import os
+import shutil
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+#: the store's folder inside a study's ``.work/``
+FOLDER = "images"
+#: Set to 1 to compute every optical image in the worker that needs it.
+NO_STORE_ENV = "CFA_MITSUBA_NO_IMAGE_STORE"
+
+
+def fresh(work: Path) -> Path:
+    """``work`` made, its image store emptied; returns the store's folder."""
+    work = Path(work)
+    work.mkdir(exist_ok=True)
+    shutil.rmtree(work / FOLDER, ignore_errors=True)
+    return work / FOLDER
+
+
+def _key(fields: dict) -> str:
+    from ..io.cache import hash_key
+
+    return hash_key(fields)
+
+
+def _load(path: Path):
+    from ..values import OpticalImage
+
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            pixel = data["pixel_irradiance_w_m2_nm"] if "pixel_irradiance_w_m2_nm" in data.files else None
+            return OpticalImage(irradiance_w_m2_nm=data["irradiance_w_m2_nm"], wavelengths=data["wavelengths"],
+                                sample_pitch_um=float(data["sample_pitch_um"]),
+                                meta=json.loads(str(data["meta"])), pixel_irradiance_w_m2_nm=pixel)
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile):  # absent, or half a file from a crashed writer: made again
+        return None
+
+
+def _save(path: Path, oi) -> None:
+    meta = json.dumps(oi.meta)
+    if json.loads(meta) != oi.meta:  # would not come back the same: not stored
+        return
+    arrays = {"irradiance_w_m2_nm": oi.irradiance_w_m2_nm, "wavelengths": oi.wavelengths,
+              "sample_pitch_um": np.float64(oi.sample_pitch_um), "meta": np.str_(meta)}
+    if oi.pixel_irradiance_w_m2_nm is not None:
+        arrays["pixel_irradiance_w_m2_nm"] = oi.pixel_irradiance_w_m2_nm
+    buf = _io.BytesIO()
+    np.savez(buf, **arrays)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".part-", suffix=".npz")
+        with os.fdopen(fd, "wb") as f:
+            f.write(buf.getbuffer())
+        os.replace(tmp, path)
+    except OSError:  # a folder this worker cannot write: the image stays its own
+        try:
+            os.unlink(tmp)
+        except (OSError, UnboundLocalError):
+            pass
+
+
+def load_or_make(store: str | None, fields: dict, make):
+    """The optical image ``fields`` name (JSON-able: the render, the optics)
+    from the study's store, else ``make()``, stored for the other workers.
+    ``store`` None (no study) or :data:`NO_STORE_ENV` = 1: ``make()``."""
+    if not store or os.environ.get(NO_STORE_ENV) == "1":
+        return make()
+    path = Path(store) / f"optical-{_key(fields)}.npz"
+    got = _load(path) if path.is_file() else None
+    if got is not None:
+        return got
+    oi = make()
+    _save(path, oi)
+    return oi
