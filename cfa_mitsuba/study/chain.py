@@ -14,7 +14,10 @@ The optical image does not depend on the CFA or the demosaic, so a chain
 computes it once per (scene, optics-relevant condition) and keeps it, with
 the ideal sensor's image per luminance and exposure, for every CFA and
 demosaic evaluated in the same process (:class:`_Memo`, a small LRU: a
-puppy-sized optical image is about 0.2 GB).
+puppy-sized optical image is about 0.2 GB), and in a study writes both to
+the study's store for its other workers (:mod:`.image_store`).  Only the
+regions the metrics read are demosaiced and measured where that gives the
+whole image's values (:mod:`.roi`).
 """
 
 from __future__ import annotations
@@ -284,7 +287,7 @@ class CameraChain:
                   "fill_factor": float(sensor.fill_factor)}
 
         def make():  # from the study's store when another worker made it (.image_store)
-            return image_store.load_or_make(self.image_store, fields, compute)
+            return image_store.load_or_make(self.image_store, "optical", fields, compute)
 
         return self._timed("optics_s", _OPTICAL.get, key, make)
 
@@ -295,7 +298,7 @@ class CameraChain:
 
         _, sensor = self.settings.for_condition(cond)
 
-        def make():
+        def compute():
             raw = capture_ideal(oi, luminance_cd_m2=cond.luminance, sensor=sensor, exposure_s=cond.exposure)
             out = process(raw)
             # compared with every camera output of its task: read-only, so the metrics check it once
@@ -303,8 +306,14 @@ class CameraChain:
             return out
 
         if scene_key is None or os.environ.get(NO_MEMO_ENV) == "1":
-            return self._timed("optics_s", make)
+            return self._timed("optics_s", compute)
         key = (scene_key, *self.settings.for_condition(cond), cond.luminance, cond.exposure)
+        fields = {"scene": str(scene_key), "optics": repr(key[1]), "sensor": repr(sensor),
+                  "luminance": float(cond.luminance), "exposure": str(cond.exposure)}
+
+        def make():  # from the study's store when another worker made it (.image_store)
+            return image_store.load_or_make(self.image_store, "ideal", fields, compute)
+
         return self._timed("optics_s", _IDEAL.get, key, make)
 
     def capture(self, oi, cfa, cond: Condition, seed: int, *, noise: str | None = None):

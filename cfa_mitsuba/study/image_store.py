@@ -1,20 +1,22 @@
-"""Optical images once per study, shared by its workers.
+"""Optical and ideal images once per study, shared by its workers.
 
 The optical image depends on the render and the optics (not on the CFA, the
-demosaic, the luminance or the exposure), so a study makes it once per
-(render, optics) and every worker that needs it reads it from the study's
-``.work/images/`` folder: the tasks of one render and condition already go
-to one worker (:func:`.tasks.evaluate_group`), and this shares the optical
+demosaic, the luminance or the exposure), the ideal sensor's image on those
+and the sensor, luminance and exposure; a study makes each once and every
+worker that needs it reads it from the study's ``.work/images/`` folder:
+the tasks of one render and condition go to one worker as a group
+(:func:`.tasks.evaluate_group`) unless there are too few groups for the
+workers, and this shares the images across split groups and the optical
 image across conditions too (a luminance sweep's nine levels, spread over
 the workers).  Locally and on a Dask cluster that sees the study's folder;
 a worker that cannot read or write it computes the image itself (the same
 values).  The folder is emptied when a study starts (:func:`fresh`), so an
 image is never read from another run's renders.
 
-Each image is one ``.npz`` (its arrays) and its meta as JSON inside it,
+Each image is one ``.npz`` (its arrays, its kind and its meta as JSON),
 written to a temporary name in the folder and renamed into place (atomic:
 a reader sees the whole file or none); read back, every array and meta
-value is the computed one bit for bit (an image whose meta would not round
+value is the computed one bit for bit (tests/study/test_image_store.py) (an image whose meta would not round
 trip through JSON is not stored).  ``CFA_MITSUBA_NO_IMAGE_STORE=1`` turns
 the store off.
 """
@@ -53,29 +55,47 @@ def _key(fields: dict) -> str:
     return hash_key(fields)
 
 
-def _load(path: Path):
+def _arrays(image) -> tuple[str, dict, dict]:
+    """(kind, arrays, meta) of an optical image or a processed (ideal) image."""
     from ..values import OpticalImage
 
+    if isinstance(image, OpticalImage):
+        arrays = {"irradiance_w_m2_nm": image.irradiance_w_m2_nm, "wavelengths": image.wavelengths,
+                  "sample_pitch_um": np.float64(image.sample_pitch_um)}
+        if image.pixel_irradiance_w_m2_nm is not None:
+            arrays["pixel_irradiance_w_m2_nm"] = image.pixel_irradiance_w_m2_nm
+        return "optical", arrays, image.meta
+    return "rendered", {"xyz": image.xyz, "srgb": image.srgb, "white_xyz": image.white_xyz}, image.meta
+
+
+def _image(kind: str, data, meta: dict):
+    from ..values import OpticalImage, RenderedImage
+
+    if kind == "optical":
+        pixel = data["pixel_irradiance_w_m2_nm"] if "pixel_irradiance_w_m2_nm" in data.files else None
+        return OpticalImage(irradiance_w_m2_nm=data["irradiance_w_m2_nm"], wavelengths=data["wavelengths"],
+                            sample_pitch_um=float(data["sample_pitch_um"]), meta=meta, pixel_irradiance_w_m2_nm=pixel)
+    out = RenderedImage(xyz=data["xyz"], srgb=data["srgb"], white_xyz=data["white_xyz"], meta=meta)
+    out.xyz.flags.writeable = False  # as the chain leaves the ideal's (compared with every camera output)
+    return out
+
+
+def _load(path: Path):
     try:
         with np.load(path, allow_pickle=False) as data:
-            pixel = data["pixel_irradiance_w_m2_nm"] if "pixel_irradiance_w_m2_nm" in data.files else None
-            return OpticalImage(irradiance_w_m2_nm=data["irradiance_w_m2_nm"], wavelengths=data["wavelengths"],
-                                sample_pitch_um=float(data["sample_pitch_um"]),
-                                meta=json.loads(str(data["meta"])), pixel_irradiance_w_m2_nm=pixel)
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile):  # absent, or half a file from a crashed writer: made again
+            return _image(str(data["kind"]), data, json.loads(str(data["meta"])))
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile):  # absent, or half a file from a crashed writer
         return None
 
 
-def _save(path: Path, oi) -> None:
-    meta = json.dumps(oi.meta)
-    if json.loads(meta) != oi.meta:  # would not come back the same: not stored
+def _save(path: Path, image) -> None:
+    kind, arrays, meta = _arrays(image)
+    text = json.dumps(meta)
+    if json.loads(text) != meta:  # would not come back the same: not stored
         return
-    arrays = {"irradiance_w_m2_nm": oi.irradiance_w_m2_nm, "wavelengths": oi.wavelengths,
-              "sample_pitch_um": np.float64(oi.sample_pitch_um), "meta": np.str_(meta)}
-    if oi.pixel_irradiance_w_m2_nm is not None:
-        arrays["pixel_irradiance_w_m2_nm"] = oi.pixel_irradiance_w_m2_nm
     buf = _io.BytesIO()
-    np.savez(buf, **arrays)
+    np.savez(buf, kind=np.str_(kind), meta=np.str_(text), **arrays)
+    tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".part-", suffix=".npz")
@@ -83,19 +103,19 @@ def _save(path: Path, oi) -> None:
             f.write(buf.getbuffer())
         os.replace(tmp, path)
     except OSError:  # a folder this worker cannot write: the image stays its own
-        try:
-            os.unlink(tmp)
-        except (OSError, UnboundLocalError):
-            pass
+        if tmp is not None:
+            Path(tmp).unlink(missing_ok=True)
 
 
-def load_or_make(store: str | None, fields: dict, make):
-    """The optical image ``fields`` name (JSON-able: the render, the optics)
-    from the study's store, else ``make()``, stored for the other workers.
-    ``store`` None (no study) or :data:`NO_STORE_ENV` = 1: ``make()``."""
+def load_or_make(store: str | None, kind: str, fields: dict, make):
+    """The image ``fields`` name (JSON-able: the render, the optics; for the
+    ideal, the sensor, luminance and exposure too) from the study's store,
+    else ``make()``, stored for the other workers; ``kind`` ('optical' or
+    'ideal') starts its file name.  ``store`` None (no study) or
+    :data:`NO_STORE_ENV` = 1: ``make()``."""
     if not store or os.environ.get(NO_STORE_ENV) == "1":
         return make()
-    path = Path(store) / f"optical-{_key(fields)}.npz"
+    path = Path(store) / f"{kind}-{_key(fields)}.npz"
     got = _load(path) if path.is_file() else None
     if got is not None:
         return got

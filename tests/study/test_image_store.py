@@ -48,6 +48,22 @@ def test_a_second_worker_reads_the_first_ones_optical_image_bit_for_bit(tmp_path
     assert len(list(store.glob("optical-*.npz"))) == 2
 
 
+def test_the_ideal_image_is_read_back_bit_for_bit(tmp_path, monkeypatch):
+    store = image_store.fresh(tmp_path / ".work")
+    chain = CameraChain(image_store=str(store))
+    cond = chain.settings.base_condition(luminance=30.0)
+    monkeypatch.setattr(chain_module, "_IDEAL", chain_module._Memo(4))
+    oi = chain.optical(_scene(), cond, scene_key="k")
+    made = chain.ideal(oi, cond, scene_key="k")
+    assert len(list(store.glob("ideal-*.npz"))) == 1
+    monkeypatch.setattr(chain_module, "_IDEAL", chain_module._Memo(4))
+    monkeypatch.setattr(cm.sensor, "capture_ideal", lambda *a, **k: (_ for _ in ()).throw(AssertionError("again")))
+    got = CameraChain(image_store=str(store)).ideal(oi, cond, scene_key="k")
+    for name in ("xyz", "srgb", "white_xyz"):
+        assert np.array_equal(getattr(got, name), getattr(made, name)), name
+    assert got.meta == made.meta and not got.xyz.flags.writeable
+
+
 def test_a_broken_file_is_made_again_and_a_study_start_empties_the_store(tmp_path, monkeypatch):
     store = image_store.fresh(tmp_path / ".work")
     chain = CameraChain(image_store=str(store))
