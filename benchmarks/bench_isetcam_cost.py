@@ -209,35 +209,40 @@ def _now() -> str:
     return dt.datetime.now(dt.timezone.utc).replace(microsecond=0).isoformat()
 
 
-def ratios(ours: dict, iset: dict) -> dict:
+def ratios(ours: dict, iset: dict, cpu: bool = False) -> dict:
     """ISETCam's seconds / ours, per scene: per capture (after the optics),
-    with the optics, and per stage."""
+    with the optics, and per stage; ``cpu``: in CPU seconds of each process
+    (less moved by other work on a shared machine than wall time)."""
+    c = "_cpu" if cpu else ""
     out = {}
     for name in SCENES:
         o, i = ours[name], iset["scenes"][name]
         out[name] = {
-            "capture": i["without_optics_s"] / o["per_capture_s"],
-            "with_optics": i["per_capture_s"] / o["with_optics_s"],
-            "optics": i["optics_s"] / (o["optics_s"] + o["ideal_s"]),
-            "sensor": i["sensor_s"] / o["capture_s"],
-            "isp": i["ip_s"] / o["process_s"],
-            "metric": i["metric_s"] / o["metrics_s"],
+            "capture": i[f"without_optics{c}_s"] / o[f"per_capture{c}_s"],
+            "with_optics": i[f"per_capture{c}_s"] / o[f"with_optics{c}_s"],
+            "optics": i[f"optics{c}_s"] / (o[f"optics{c}_s"] + o[f"ideal{c}_s"]),
         }
+        if not cpu:  # our stages are timed in wall seconds only (CameraChain.timing)
+            out[name].update(sensor=i["sensor_s"] / o["capture_s"], isp=i["ip_s"] / o["process_s"],
+                             metric=i["metric_s"] / o["metrics_s"])
     return out
 
 
-def print_table(ours: dict, iset: dict, rat: dict) -> None:
-    print(f"\n{'scene':<14}{'stage':<28}{'ISETCam s':>11}{'ours s':>10}{'ratio':>9}")
+def print_table(ours: dict, iset: dict, rat: dict, rat_cpu: dict) -> None:
+    print(f"\n{'scene':<14}{'stage (wall seconds)':<28}{'ISETCam s':>11}{'ours s':>10}{'ratio':>9}{'CPU ratio':>11}")
     for name in SCENES:
-        o, i, r = ours[name], iset["scenes"][name], rat[name]
+        o, i, r, rc = ours[name], iset["scenes"][name], rat[name], rat_cpu[name]
         rows = [("optics (+ our ideal image)", i["optics_s"], o["optics_s"] + o["ideal_s"], r["optics"]),
                 ("sensor / capture", i["sensor_s"], o["capture_s"], r["sensor"]),
                 ("ipCompute / process", i["ip_s"], o["process_s"], r["isp"]),
                 ("metric", i["metric_s"], o["metrics_s"], r["metric"]),
                 ("per capture (no optics)", i["without_optics_s"], o["per_capture_s"], r["capture"]),
                 ("per capture with optics", i["per_capture_s"], o["with_optics_s"], r["with_optics"])]
+        cpu = {"optics (+ our ideal image)": rc["optics"], "per capture (no optics)": rc["capture"],
+               "per capture with optics": rc["with_optics"]}
         for stage, a, b, x in rows:
-            print(f"{name:<14}{stage:<28}{a:>11.3f}{b:>10.3f}{x:>9.1f}")
+            extra = f"{cpu[stage]:>11.1f}" if stage in cpu else ""
+            print(f"{name:<14}{stage:<28}{a:>11.3f}{b:>10.3f}{x:>9.1f}{extra}")
 
 
 def main(argv=None) -> int:
@@ -267,8 +272,8 @@ def main(argv=None) -> int:
         iset = run_octave(args.octave, Path(args.isetcam), args.octave_repeat)
         # ours again after ISETCam (A B A): the load on a shared machine drifts; each value is the mean of both passes
         ours = _mean_of(ours, measure_all(args.repeat))
-    rat = ratios(ours, iset)
-    print_table(ours, iset, rat)
+    rat, rat_cpu = ratios(ours, iset), ratios(ours, iset, cpu=True)
+    print_table(ours, iset, rat, rat_cpu)
     result = {
         "what": "per-capture cost, ISETCam (GNU Octave) against cfa-mitsuba, same capture: Bayer, bilinear",
         "command": command, "date": started, "machine": _machine(),
@@ -282,6 +287,7 @@ def main(argv=None) -> int:
                  "repeat": args.repeat, "scenes": ours},
         "isetcam": iset,
         "ratios": rat,
+        "ratios_cpu": rat_cpu,
     }
     args.json.parent.mkdir(parents=True, exist_ok=True)
     tmp = args.json.with_name(args.json.name + ".tmp")
