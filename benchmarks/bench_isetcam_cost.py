@@ -42,6 +42,7 @@ import argparse
 import datetime as dt
 import json
 import os
+import re
 import shutil
 import statistics
 import subprocess
@@ -174,10 +175,26 @@ def run_octave(octave: str, isetcam: Path, repeat: int) -> dict:
             raise SystemExit(f"bench_isetcam_cost: the Octave run wrote no timings (exit {proc.returncode}):\n"
                              f"{proc.stderr[-2000:]}")
         data = json.loads(out.read_text())
-    part = _isetcam_part(data, source=f"measured in this run: {' '.join(cmd[:-1])} {OCTAVE_SCRIPT.relative_to(REPO)}",
-                         date=_now())
-    part["isetcam_origin"] = _git("remote", "get-url", "origin", cwd=isetcam)
+    words = [Path(cmd[0]).name, *cmd[1:-1], str(OCTAVE_SCRIPT.relative_to(REPO))]
+    part = _isetcam_part(data, source=f"measured in this run: {' '.join(words)}", date=_now())
+    part["isetcam_origin"] = _repository(_git("remote", "get-url", "origin", cwd=isetcam))
     return part
+
+
+def _repository(url: str) -> str:
+    """owner/name from a remote's URL or mirror path (a committed result holds no machine's absolute path)."""
+    m = re.search(r"([A-Za-z0-9_.-]+)[/+]([A-Za-z0-9_.-]+?)(?:\.git)?(?:/repo)?/?$", url)
+    return f"{m.group(1)}/{m.group(2)}" if m else Path(url).name
+
+
+def _relative_words(words: list[str]) -> list[str]:
+    """A command's words with absolute paths written relative to the repository, or by their last part."""
+    out = []
+    for w in words:
+        p = Path(w)
+        out.append(w if not p.is_absolute() else str(p.relative_to(REPO)) if p.is_relative_to(REPO) else
+                   f"<{p.name}>")
+    return out
 
 
 def _isetcam_part(data: dict, source: str, date: str) -> dict:
@@ -264,7 +281,7 @@ def main(argv=None) -> int:
     sys.path.insert(0, str(REPO))
     nice = os.nice(0)
     given = argv if argv is not None else sys.argv[1:]
-    command = ("" if nice == 0 else f"nice -n {nice} ") + " ".join(["python3", str(Path(sys.argv[0])), *given])
+    command = ("" if nice == 0 else f"nice -n {nice} ") + " ".join(["python3", *_relative_words([sys.argv[0], *given])])
     load_before, started = _load(), _now()
     iset = read_octave_json(args.octave_json) if args.octave_json else None  # read before --json overwrites it
     ours = measure_all(args.repeat)
