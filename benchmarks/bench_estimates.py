@@ -3,8 +3,15 @@ tiny conditions and on the quick study, and the per-task costs fitted from
 them (cfa_mitsuba/data/study_costs.toml: ``task_overhead``,
 ``tables_per_condition``).
 
-    nice -n 5 python benchmarks/bench_estimates.py --json docs/data/bench-estimates.json
+    nice -n 5 python benchmarks/bench_estimates.py --json docs/data/bench-estimates.json \
+        --results docs/example-report docs/example-report-isetcam
     python benchmarks/bench_estimates.py --from-json docs/data/bench-estimates.json   # no runs: the table again
+
+``--results DIR ...`` adds finished studies of shipped configs (the paper
+studies take minutes each: their committed runs are read rather than run
+again): the estimate of the config each names (its ``config.json``'s
+``path``) beside its ``timing.json``, without the renders and the report,
+at the worker count given by ``--workers`` (they must have run with it).
 
 Runs each study once (``--no-report --quiet``, ``--workers N``, a render
 cache of its own) and reads its ``timing.json``.  What is compared leaves
@@ -83,6 +90,19 @@ def run_one(name: str, spec, folder: Path, workers: int) -> dict:
             "phases": phases, "measured_s": phases["total_s"] - phases.get("render_s", 0.0)}
 
 
+def from_results(folder: Path) -> dict:
+    """A finished study as a run: its config's path and its measured time
+    without the renders and the report (module docstring)."""
+    config = (folder / json.loads((folder / "config.json").read_text())["path"]).resolve()
+    if not config.is_file():
+        config = (REPO / "configs" / config.name).resolve()
+    phases = json.loads((folder / "timing.json").read_text())["phases"]
+    return {"name": folder.name, "config": str(config.relative_to(REPO)), "config_text": None,
+            "results": str(folder.resolve().relative_to(REPO)) if folder.resolve().is_relative_to(REPO) else None,
+            "phases": phases,
+            "measured_s": phases["total_s"] - phases.get("render_s", 0.0) - phases.get("report_s", 0.0)}
+
+
 def with_estimates(runs: list[dict], workers: int, costs: dict | None = None) -> list[dict]:
     """Each run with the estimate of its config (current costs, or ``costs``)."""
     out = []
@@ -131,6 +151,8 @@ def main(argv=None) -> int:
     ap.add_argument("--studies", default=",".join(STUDIES), help=f"comma-separated, of {', '.join(STUDIES)}")
     ap.add_argument("--json", type=Path, help="write the runs, estimates and fit here")
     ap.add_argument("--from-json", type=Path, help="no runs: the table of these runs with the current costs")
+    ap.add_argument("--results", type=Path, nargs="*", default=[],
+                    help="finished studies of shipped configs to add (run with --workers N)")
     args = ap.parse_args(argv)
     saved = {}
     if args.from_json:
@@ -143,6 +165,7 @@ def main(argv=None) -> int:
             for name in args.studies.split(","):
                 runs.append(run_one(name, STUDIES[name], Path(d), workers))
                 print(f"ran {name}: {runs[-1]['measured_s']:.1f} s", file=sys.stderr)
+        runs += [from_results(folder) for folder in args.results]
     fitted = fit(runs, workers) if sum(r["name"].startswith("tiny") for r in runs) >= 2 else None
     shown = with_estimates(runs, workers)
     load = saved.get("load_average") if args.from_json else os.getloadavg()

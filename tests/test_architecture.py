@@ -263,3 +263,39 @@ def test_the_member_list_rule_catches_a_planted_list(tmp_path):
     found = hard_coded_member_lists(planted, members, root=tmp_path)
     assert [f.split()[-1] for f in found] == ["demosaics", "demosaics"]  # the tuple and the dict, not the subset
 
+
+
+def _string_constants(folder: Path) -> list[tuple[str, int, str]]:
+    out = []
+    for path in sorted(folder.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str):
+                out.append((str(path.relative_to(REPO)), node.lineno, node.value))
+    return out
+
+
+def test_the_report_names_no_scene():
+    """A scene's name comes from the results (its record), never from report/ code."""
+    from cfa_mitsuba.render import list_scenes
+
+    names = {name for name, _ in list_scenes()}
+    bad = [f"{p}:{line} {v!r}" for p, line, v in _string_constants(PACKAGE / "report") if v in names]
+    assert not bad, "report/ code that names a scene:\n" + "\n".join(bad)
+
+
+def test_the_exposure_defaults_are_defined_once():
+    """EXPOSURE_POLICIES is assigned in one module; the 1/30 s maximum exposure is written once."""
+    assigned, thirtieths = [], []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target] if isinstance(
+                node, ast.AnnAssign) else []
+            if any(isinstance(t, ast.Name) and t.id == "EXPOSURE_POLICIES" for t in targets):
+                assigned.append(f"{path.relative_to(REPO)}:{node.lineno}")
+            if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Div) and all(
+                    isinstance(v, ast.Constant) for v in (node.left, node.right)) and (
+                    node.left.value, node.right.value) in ((1, 30), (1.0, 30.0), (1, 30.0), (1.0, 30)):
+                thirtieths.append(f"{path.relative_to(REPO)}:{node.lineno}")
+    assert len(assigned) == 1, assigned
+    assert len(thirtieths) == 1, thirtieths

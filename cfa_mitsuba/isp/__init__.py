@@ -24,9 +24,10 @@ from .colour_matrix import (  # noqa: F401
 from .pipeline import (PREPARE_KEYWORDS, WHITE_BALANCE_MODES, PreparedRaw, prepare, process,  # noqa: F401
                        process_prepared)
 from .synthetic import channels_from_rgb, mosaic_image  # noqa: F401
-from .denoise import (DenoiseMethod, denoise_channels, denoise_mosaic, get_denoiser, list_denoisers,  # noqa: F401
-                      register_denoiser)
+from .denoise import (DenoiseMethod, denoise_channels, denoise_mosaic, denoise_setting,  # noqa: F401
+                      denoise_setting_name, denoise_support_px, get_denoiser, list_denoisers, register_denoiser)
 from .noise_profile import NoiseProfile, noise_profile  # noqa: F401
-from .sharpen import SharpenMethod, get_sharpener, list_sharpeners, register_sharpener, sharpen_image  # noqa: F401
+from .sharpen import (SharpenMethod, get_sharpener, list_sharpeners, register_sharpener, sharpen_image,  # noqa: F401
+                      sharpen_setting, sharpen_setting_name, sharpen_support_px)
 
 collect_demosaics(__name__)  # each method module declares DEMOSAICS

@@ -19,14 +19,18 @@ reflectance, so that the flat patch's noise is the texture's.
 
 Exactness, as the other charts (:mod:`.charts`): the pattern is defined on
 cells of 1/t EXR pixel (t = sqrt(spp), at most :data:`MAX_CELLS_PER_PX`),
-each cell the reflectance of the front disc that covers its centre; every
-EXR pixel is the exact mean of its t x t cells, i.e. the box integral of
-that cell pattern over the pixel.  It is computed here directly, not by
-Mitsuba: the chart is flat and seen directly (no light transport), and
-Mitsuba's stratified samples at the strata centres with nearest-texel
-lookups would compute exactly these means, from about 10^5 disc emitters
-or a 20-million-texel palette texture.  The radiance of a cell is D65 x its
-reflectance as band means of the product (as the macbeth patches).
+each cell the reflectance of the front disc that covers its centre.
+Mitsuba renders it as the achromatic charts are rendered, once per palette
+reflectance (a layered chart, :class:`~.types.Built` ``layers``): a bitmap
+of the share of that reflectance in each cell (1 or 0) on a rectangle over
+the texture square (and the surround, 1 for the flat patch's reflectance),
+looked up nearest-texel, under the unjittered ``stratified`` sampler (s x s
+samples per pixel at the strata centres, one per cell) with a ``box``
+filter, so each EXR pixel is the exact mean of its t x t cells: the box
+integral of the cell pattern over the pixel.  The engine adds the layers,
+each times its radiance, D65 x the reflectance as band means of the product
+(as the macbeth patches).  :func:`exact_radiance` computes the same
+integral in numpy, independently of Mitsuba, for the tests.
 
 The sidecar's ``geometry`` holds the statistics (radius limits, law,
 palette and its reflectances, contrast, seed, disc count), the texture
@@ -46,7 +50,7 @@ natural images", Int. J. Comput. Vis. 41 (2001) 35-59.
 from __future__ import annotations
 
 __all__ = ["PALETTE", "FLAT_PATCH", "RADIUS_MIN_SENSOR_PX", "RADIUS_MAX_FRACTION", "DEAD_LEAVES_SEED", "SCENE",
-           "layout", "disc_labels", "chart_luminance", "camera_example"]
+           "layout", "disc_labels", "chart_luminance", "exact_radiance", "camera_example"]
 
 import functools
 import math
@@ -56,6 +60,7 @@ import numpy as np
 
 from .. import spectra
 from ..errors import CfaMitsubaError
+from .charts import CHART_DISTANCE_M, _Frame
 from .light import d65_white_radiance
 from .types import Built, RenderConfig, Scene
 
@@ -192,26 +197,74 @@ def chart_luminance(record: dict) -> np.ndarray:
     return _fractions(labels, int(record["cells_per_px"]), y.size) @ y
 
 
-def _build(scene: Scene, config: RenderConfig) -> Built:
-    wl = config.wl
-    k = int(config.oversample)
-    t = max(d for d in range(1, min(max(1, math.isqrt(config.spp)), MAX_CELLS_PER_PX) + 1)
-            if max(1, math.isqrt(config.spp)) % d == 0)
-    stats = _statistics(config.width, config.height, k, t)
-    labels, n_discs = disc_labels(stats["side_px"], t, stats["r_min_px"], stats["r_max_px"], len(PALETTE),
-                                  stats["seed"])
+def _radiances(wl: np.ndarray) -> dict:
+    """{reflectance name: (B,) radiance} of the palette and the flat patch:
+    band means of D65 x the reflectance (the product of the interpolated
+    tables), at the canonical scale of the white."""
     white = d65_white_radiance(wl)
     scale = white / spectra.illuminant("D65", wl)
     names, tables = spectra.colorchecker_tables()
     d65_table = spectra.illuminant_table("D65")
-    radiance = {n: scale * spectra.band_average_product([d65_table, tables[names.index(n)]], wl)
-                for n in (*PALETTE, FLAT_PATCH)}
-    data = np.broadcast_to(radiance[FLAT_PATCH], (config.height, config.width, wl.size)).copy()
+    return {n: scale * spectra.band_average_product([d65_table, tables[names.index(n)]], wl)
+            for n in dict.fromkeys((*PALETTE, FLAT_PATCH))}
+
+
+def _cells_per_px(spp: int) -> int:
+    """t: the largest divisor of s = sqrt(spp) up to :data:`MAX_CELLS_PER_PX` (one stratum per cell)."""
+    s = max(1, math.isqrt(spp))
+    return max(d for d in range(1, min(s, MAX_CELLS_PER_PX) + 1) if s % d == 0)
+
+
+def _layers(config: RenderConfig, stats: dict, labels: np.ndarray, radiance: dict) -> tuple:
+    """One achromatic layer per reflectance (module doc): (Mitsuba objects, radiance)."""
+    import mitsuba as mi
+
+    frame = _Frame(config)
+    out = []
+    for name, spectrum in radiance.items():
+        objects = {}
+        if name == FLAT_PATCH:  # the surround and the flat patch
+            objects["surround"] = frame.background({"type": "uniform", "value": 1.0})
+        if name in PALETTE:
+            share = (labels == PALETTE.index(name)).astype(np.float32)
+            # Row 0 of a bitmap lands at the bottom of a rectangle seen from +z.
+            texture = {"type": "bitmap", "bitmap": mi.Bitmap(np.ascontiguousarray(np.flipud(share))[..., None]),
+                       "raw": True, "filter_type": "nearest", "wrap_mode": "clamp"}
+            del share
+            # A hair in front of the surround so that the square wins every ray (as the macbeth patches).
+            objects["square"] = {"type": "rectangle",
+                                 "to_world": frame.rect(*stats["texture_rect"], z=1e-5 * frame.distance),
+                                 "emitter": {"type": "area", "radiance": texture}}
+        out.append((objects, spectrum))
+    return tuple(out)
+
+
+def exact_radiance(width: int, height: int, oversample: int, spp: int = 16, wl=None) -> np.ndarray:
+    """The exact box integral over each EXR pixel of the chart's spectral
+    radiance at the canonical scale, (height, width, B), in numpy: each
+    pixel the mean of its cells' band radiances.  What the Mitsuba render
+    must equal (up to float32); independent of Mitsuba."""
+    wl = np.asarray(spectra.DEFAULT_WAVELENGTHS if wl is None else wl, dtype=np.float64)
+    t = _cells_per_px(spp)
+    stats = _statistics(width, height, int(oversample), t)
+    labels, _ = disc_labels(stats["side_px"], t, stats["r_min_px"], stats["r_max_px"], len(PALETTE), stats["seed"])
+    radiance = _radiances(wl)
+    data = np.broadcast_to(radiance[FLAT_PATCH], (height, width, wl.size)).copy()
     y0, x0, y1, x1 = stats["texture_rect"]
-    frac = _fractions(labels, t, len(PALETTE))
-    data[y0:y1, x0:x1] = frac @ np.stack([radiance[n] for n in PALETTE])
+    data[y0:y1, x0:x1] = _fractions(labels, t, len(PALETTE)) @ np.stack([radiance[n] for n in PALETTE])
+    return data
+
+
+def _build(scene: Scene, config: RenderConfig) -> Built:
+    wl = config.wl
+    k = int(config.oversample)
+    t = _cells_per_px(config.spp)
+    stats = _statistics(config.width, config.height, k, t)
+    labels, n_discs = disc_labels(stats["side_px"], t, stats["r_min_px"], stats["r_max_px"], len(PALETTE),
+                                  stats["seed"])
+    white = d65_white_radiance(wl)
     y = _luminance_factor(PALETTE)
-    meta = {"scene_distance_m": 1.2, "illuminant": "D65", "geometry": {
+    meta = {"scene_distance_m": CHART_DISTANCE_M, "illuminant": "D65", "geometry": {
         "reflectance_set": "ColorChecker N Ohta", "palette": list(PALETTE),
         "palette_luminance_factor": y.tolist(), "flat_patch": FLAT_PATCH,
         "flat_luminance_factor": float(_luminance_factor((FLAT_PATCH,))[0]),
@@ -220,7 +273,8 @@ def _build(scene: Scene, config: RenderConfig) -> Built:
         "radius_sensor_px": [stats["r_min_px"] / k, stats["r_max_px"] / k], "seed": stats["seed"],
         "discs": int(n_discs), "cells_per_px": t,
         "texture_rect": stats["texture_rect"], "flat_rect": stats["flat_rect"], "dead_leaves": stats}}
-    return Built(meta=meta, objects=None, sensor=None, white_radiance=white, radiance=data)
+    return Built(meta=meta, sensor=_Frame(config).sensor(config.fov_deg), white_radiance=white,
+                 layers=_layers(config, stats, labels, _radiances(wl)))
 
 
 #: The chart, registered by :mod:`.builtins`: 1280 x 1024 EXR pixels at K = 4

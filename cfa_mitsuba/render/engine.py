@@ -35,6 +35,7 @@ __all__ = [
     "scale_to_luminance",
 ]
 
+import dataclasses
 import functools
 import hashlib
 import math
@@ -366,21 +367,28 @@ def _render_canonical(sc: Scene, cfg: RenderConfig, progress=None) -> SpectralIm
     key = hash_key(_key_fields(sc, cfg))
     built = sc.build(cfg)
     start = time.perf_counter()
-    achromatic = built.pattern_spectrum is not None
+    achromatic = built.pattern_spectrum is not None or built.layers is not None
     boxes = _band_boxes(cfg, achromatic)
-    renders = len(boxes) if _per_band(cfg, built) else 1
+    per_render = len(boxes) if _per_band(cfg, built) else 1
+    layers = built.layers if built.layers is not None else ((built.objects, built.pattern_spectrum),)
+    renders = per_render * len(layers)
     stages = renders + (built.white_radiance is None)  # the render (or each band's); a 3D scene's white panels
     if progress is not None:
         progress(f"render ({cfg.width} x {cfg.height}, {cfg.spp} spp)", 0, stages)
-    if built.radiance is not None:  # computed exactly by the builder (a flat chart seen directly)
-        bands, scene, achromatic = np.asarray(built.radiance, dtype=np.float64), None, False
-    else:
-        bands, scene = _render_boxes(mi, built, cfg, sc, boxes, width=cfg.width, height=cfg.height, spp=cfg.spp,
-                                     step=None if progress is None else lambda t, i: progress(t, i, stages))
-    if achromatic:
-        data = bands[..., :1].astype(np.float64) * np.asarray(built.pattern_spectrum)[None, None, :]
-    else:
-        data = bands.astype(np.float64)
+    data = None
+    for n, (objects, spectrum) in enumerate(layers):  # one render, or one per layer of a layered chart
+        def step(t, i, n=n):
+            progress(t if len(layers) == 1 else f"layer {n + 1}/{len(layers)} {t}", n * per_render + i, stages)
+
+        bands, scene = _render_boxes(mi, dataclasses.replace(built, objects=objects), cfg, sc, boxes,
+                                     width=cfg.width, height=cfg.height, spp=cfg.spp,
+                                     step=None if progress is None else step)
+        if achromatic:  # the pattern times its spectrum, summed over the layers
+            part = bands[..., :1].astype(np.float64) * np.asarray(spectrum, dtype=np.float64)[None, None, :]
+            data = part if data is None else data + part
+            del bands, part
+        else:
+            data = bands.astype(np.float64)
     data = data.astype(np.float32).astype(np.float64)
     bad = int(data.size - np.count_nonzero(np.isfinite(data)))
     if bad:  # a scene file with an infinite (or float32-overflowing) emitter or texture value
@@ -430,8 +438,7 @@ def _render_canonical(sc: Scene, cfg: RenderConfig, progress=None) -> SpectralIm
         "render_time_s": round(elapsed, 3),
         "cache_key": key,
         "kind": sc.kind,
-        "renderer": (f"mitsuba {mi.__version__}" if built.radiance is None
-                     else "exact cell means (no Mitsuba: a flat chart seen directly)"),
+        "renderer": f"mitsuba {mi.__version__}",
         **meta_extra,
         **built.meta,
     }

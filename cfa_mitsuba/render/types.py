@@ -100,10 +100,13 @@ class Built:
     then renders it band by band with a single-band ``specfilm``, in any
     variant.  None: the engine's usual route.
 
-    ``radiance``: (H, W, B) band-mean radiance, W/(m^2 sr nm), at the
-    canonical scale, computed exactly by the builder for a flat chart seen
-    directly that Mitsuba would only sample (the dead-leaves chart's 10^5
-    discs, :mod:`.dead_leaves`); the engine then renders nothing.
+    ``layers``: a flat chart made of several achromatic patterns, each
+    with its own spectrum: ((objects, spectrum (B,)), ...).  Each layer's
+    ``objects`` (with ``sensor``) is rendered as an achromatic chart (one
+    spatial channel, emitter values = the pattern) and the engine sums the
+    layers' patterns times their spectra: the dead-leaves chart
+    (:mod:`.dead_leaves`), whose 10^5 discs of three reflectances are three
+    bitmaps of exact cell shares.  None for every other scene.
     """
 
     meta: dict[str, Any]
@@ -114,7 +117,7 @@ class Built:
     pattern_spectrum: np.ndarray | None = None
     white_radiance: np.ndarray | None = None
     stock_integrator: str | None = None
-    radiance: np.ndarray | None = None
+    layers: tuple | None = None
 
 
 @dataclass(frozen=True)

@@ -50,6 +50,9 @@ def _figure_functions(res: Results, thumbnails: bool):
     yield noise_figures
     yield fs.luminance_sweep
     yield low_light.snr_figure
+    from .processing import acutance_ysnr_figure
+
+    yield acutance_ysnr_figure
     yield fsen.sensor_curves
     for axis in res.swept_axes:
         def by_axis(r, axis=axis):
@@ -370,6 +373,7 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
         log(f"  figures drawn and encoded in {time.perf_counter() - t:.2f} s ({workers} process(es))")
     from . import page, tables
     from .low_light import low_light_tables
+    from .processing import processing_html
 
     tabs = {
         "table1": tables.table1(res),
@@ -381,6 +385,7 @@ def build_report(out_dir, *, formats=("png", "svg"), thumbnails: bool = True, ti
         "policies": tables.policy_table(res),
         "low_light": low_light_tables(res),
         "moire_thresholds": _moire_sensitivity(res),
+        "section:processing": processing_html(res),
     }
     text = page.render_page(res, figures=figures, absents=absents, embeds=embeds, tables=tabs, facts=_facts(res))
     # figures/: this build's files only (a rebuild must not leave figures of CFAs no longer in the

@@ -7,7 +7,7 @@ CFA's spectra set (``cfas.json``)."""
 
 from __future__ import annotations
 
-__all__ = ["snr_figure", "low_light_tables", "read_snr", "versus_reference", "VERSUS_METRICS"]
+__all__ = ["snr_figure", "low_light_tables", "read_snr", "own_setting", "versus_reference", "VERSUS_METRICS"]
 
 import html
 
@@ -23,16 +23,30 @@ def _e(text) -> str:
     return html.escape(str(text))
 
 
-def read_snr(res: Results, name: str = "snr.csv"):
+def own_setting(res: Results, axis: str) -> str:
+    """The study's own value of a processing axis (config.json's base condition, else the stage's default)."""
+    from ..study.axes import get_axis
+
+    base = (res.config or {}).get("base_condition") or {}
+    return str(base.get(axis, get_axis(axis).default_value()))
+
+
+def read_snr(res: Results, name: str = "snr.csv", setting: tuple[str, str] | None = None):
     """``snr.csv`` or ``snr10.csv`` of the results as a DataFrame, the rows
-    of the CFAs and demosaics the report shows; None when there are none."""
+    of the CFAs and demosaics the report shows at the study's own processing
+    setting (``setting``: (axis, value) of another, :mod:`cfa_mitsuba.study.isp_settings`);
+    None when there are none."""
     from ..io.guard import read_csv
+    from ..study.isp_settings import isp_axes
 
     path = res.root / name
     if not path.exists():
         return None
     df = read_csv(path, keep_default_na=True)
     df = df[df["cfa"].astype(str).isin(res.cfas) & df["demosaic"].astype(str).isin(res.demosaics)]
+    for axis in isp_axes(df.columns):
+        want = setting[1] if setting is not None and setting[0] == axis else own_setting(res, axis)
+        df = df[df[axis].astype(str) == want]
     return df if len(df) else None
 
 
@@ -151,7 +165,7 @@ def _sweep_scene(m) -> str | None:
 def _capture_html(res: Results) -> str | None:
     """Per CFA and luminance of the sweep: time, gains, clipped pixels, and
     (details) electrons on a mid-grey, the matrix's condition number and noise gain."""
-    m = res.all_metrics if res.all_metrics is not None else res.metrics
+    m = res.metrics  # every axis but luminance at the study's own value (a denoise sweep is its own section)
     if "exposure_s" not in m.columns:
         return None
     scene = _sweep_scene(m[m["metric"].isin(SCORED_METRICS)]) or _sweep_scene(m)
@@ -236,7 +250,7 @@ def versus_reference(metrics, reference: str = "bayer") -> list[dict]:
 
 
 def _versus_html(res: Results) -> str | None:
-    m = res.all_metrics if res.all_metrics is not None else res.metrics
+    m = res.metrics  # every axis but luminance at the study's own value (a denoise sweep is its own section)
     if "bayer" not in set(m["cfa"]) or "ysnr" not in set(m["metric"]):
         return None
     head = "".join(f"<th>{_e(k)}: better / worse than Bayer at (cd/m²)</th>" for k in VERSUS_METRICS)

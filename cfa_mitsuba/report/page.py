@@ -36,6 +36,10 @@ SECTIONS = (
      "The luminance SNR on each step of the gray bar, and the dynamic range read from it."),
     ("sweep", "Low light: metrics against luminance", "s. 3: S-CIELAB, SSIM at 3-400 cd/m²",
      "How the image metrics degrade as the scene gets darker."),
+    ("processing", "With noise reduction: the processing settings compared", "beyond the paper",
+     "The same captures through another processing setting (noise reduction, sharpening), beside the plain "
+     "processing: the noise it removes, the texture it takes, the sharpness and colour it keeps, and how the "
+     "low-light answer changes."),
     ("crops", "Crops: 1:1 and 4:1", "beyond the paper",
      "The same pixels of the chirp, the slanted edge and the puppy from every CFA and demosaicing method, at the "
      "sensor's pixels and magnified by nearest neighbour: where demosaicing artefacts can be judged."),
@@ -278,7 +282,7 @@ def render_page(res: Results, *, figures: list, absents: list, embeds: dict, tab
 
     body.append(_tables_section(res, tables))
     body.append(_ranges_section(res, tables, facts))
-    n_tabs = _figure_sections(body, nav, figures, absents, embeds)
+    n_tabs = _figure_sections(body, nav, figures, absents, embeds, tables)
     nav.append(("conventions", "Units"))
     body.append(f'<section id="conventions"><h2>Units and conventions</h2>{_conventions(res)}</section>')
 
@@ -396,14 +400,17 @@ def _ranges_section(res: Results, tables: dict, facts: dict) -> str:
     return "".join(r)
 
 
-def _figure_sections(body: list, nav: list, figures: list, absents: list, embeds: dict) -> int:
-    """One section per figure group (appended to ``body`` and ``nav``);
-    returns the most tabs a figure group needs."""
+def _figure_sections(body: list, nav: list, figures: list, absents: list, embeds: dict,
+                     tables: dict | None = None) -> int:
+    """One section per figure group (appended to ``body`` and ``nav``), with
+    the section's own tables (``tables['section:<id>']``, HTML) after its
+    figures; returns the most tabs a figure group needs."""
     n_tabs = 1
     for sec, heading, paper, intro in SECTIONS:
         items = [f for f in figures if f.section == sec]
         missing = [a for a in absents if a.section == sec]
-        if not items and not missing:
+        extra = (tables or {}).get(f"section:{sec}")
+        if not items and not missing and not extra:
             continue
         nav.append((sec, heading.split(":")[0]))
         s = [f'<section id="{sec}"><h2>{_e(heading)} <span class="paper">({_e(paper)})</span></h2>',
@@ -411,6 +418,8 @@ def _figure_sections(body: list, nav: list, figures: list, absents: list, embeds
         for a in missing:
             s.append(f'<div class="absent"><b>{_e(a.title)}: not drawn.</b> {_e(a.reason)}</div>')
         s.append(_section_figures(sec, items, embeds))
+        if extra:
+            s.append(extra)
         groups: dict = {}
         for f in items:
             if f.group is not None:

@@ -97,6 +97,44 @@ def _readout(ck, v, key):
     return ck.string(v, key, READOUT_MODES)
 
 
+def _isp_setting(kind: str):
+    """The check of a ``denoise`` or ``sharpen`` value: ``NAME`` or
+    ``NAME:AMOUNT`` (:func:`cfa_mitsuba.isp.denoise.denoise_setting`,
+    :func:`cfa_mitsuba.isp.sharpen.sharpen_setting`), returned in its one
+    spelling (so a sweep cannot list one setting twice)."""
+
+    def check(ck, v, key):
+        from .. import isp
+
+        spell = isp.denoise_setting_name if kind == "denoise" else isp.sharpen_setting_name
+        known = isp.list_denoisers() if kind == "denoise" else isp.list_sharpeners()
+        if not isinstance(v, str) or not v:
+            ck.fail(key, f"must be a {kind} method's name or NAME:AMOUNT (known: {', '.join(n for n, _ in known)}), "
+                         f"got {type(v).__name__} {v!r}")
+        try:
+            return spell(v)
+        except CfaMitsubaError as exc:
+            ck.fail(key, str(exc))
+
+    check.__name__ = f"_{kind}_setting"
+    return check
+
+
+def _isp_keywords(kind: str):
+    """A ``denoise`` or ``sharpen`` value as :func:`cfa_mitsuba.isp.process`'s
+    keywords: the method and its options (``{'denoise': 'nl-means',
+    'denoise_options': {'scale': 2.0}}``)."""
+
+    def keywords(value) -> dict:
+        from .. import isp
+
+        name, options = (isp.denoise_setting if kind == "denoise" else isp.sharpen_setting)(value)
+        return {kind: name, f"{kind}_options": options}
+
+    keywords.__name__ = f"_{kind}_keywords"
+    return keywords
+
+
 def _readout_applies(pattern, mode) -> bool:
     """``full`` reads any CFA; ``remosaic`` and ``bin`` the block layouts only."""
     from ..sensor.readout import readout_applies
@@ -142,6 +180,9 @@ class Axis:
     cfa_applies : ``cfa_applies(pattern, value) -> bool``: whether a value
         applies to a CFA (its tile of filter names); a CFA a value does not
         apply to is left out of that condition.  None: every value, every CFA.
+    isp_keywords : for an ``isp`` axis whose value is a setting rather than
+        one keyword (``'nl-means:2'``), ``isp_keywords(value) -> {keyword:
+        value}`` of :func:`~cfa_mitsuba.isp.process`; None: ``{field: value}``.
     """
 
     name: str
@@ -158,6 +199,7 @@ class Axis:
     scene_value: Callable[[dict], Any] | None = None
     render_setting: str | None = None
     cfa_applies: Callable[[Any, Any], bool] | None = None
+    isp_keywords: Callable[[Any], dict] | None = None
 
     def __post_init__(self):
         if self.applies_to not in APPLIES_TO:
@@ -243,6 +285,13 @@ AXES: dict[str, Axis] = {a.name: a for a in (
          numeric=False),
     Axis(name="readout", applies_to="sensor", label="read-out mode", unit="", short="ro-", check=_readout,
          numeric=False, cfa_applies=_readout_applies),
+    Axis(name="denoise", applies_to="isp", label="noise reduction", unit="", short="dn-",
+         check=_isp_setting("denoise"), numeric=False, isp_keywords=_isp_keywords("denoise"),
+         note="Noise reduction before demosaicing, its strength set by the capture's own noise "
+              "(NAME:SCALE: the tuned strength times SCALE)."),
+    Axis(name="sharpen", applies_to="isp", label="sharpening", unit="", short="sh-",
+         check=_isp_setting("sharpen"), numeric=False, isp_keywords=_isp_keywords("sharpen"),
+         note="Sharpening after the colour matrix (NAME:AMOUNT: the sharpener's amount)."),
 )}
 
 

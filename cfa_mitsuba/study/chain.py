@@ -157,13 +157,18 @@ class ChainSettings:
     def isp_options(self, method: str, cond: Condition | None = None) -> dict:
         """The keywords of :func:`cfa_mitsuba.isp.process` for ``method``: the
         ``[isp]`` options, the method's own (``[demosaics.<name>]``) and the
-        condition's ISP axes; the demosaicing runs in
+        condition's ISP axes, an axis whose value is a setting (``denoise =
+        'nl-means:2'``) passed as the keywords its record gives
+        (:attr:`.axes.Axis.isp_keywords`); the demosaicing runs in
         :data:`STUDY_DEMOSAIC_PRECISION` unless ``[isp]`` sets
         ``demosaic_precision``."""
         opts = {"demosaic_precision": STUDY_DEMOSAIC_PRECISION, **dict(self.isp),
                 **dict(dict(self.demosaic_options).get(method, ()))}
         if cond is not None:
             opts.update(self._targets(cond, "isp"))
+        for axis in AXES.values():
+            if axis.applies_to == "isp" and axis.isp_keywords is not None and axis.field in opts:
+                opts.update(axis.isp_keywords(opts.pop(axis.field)))
         return opts
 
     def metric_options_for(self, cond: Condition | None = None) -> dict:

@@ -2,7 +2,7 @@
 
 A :class:`Condition` holds a value for each registered axis (``luminance``,
 ``f_number``, ``pixel_pitch_um``, ``exposure``, ``read_noise_e``, ``seed``,
-``spectra``, ``readout``, and any axis a plug-in registers), read as
+``spectra``, ``readout``, ``denoise``, ``sharpen``, and any axis a plug-in registers), read as
 attributes (``cond.luminance``).  An axis not given takes its default
 (:meth:`.axes.Axis.default_value`: the stage's own parameter default).  A
 config's base values come from ``[optics]``, ``[sensor]``, ``[isp]``,
@@ -18,6 +18,7 @@ __all__ = ["AXES", "Condition", "cross"]
 import itertools
 
 from .axes import AXES
+from .details_layout import safe_label
 
 
 class Condition:
@@ -86,7 +87,7 @@ class Condition:
             if base is None and v is None:
                 continue
             short = AXES[axis].short if axis in AXES else axis
-            parts.append(f"{short}{v:g}" if isinstance(v, (int, float)) else f"{short}{v}")
+            parts.append(f"{short}{v:g}" if isinstance(v, (int, float)) else f"{short}{safe_label(v)}")
         return "_".join(parts)
 
 

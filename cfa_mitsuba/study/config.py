@@ -264,13 +264,15 @@ def _demosaics(ck: _Checker, value, isp_cfg: dict) -> tuple[tuple[str, ...], dic
 
 
 def _isp(ck: _Checker, isp_cfg) -> dict:
-    """``[isp]``: white balance, the colour fit and the processing switches."""
+    """``[isp]``: white balance, the colour fit, the switches, each ISP axis's base value (its record checks it)."""
     from .. import isp
+    from .axes import AXES
 
+    isp_axes = {a.field: a for a in AXES.values() if a.applies_to == "isp"}
     ck.table(isp_cfg, "isp", {"white_balance": None, "white_preserving": None, "pocs_iterations": None,
                               "colour_fit": None, "regularise": None, "clip_highlights": None,
-                              "demosaic_precision": None})
-    out = {}
+                              "demosaic_precision": None, **dict.fromkeys(isp_axes)})
+    out = {f: a.check(ck, isp_cfg[f], f"isp.{f}") for f, a in isp_axes.items() if f in isp_cfg}
     if "white_balance" in isp_cfg:
         out["white_balance"] = ck.string(isp_cfg["white_balance"], "isp.white_balance", ("illuminant", "gray-world"))
     for flag in ("white_preserving", "regularise", "clip_highlights"):  # isp.process's switches (docs/isp.md)

@@ -13,7 +13,9 @@ Rows (``aspect``):
   YSNR reaches 10 (lower is better), and ``low light: <metric>``: each
   swept scored metric's own values at the lowest swept luminance below the
   base one.  Low light is decided on physics, never on scores clipped to a
-  range's bound.
+  range's bound.  A study that sweeps a processing setting (``denoise``)
+  gets the low-light rows again for each setting,
+  ``low light with denoise nl-means`` (study/isp_settings.py).
 
 The rule, the same everywhere the project names a best CFA (the report's
 panel and cards, Table 3, the paper comparison's "best" claims):
@@ -186,6 +188,11 @@ def decisions_table(alternatives, realisations=None, base_luminance=None, ranges
         (aspect, "", "unmeasured", False, "", base_luminance, _quantity(aspect, m), np.nan, "no scores")
         for aspect, m in ASPECTS]
     rows += lowlight_rows(realisations, ranges or {})
+    if realisations is not None and len(realisations):
+        from .isp_settings import isp_settings
+
+        for setting in isp_settings(realisations):  # the same low-light rows with each other processing setting
+            rows += lowlight_rows(realisations, ranges or {}, setting)
     return pd.DataFrame(rows, columns=COLUMNS)
 
 

@@ -20,7 +20,14 @@ artefact of the range.  The rows here use the quantities themselves:
   level's scores the study's ranges clip (the reason values are used).
 
 Every decision follows :func:`.decisions.decide`'s rule with paired rank
-intervals over the realisations.
+intervals over the realisations.  The rows are decided on the study's own
+camera (every axis but luminance at its own value, :mod:`.isp_settings`);
+for each other processing setting a study sweeps (``denoise =
+'nl-means'``), the same rows again on that setting's rows, the aspect named
+``low light with denoise nl-means``, ``low light: scielab with denoise
+nl-means``.  The metrics decided at the low level are the swept ones with a
+practical difference on their record (the scored metrics, and the texture
+acutance a camera tuner reads against noise).
 """
 
 from __future__ import annotations
@@ -40,7 +47,8 @@ def _base_level(realisations):
 
 def _first_condition(rows):
     """One row per (scene, cfa, demosaic, luminance, metric, realisation): the
-    first condition of each level (the other axes at their base values)."""
+    rows are one setting's already (:func:`lowlight_rows`); a study that
+    reaches a level twice under the same values keeps the first."""
     return rows.drop_duplicates(["scene", "cfa", "demosaic", "luminance", "metric", "realisation"], keep="first")
 
 
@@ -96,11 +104,17 @@ def _snr10_outcome(realisations):
     return _decide_values(per, "snr10", False, lambda lead: factor * lead, 3), per
 
 
-def _metric_levels(realisations, base_lum):
-    """{metric: [levels below the base, ascending]} of the swept scored metrics."""
-    from ..metrics import scored_metrics
+def _decided_metrics() -> list[str]:
+    """The metrics decided at a low level: the scored ones and every other
+    whose record gives a practical difference (the texture acutance)."""
+    from ..metrics import METRICS
 
-    below = realisations[realisations["metric"].isin(scored_metrics())
+    return [n for n, r in METRICS.items() if r.scored or r.practical_difference]
+
+
+def _metric_levels(realisations, base_lum):
+    """{metric: [levels below the base, ascending]} of the swept decided metrics."""
+    below = realisations[realisations["metric"].isin(_decided_metrics())
                          & (realisations["luminance"].astype(float) < base_lum)]
     return {m: sorted(g["luminance"].astype(float).unique()) for m, g in below.groupby("metric", sort=False)}
 
@@ -133,16 +147,31 @@ def _clipped_at(rows, ranges, metric) -> float:
     return round(float(np.mean((raw < -1e-9) | (raw > 1 + 1e-9))), 4)
 
 
-def lowlight_rows(realisations, ranges: dict) -> list[tuple]:
+def lowlight_rows(realisations, ranges: dict, setting: tuple[str, str] | None = None) -> list[tuple]:
     """decisions.csv's low-light rows (module docstring), as tuples in
-    :data:`.decisions.COLUMNS` order; [] without a sweep below the base."""
-    from .decision_rule import robustness
+    :data:`.decisions.COLUMNS` order; [] without a sweep below the base.
+    ``setting``: (axis, value) of a processing setting the study swept
+    (:func:`.isp_settings.isp_settings`): the rows of that setting, the
+    aspects named ``... with <axis> <value>``; None: the study's own."""
+    from .isp_settings import at_base_axes, setting_label, with_setting
 
     if realisations is None or realisations.empty or "base" not in realisations:
         return []
     base_lum = _base_level(realisations)
     if base_lum is None:
         return []
+    realisations = at_base_axes(realisations) if setting is None else with_setting(realisations, *setting)
+    rows = _decide_lowlight(realisations, ranges, base_lum)
+    if setting is None:
+        return rows
+    sfx = f" with {setting_label(*setting)}"
+    return [(r[0] + sfx, *r[1:6], f"{r[6]}, {setting_label(*setting)}", *r[7:]) for r in rows]
+
+
+def _decide_lowlight(realisations, ranges: dict, base_lum: float) -> list[tuple]:
+    """:func:`lowlight_rows` on one setting's rows."""
+    from .decision_rule import robustness
+
     levels = _metric_levels(realisations, base_lum)
     out = []
     snr, per = _snr10_outcome(realisations)
@@ -156,8 +185,11 @@ def lowlight_rows(realisations, ranges: dict) -> list[tuple]:
                     f"SNR10 over {n} realisation(s) of each CFA, mean over the demosaics; practical difference "
                     f"1/3 stop: {snr.detail}.{words}"))
     elif len(per):
+        y = realisations[realisations["metric"] == "ysnr"]["value"].astype(float)
+        where = ("is above 10 already at the sweep's lowest level" if len(y) and y.min() >= 10 else
+                 "does not cross 10 within the sweep")
         out.append(("low light", "", "unmeasured", False, "", np.nan, "SNR10", np.nan,
-                    "YSNR does not reach 10 within the sweep for any CFA: nothing decided"))
+                    f"YSNR {where} for any CFA: nothing decided (sweep further)"))
     from ..metrics import get_metric
 
     for m, (lv, o, rows) in lowest.items():

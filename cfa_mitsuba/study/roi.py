@@ -21,8 +21,10 @@ image (tests/study/test_roi.py compares the two on every scene, demosaic
 and several CFA families).
 
 What needs the whole image turns the windows off (:func:`blocked_by`):
-mean-matching (its scale is the whole output's interior mean), an ISP
-denoiser or sharpener (their support is not declared here), a binned
+mean-matching (its scale is the whole output's interior mean), a global
+ISP denoiser (the wavelet methods: their thresholds come from the whole
+plane; a local one, nl-means, and the unsharp mask add their declared
+reach to the margin), a binned
 read-out (its up-sampling), a kept camera output (its details and
 thumbnails: the first realisation of each CFA and demosaic), a metric
 that reads the whole image.  ``ChainSettings(roi=False)`` or the
@@ -133,11 +135,24 @@ def blocked_by(settings, isp_options: dict, prepared, *, details: bool) -> str |
         return "the output's details and thumbnails need the whole image"
     if settings.mean_match:
         return "mean-matching scales by the whole output's interior mean"
-    if isp_options.get("denoise", "none") != "none" or isp_options.get("sharpen", "none") != "none":
-        return "an ISP denoiser or sharpener"
+    if isp_margin(isp_options, prepared.cfa.pattern.shape) is None:
+        return "a global ISP denoiser or sharpener (its thresholds come from the whole image)"
     if prepared.readout.get("mode") == "bin":
         return "a binned read-out is up-sampled whole"
     return None
+
+
+def isp_margin(isp_options: dict, tile) -> int | None:
+    """The margin (px) the ISP's denoiser and sharpener add to the
+    demosaic's (their records' support, isp/denoise and isp/sharpen: a
+    raw-domain denoiser's plane pixel is a tile period); None when either
+    reads the whole image (the wavelet methods)."""
+    from ..isp.denoise import denoise_support_px
+    from ..isp.sharpen import sharpen_support_px
+
+    d = denoise_support_px(isp_options.get("denoise", "none"), isp_options.get("denoise_options"), tile)
+    s = sharpen_support_px(isp_options.get("sharpen", "none"), isp_options.get("sharpen_options"))
+    return None if d is None or s is None else int(d) + int(s)
 
 
 def method_margin(prepared, method: str, options: dict) -> int | None:
@@ -148,7 +163,8 @@ def method_margin(prepared, method: str, options: dict) -> int | None:
     record = get_demosaic_record(method)
     if record.support is None:
         return None
-    opts = {k: v for k, v in options.items() if k not in ("demosaic_precision", "gamut_check")}
+    opts = {k: v for k, v in options.items() if k not in ("demosaic_precision", "gamut_check", "denoise",
+                                                          "denoise_options", "sharpen", "sharpen_options")}
     opts.setdefault("luminance_weights", prepared.luminance_weights)
     return record.support(prepared.cfa, opts)
 
@@ -203,6 +219,7 @@ def plan(chain, prepared, method: str, cond, ideal, metric_names, *, details: bo
     margin = method_margin(prepared, method, isp_options)
     if margin is None:
         return None
+    margin += isp_margin(isp_options, prepared.cfa.pattern.shape)  # local denoiser and sharpener: their reach
     rects = windows(regions, margin, shape, prepared.cfa.pattern.shape)
     if sum(_area(r) + WINDOW_COST_PX for r in rects) >= 0.9 * shape[0] * shape[1]:
         return None  # no gain worth the windows' cost

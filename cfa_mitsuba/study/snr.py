@@ -9,11 +9,15 @@ interval):
     ``cfa``, ``demosaic``, ``luminance`` (mean scene luminance, cd/m^2),
     ``ysnr``, ``ysnr_low``, ``ysnr_high``, ``chroma_snr``, and the chroma
     interval ``chroma_snr_low``, ``chroma_snr_high``; one row per CFA,
-    demosaic and luminance (the first condition of that luminance in the
-    study's order, when other axes vary too).
+    demosaic, processing setting and luminance: a study with ISP axes
+    (``denoise``, ``sharpen``: :mod:`.isp_settings`) has their columns last
+    and a curve per setting, each other axis at the study's own value (the
+    first condition of a luminance in the study's order, when one is
+    reached twice).
 
 ``snr10.csv``
-    ``cfa``, ``demosaic``, ``snr10_cd_m2``: the scene luminance at which
+    ``cfa``, ``demosaic``, ``snr10_cd_m2`` (and the ISP axes' columns last,
+    one row per setting): the scene luminance at which
     YSNR reaches 10 (ISO 12232's 'acceptable' SNR for luminance; the
     low-light figure of merit of sensor data sheets), interpolated linearly
     in log luminance against log YSNR between the two luminances of the sweep
@@ -54,10 +58,15 @@ def snr_table(metrics, metric: str = "ysnr"):
     area, which a demosaic's smoothing does not raise; metrics/snr.py)."""
     import pandas as pd
 
+    from .isp_settings import isp_axes
+
+    settings = isp_axes(metrics.columns)
+    if settings and "base" in metrics.columns:  # every axis but luminance and the ISP's at the study's own value
+        metrics = metrics[_own_but(metrics, settings)]
     y = metrics[metrics["metric"] == metric]
     if y.empty:
-        return pd.DataFrame(columns=SNR_COLUMNS)
-    keys = ["cfa", "demosaic", "luminance"]
+        return pd.DataFrame(columns=SNR_COLUMNS + settings)
+    keys = ["cfa", "demosaic", "luminance", *settings]
     y = y.drop_duplicates(keys, keep="first")
     c = metrics[metrics["metric"] == "chroma_snr"].drop_duplicates(keys, keep="first")
     c = c[keys + ["value", "ci_low", "ci_high"]].rename(
@@ -70,9 +79,20 @@ def snr_table(metrics, metric: str = "ysnr"):
         for col in ("ysnr", "chroma_snr"):
             v = out[col].to_numpy(dtype=float)
             out[f"{col}_db"] = np.where(v > 0, 20.0 * np.log10(np.where(v > 0, v, 1.0)), np.nan)
-    rank = {col: {v: i for i, v in enumerate(dict.fromkeys(y[col]))} for col in ("cfa", "demosaic")}
-    out["_c"], out["_d"] = out["cfa"].map(rank["cfa"]), out["demosaic"].map(rank["demosaic"])
-    return out.sort_values(["_c", "_d", "luminance"], kind="stable")[SNR_COLUMNS].reset_index(drop=True)
+    order = []
+    for col in ("cfa", "demosaic", *settings):
+        rank = {v: i for i, v in enumerate(dict.fromkeys(y[col]))}
+        out[f"_{col}"] = out[col].map(rank)
+        order.append(f"_{col}")
+    return out.sort_values([*order, "luminance"], kind="stable")[SNR_COLUMNS + settings].reset_index(drop=True)
+
+
+def _own_but(metrics, settings) -> np.ndarray:
+    """Rows whose axes other than luminance and ``settings`` are at the study's own values."""
+    from .isp_settings import _base_values, _matching, other_axes
+
+    axes = other_axes(metrics.columns, *settings)
+    return _matching(metrics, axes, _base_values(metrics, axes))
 
 
 def crossing(luminance, snr, target: float = SNR_TARGET) -> float | None:
@@ -112,16 +132,20 @@ def snr10_table(snr):
     """``snr10.csv`` (module doc) from :func:`snr_table`."""
     import pandas as pd
 
+    from .isp_settings import isp_axes
+
+    settings = isp_axes(snr.columns)
     rows = []
-    for (cfa, dem), g in snr.groupby(["cfa", "demosaic"], sort=False):
+    for key, g in snr.groupby(["cfa", "demosaic", *settings], sort=False):
         lum = g["luminance"].to_numpy(float)
         mid, lo, hi = (crossing(lum, g[col]) for col in ("ysnr", "ysnr_high", "ysnr_low"))
         per = (g["scene_illuminance_lux"].to_numpy(float) / lum) if "scene_illuminance_lux" in g.columns else None
         lux_per = float(np.nanmean(per)) if per is not None and np.isfinite(per).any() else None
-        rows.append({"cfa": cfa, "demosaic": dem, "snr10_cd_m2": mid, "ci_low": lo, "ci_high": hi,
+        rows.append({"cfa": key[0], "demosaic": key[1], "snr10_cd_m2": mid, "ci_low": lo, "ci_high": hi,
                      "note": "" if mid is not None else _note(lum, g["ysnr"].to_numpy(float)),
-                     "snr10_lux": mid * lux_per if mid is not None and lux_per else None})
-    return pd.DataFrame(rows, columns=SNR10_COLUMNS)
+                     "snr10_lux": mid * lux_per if mid is not None and lux_per else None,
+                     **dict(zip(settings, key[2:]))})
+    return pd.DataFrame(rows, columns=SNR10_COLUMNS + settings)
 
 
 def write_snr_tables(out_dir, metrics) -> list[Path]:

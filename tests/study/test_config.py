@@ -26,11 +26,20 @@ def write(tmp_path: Path, text: str, name="c.toml") -> Path:
     return p
 
 
-@pytest.mark.parametrize("name", ["quick.toml", "paper.toml", "examples/custom_cfa.toml",
+@pytest.mark.parametrize("name", ["quick.toml", "paper.toml", "paper-denoise.toml", "examples/custom_cfa.toml",
                                   "examples/custom_scene.toml"])
 def test_shipped_configs_load(name):
     cfg = load_config(REPO / "configs" / name)
     assert cfg.scenes and cfg.cfas and cfg.demosaics
+
+
+def test_paper_denoise_config_compares_the_papers_cfas_with_and_without_noise_reduction():
+    cfg = load_config(REPO / "configs" / "paper-denoise.toml")
+    assert cfg.cfas == load_config(REPO / "configs" / "paper.toml").cfas
+    assert {"dead-leaves", "puppy", "gray-bar", "slanted-edge"} <= {s.name for s in cfg.scenes}
+    swept = {s.scenes[0]: s.values for s in cfg.sweeps}
+    assert all(tuple(v["denoise"]) == ("none", "nl-means") for v in swept.values())
+    assert min(swept["puppy"]["luminance"]) == 3 and max(swept["puppy"]["luminance"]) == 400
 
 
 def test_paper_config_is_the_papers_study():

@@ -34,10 +34,10 @@ def _image(kind: str):
     return cm.render.render_cached(name, **SIZES.get(kind, _quick_render_settings().get(name, {})))
 
 
-def _evaluate(image, cfa, metrics, settings, cond, seed=7):
+def _evaluate(image, cfa, metrics, settings, cond, seed=7, demosaics=DEMOSAICS):
     chain = CameraChain(settings)
     out = {}
-    for _, _, method, ev in chain.evaluate(image, cfa, DEMOSAICS, metrics, cond, seed, ("roi-test", id(image)),
+    for _, _, method, ev in chain.evaluate(image, cfa, demosaics, metrics, cond, seed, ("roi-test", id(image)),
                                            details=False):
         assert hasattr(ev, "results"), ev
         out[method] = (result_rows(ev.results), ev.failures, ev.processed)
@@ -75,6 +75,25 @@ def test_windows_give_the_whole_images_values_to_the_last_bit(kind, monkeypatch)
             assert "roi" not in proc_w.meta
 
 
+def test_windows_with_a_local_denoiser_and_sharpener_give_the_whole_images_values(monkeypatch):
+    """nl-means (raw domain: its reach in tile periods) and the unsharp mask
+    after the colour matrix add their declared reach to the margin; the
+    values stay the whole image's to the last bit."""
+    monkeypatch.setattr(roi, "WINDOW_COST_PX", 0)
+    image = _image("slanted-edge")
+    metrics = list(metrics_for_scene("slanted-edge"))
+    isp = {"denoise": "nl-means", "sharpen": "unsharp"}
+    whole_settings = ChainSettings(mean_match=False, roi=False, isp=isp)
+    roi_settings = ChainSettings(mean_match=False, isp=isp)
+    cond = roi_settings.base_condition(luminance=100.0, seed=1)
+    for cfa in ("bayer", "rgbw1"):  # 2 x 2 tiles: nl-means's reach (16 px on them) leaves windows this small image
+        whole = _evaluate(image, cfa, metrics, whole_settings, cond, demosaics=("bilinear", "laplacian"))
+        part = _evaluate(image, cfa, metrics, roi_settings, cond, demosaics=("bilinear", "laplacian"))
+        for method, (rows_r, failed_r, proc_r) in part.items():
+            assert proc_r.meta.get("roi", {}).get("windows"), (cfa, method)
+            assert (rows_r, failed_r) == whole[method][:2], (cfa, method)
+
+
 def test_macbeth_windows_are_the_patches_and_the_supports_margin(monkeypatch):
     """The patches' windows: each patch interior widened by the method's
     declared support and aligned outwards on the tile grid, merged where
@@ -108,10 +127,10 @@ def test_what_needs_the_whole_image_turns_the_windows_off(monkeypatch):
     natural scene's metrics and the switch itself each give the whole image."""
     monkeypatch.setattr(roi, "WINDOW_COST_PX", 0)
     image = _image("macbeth")
-    cond = ChainSettings().base_condition(luminance=100.0, seed=1)
     metrics = list(metrics_for_scene("macbeth"))
 
     def windows_of(settings, details=False, names=metrics, method="bilinear"):
+        cond = settings.base_condition(luminance=100.0, seed=1)  # the settings' own ISP axes
         chain = CameraChain(settings)
         oi = chain.optical(image, cond)
         ideal = chain.ideal(oi, cond)
@@ -122,7 +141,9 @@ def test_what_needs_the_whole_image_turns_the_windows_off(monkeypatch):
     assert windows_of(ChainSettings()) is None  # mean-matching reads the whole output
     assert windows_of(ChainSettings(mean_match=False, roi=False)) is None
     assert windows_of(ChainSettings(mean_match=False), details=True) is None
-    assert windows_of(ChainSettings(mean_match=False, isp={"denoise": "wavelet"})) is None
+    assert windows_of(ChainSettings(mean_match=False, isp={"denoise": "wavelet"})) is None  # global
+    local = windows_of(ChainSettings(mean_match=False, isp={"denoise": "nl-means", "sharpen": "unsharp"}))
+    assert local[0] > 1  # bilinear's margin plus the denoiser's and the sharpener's reach
     assert windows_of(ChainSettings(mean_match=False), names=["scielab"]) is None
     assert windows_of(ChainSettings(mean_match=False), method="pocs") is None  # its early stop
     assert roi.blocked_by(ChainSettings(mean_match=False), {}, _Prepared(), details=False) is None
@@ -130,3 +151,4 @@ def test_what_needs_the_whole_image_turns_the_windows_off(monkeypatch):
 
 class _Prepared:
     readout = {"mode": "full"}
+    cfa = cm.sensor.get_cfa("bayer")

@@ -20,6 +20,15 @@ in its record with the rule that chose it and its data
 ``benchmarks/tune_denoise.py``): the same for every CFA, sensor and light.
 ``scale`` (option, default 1) lets a user turn it up or down.
 
+A study names a denoiser and its amount in one value (the ``denoise`` axis,
+``[isp] denoise``): ``NAME`` or ``NAME:SCALE``, the tuned strength times
+SCALE (:func:`denoise_setting`).
+
+Support: a record says how far an output pixel's inputs reach
+(``support``, :func:`denoise_support_px`), so that a chain that processes
+only a region of the image can give a local method its margin and run a
+global one (whose thresholds come from the whole plane) on the whole image.
+
 Domains: ``raw`` denoises the white-balanced mosaic before demosaicing,
 each phase of the CFA tile as its own image (a Bayer tile gives four
 half-size planes: samples of one colour, its noise white); ``rgb`` denoises
@@ -33,7 +42,7 @@ from __future__ import annotations
 
 __all__ = ["DenoiseMethod", "DOMAINS", "collect_denoisers", "register_denoiser", "unregister_denoiser",
            "list_denoisers", "get_denoiser", "denoiser_parameters", "check_denoise_options", "denoise_mosaic",
-           "denoise_channels"]
+           "denoise_channels", "denoise_setting", "denoise_setting_name", "denoise_support_px"]
 
 import inspect
 from dataclasses import dataclass
@@ -66,6 +75,10 @@ class DenoiseMethod:
     tuning : the rule that chose ``strength`` and on what data.
     licence : the licence of the code it runs.
     order : its place in listings.
+    support : how far an output pixel's inputs reach, in pixels of the plane
+        it denoises: ``support(options) -> radius`` (the method's own options,
+        defaults filled in); None: global, every output pixel depends on the
+        whole plane (thresholds estimated from all of it).
     """
 
     name: str
@@ -76,8 +89,11 @@ class DenoiseMethod:
     tuning: str = ""
     licence: str = ""
     order: int = 1000
+    support: Callable[[dict], float] | None = None
 
     def __post_init__(self):
+        if self.support is not None and not callable(self.support):
+            raise CfaMitsubaError(f"denoiser {self.name!r}: support must be a function of the options or None")
         if not self.domains or any(d not in DOMAINS for d in self.domains):
             raise CfaMitsubaError(f"denoiser {self.name!r}: domains must be among {DOMAINS}, got {self.domains!r}")
         if not (isinstance(self.strength, (int, float)) and np.isfinite(self.strength) and self.strength >= 0):
@@ -162,6 +178,57 @@ def check_denoise_options(name: str, options: dict | None) -> tuple[DenoiseMetho
     if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not np.isfinite(scale) or scale < 0:
         raise CfaMitsubaError(f"denoiser {name!r}: scale must be a number >= 0, got {scale!r}")
     return m, domain, float(scale), options
+
+
+def denoise_setting(value) -> tuple[str, dict]:
+    """(name, stage options) of a study's ``denoise`` value: ``NAME`` or
+    ``NAME:SCALE`` (the method's tuned strength times SCALE, a number >= 0),
+    e.g. ``'nl-means:2'`` -> ``('nl-means', {'scale': 2.0})``; a one-line
+    error for anything else.
+
+    >>> denoise_setting("nl-means:2"), denoise_setting("none")
+    (('nl-means', {'scale': 2.0}), ('none', {}))
+    """
+    if not isinstance(value, str) or not value:
+        raise CfaMitsubaError(f"a denoise setting is a denoiser's name or NAME:SCALE, got {value!r}")
+    name, sep, amount = value.partition(":")
+    get_denoiser(name)
+    if not sep:
+        return name, {}
+    try:
+        scale = float(amount)
+    except ValueError:
+        scale = float("nan")
+    if not np.isfinite(scale) or scale < 0:
+        raise CfaMitsubaError(f"denoise {value!r}: the scale after ':' must be a number >= 0 (x the tuned strength)")
+    if get_denoiser(name).function is None:
+        raise CfaMitsubaError(f"denoise {value!r}: {name!r} has no strength to scale")
+    return name, {"scale": scale}
+
+
+def denoise_setting_name(value) -> str:
+    """The one spelling of a ``denoise`` setting: ``NAME``, or
+    ``NAME:SCALE`` with SCALE as ``%g`` when it is not 1."""
+    name, options = denoise_setting(value)
+    scale = options.get("scale", 1.0)
+    return name if scale == 1.0 else f"{name}:{scale:g}"
+
+
+def denoise_support_px(name: str, options: dict | None = None, tile_shape=(1, 1)) -> int | None:
+    """How far (pixels of the image, each axis) an output pixel's inputs
+    reach for denoiser ``name`` with ``options``; None for a global method.
+    In the raw domain each plane is one phase of the CFA tile, so a plane
+    pixel is a tile period: the radius is the plane's times the larger tile
+    side.  ``none``: 0."""
+    m, domain, scale, own = check_denoise_options(name, options)
+    if m.function is None or m.strength * scale == 0:
+        return 0
+    if m.support is None:
+        return None
+    full = {k: own.get(k, p.default) for k, p in denoiser_parameters(name).items() if k not in STAGE_OPTIONS}
+    radius = float(m.support(full))
+    step = max(int(v) for v in tile_shape) if domain == "raw" else 1
+    return int(np.ceil(radius)) * step
 
 
 def _run(m: DenoiseMethod, plane: np.ndarray, a: float, b: float, sigma: float, options: dict) -> np.ndarray:

@@ -52,5 +52,7 @@ def nl_means(plane: np.ndarray, *, sigma: float, patch_size: int = 5, patch_dist
 DENOISERS = (DenoiseMethod(name="nl-means", function=nl_means, order=2, domains=("raw", "rgb"),
                            strength=0.75, tuning=rule("nl-means"),
                            licence="scikit-image (BSD-3-Clause)",
+                           # local: an output pixel weighs pixels within patch_distance, each by its patch
+                           support=lambda o: int(o["patch_distance"]) + int(o["patch_size"]) // 2,
                            description="non-local means: weighted mean of pixels with similar 5 x 5 patches "
                                        "(scikit-image, fast mode)"),)

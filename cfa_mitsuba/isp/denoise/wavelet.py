@@ -52,4 +52,5 @@ def wavelet(plane: np.ndarray, *, sigma: float, wavelet: str = "db2", levels: in
 DENOISERS = (DenoiseMethod(name="wavelet", function=wavelet, order=1, domains=("raw", "rgb"),
                            strength=1.0, tuning=rule("wavelet"),
                            licence="scikit-image (BSD-3-Clause), PyWavelets (MIT)",
+                           support=None,  # global: BayesShrink estimates each subband's threshold from all of it
                            description="wavelet shrinkage: BayesShrink soft thresholds per subband (scikit-image)"),)

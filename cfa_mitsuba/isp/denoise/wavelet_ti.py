@@ -65,5 +65,6 @@ def wavelet_ti(plane: np.ndarray, *, sigma: float, wavelet: str = "db2", max_shi
 DENOISERS = (DenoiseMethod(name="wavelet-ti", function=wavelet_ti, order=3, domains=("raw", "rgb"),
                            strength=1.25, tuning=rule("wavelet-ti"),
                            licence="scikit-image (BSD-3-Clause), PyWavelets (MIT)",
+                           support=None,  # global: each shift's BayesShrink thresholds come from the whole plane
                            description="translation-invariant wavelet shrinkage: BayesShrink averaged over "
                                        "16 shifts (cycle spinning)"),)

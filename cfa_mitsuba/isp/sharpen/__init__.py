@@ -9,12 +9,19 @@ colour matrix, on the XYZ image; the default is ``none``, so results
 without it stand.  A linear sharpener (the unsharp mask) acting on every
 channel alike commutes with the colour matrix, so applying it to the
 camera channels or to XYZ is the same.
+
+A study names a sharpener and its amount in one value (the ``sharpen``
+axis, ``[isp] sharpen``): ``NAME`` or ``NAME:AMOUNT``, AMOUNT the
+sharpener's ``amount`` option (:func:`sharpen_setting`).  A record's
+``support`` says how far an output pixel's inputs reach
+(:func:`sharpen_support_px`).
 """
 
 from __future__ import annotations
 
 __all__ = ["SharpenMethod", "collect_sharpeners", "register_sharpener", "unregister_sharpener", "list_sharpeners",
-           "get_sharpener", "sharpener_parameters", "sharpen_image"]
+           "get_sharpener", "sharpener_parameters", "sharpen_image", "sharpen_setting", "sharpen_setting_name",
+           "sharpen_support_px"]
 
 import inspect
 from dataclasses import dataclass
@@ -28,13 +35,17 @@ from ...errors import CfaMitsubaError
 @dataclass(frozen=True, kw_only=True)
 class SharpenMethod:
     """A sharpener's declaration in its module (``SHARPENERS``): name,
-    function (None for ``none``), one-line description, licence, order."""
+    function (None for ``none``), one-line description, licence, order, and
+    ``support``: ``support(options) -> radius`` in pixels, how far an
+    output pixel's inputs reach (the options with their defaults filled
+    in); None: global."""
 
     name: str
     function: Callable | None
     description: str
     licence: str = ""
     order: int = 1000
+    support: Callable[[dict], float] | None = None
 
 
 _REGISTRY: dict[str, SharpenMethod] = {}
@@ -86,6 +97,54 @@ def sharpener_parameters(name: str) -> dict:
         return {}
     return {k: p for k, p in inspect.signature(m.function).parameters.items()
             if p.kind is inspect.Parameter.KEYWORD_ONLY}
+
+
+def sharpen_setting(value) -> tuple[str, dict]:
+    """(name, options) of a study's ``sharpen`` value: ``NAME`` or
+    ``NAME:AMOUNT`` (the sharpener's ``amount`` option), e.g.
+    ``'unsharp:1'`` -> ``('unsharp', {'amount': 1.0})``; a one-line error
+    for anything else.
+
+    >>> sharpen_setting("unsharp:1"), sharpen_setting("none")
+    (('unsharp', {'amount': 1.0}), ('none', {}))
+    """
+    if not isinstance(value, str) or not value:
+        raise CfaMitsubaError(f"a sharpen setting is a sharpener's name or NAME:AMOUNT, got {value!r}")
+    name, sep, amount = value.partition(":")
+    get_sharpener(name)
+    if not sep:
+        return name, {}
+    if "amount" not in sharpener_parameters(name):
+        raise CfaMitsubaError(f"sharpen {value!r}: {name!r} takes no amount")
+    try:
+        x = float(amount)
+    except ValueError:
+        x = float("nan")
+    if not np.isfinite(x) or x < 0:
+        raise CfaMitsubaError(f"sharpen {value!r}: the amount after ':' must be a number >= 0")
+    return name, {"amount": x}
+
+
+def sharpen_setting_name(value) -> str:
+    """The one spelling of a ``sharpen`` setting: ``NAME``, or
+    ``NAME:AMOUNT`` with AMOUNT as ``%g`` when it is not the sharpener's default."""
+    name, options = sharpen_setting(value)
+    if "amount" not in options or options["amount"] == sharpener_parameters(name)["amount"].default:
+        return name
+    return f"{name}:{options['amount']:g}"
+
+
+def sharpen_support_px(name: str, options: dict | None = None) -> int | None:
+    """How far (pixels, each axis) an output pixel's inputs reach for
+    sharpener ``name`` with ``options``; None for a global method; 0 for ``none``."""
+    m = get_sharpener(name)
+    if m.function is None:
+        return 0
+    if m.support is None:
+        return None
+    known = sharpener_parameters(name)
+    full = {k: dict(options or {}).get(k, p.default) for k, p in known.items()}
+    return int(np.ceil(float(m.support(full))))
 
 
 def sharpen_image(image: np.ndarray, name: str = "none", options: dict | None = None) -> tuple[np.ndarray, dict]:

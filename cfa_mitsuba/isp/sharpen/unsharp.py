@@ -62,5 +62,7 @@ def unsharp(image: np.ndarray, *, radius: float = 1.0, amount: float = 0.5) -> n
 #: This module's method (registered by :func:`.collect_sharpeners`).
 SHARPENERS = (SharpenMethod(name="unsharp", function=unsharp, order=1,
                             licence="scikit-image (BSD-3-Clause)",
+                            # local: scikit-image's Gaussian is truncated at 4 standard deviations
+                            support=lambda o: 4.0 * float(o["radius"]),
                             description="unsharp mask after demosaicing: image + amount x (image - Gaussian(radius)); "
                                         "options radius (px, default 1), amount (default 0.5)"),)
