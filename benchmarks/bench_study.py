@@ -29,7 +29,11 @@ four invocations while this tree's stayed at 108-111 s);
 ``--keep DIR`` keeps each run's metrics CSVs and timing.json; ``--json
 FILE`` writes the record (the kept runs, every run's evaluate phase, the
 ratios REV / this tree and the command).  Each tree
-runs its own copy of the config (its own configs/ file).
+runs its own copy of the config (its own configs/ file).  Each run's
+worker milliseconds per capture by scene and stage (timing.json's
+``scenes``) are printed beside the CPU floor per capture.  The chain's
+regions of interest (study/roi.py) are on unless ``CFA_MITSUBA_NO_ROI=1``
+is set in the environment (both trees inherit it).
 
 The optics memo (the quick study with the optical image shared by every
 CFA and demosaic of a scene, against recomputing it per capture,
@@ -139,7 +143,29 @@ def _study(tree: Path, config: Path, out: Path, cache: Path | None, workers: int
     # that machine load moves least, where the wall-clock phases above move with every other job
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return {**{k: float(timing["phases"].get(k, 0.0)) for k in PHASES},
-            **{k: float(timing["tasks"].get(k, 0.0)) for k in STAGES}, "cpu_s": cpu}
+            **{k: float(timing["tasks"].get(k, 0.0)) for k in STAGES}, "cpu_s": cpu,
+            "scenes": timing.get("scenes", {})}  # worker seconds per stage per scene (a tree before it: none)
+
+
+def per_capture_table(name: str, mode: str, got: dict) -> list[str]:
+    """The worker milliseconds per capture (one noise realisation of one
+    CFA, processed by every demosaic) by scene and stage, from timing.json's
+    ``scenes``; and the CPU floor per capture (all CPU time of the run over
+    the cores and the captures)."""
+    scenes = got.get("scenes") or {}
+    if not scenes:
+        return [f"{name} {mode}: no per-scene timing (timing.json without 'scenes')"]
+    lines = [f"{name} {mode}: worker ms per capture" + " " * 4 + "".join(f"{s[:-2]:>10}" for s in STAGES)
+             + f"{'total':>10}{'captures':>10}{'outputs':>9}"]
+    for scene, t in scenes.items():
+        n = max(int(t.get("captures", 0)), 1)
+        per = [1e3 * float(t.get(s, 0.0)) / n for s in STAGES]
+        lines.append(f"  {scene:<40}" + "".join(f"{v:>10.1f}" for v in per) + f"{sum(per):>10.1f}"
+                     f"{int(t.get('captures', 0)):>10}{int(t.get('outputs', 0)):>9}")
+    total = sum(int(t.get("captures", 0)) for t in scenes.values())
+    if total:
+        lines.append(f"  {'CPU floor (CPU s / cores / captures)':<40}{1e3 * got['cpu_floor_s'] / total:>10.1f} ms")
+    return lines
 
 
 def phases_main(args) -> int:
@@ -201,6 +227,9 @@ def phases_main(args) -> int:
     header = f"{'':<24}" + "".join(f"{n[:14] + ' ' + m:>20}" for n in names for m in runs[n])
     if len(names) == 2:
         header += "".join(f"{'ratio ' + m:>14}" for m in runs[names[0]])
+    for n in names:  # per capture, by scene and stage, and the floor it is measured against
+        for m, got in runs[n].items():
+            print("\n".join(per_capture_table(n, m, got)))
     print(header)
     labels = {**{k: k[:-2] + " (s)" for k in PHASES}, **{k: k[:-2] + " (worker s)" for k in STAGES},
               "cpu_s": "CPU, all processes (s)", "cpu_floor_s": f"CPU / {cores} cores (s)"}
@@ -216,7 +245,7 @@ def phases_main(args) -> int:
         m = next(iter(runs[names[0]]))  # the ratio REV / this tree of the first mode run
         record["against"] = names[1]
         record["ratio"] = {k: runs[names[1]][m][k] / runs[names[0]][m][k] for k in runs[names[0]][m]
-                           if runs[names[0]][m][k] > 0}
+                           if isinstance(runs[names[0]][m][k], float) and runs[names[0]][m][k] > 0}
     # paths in the record relative to the folder it is written to (io/portable.py)
     record["command"] = "python3 benchmarks/bench_study.py " + relative_command(
         sys.argv[1:], Path(args.json).parent if args.json else Path.cwd())

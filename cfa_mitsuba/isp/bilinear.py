@@ -89,5 +89,12 @@ def bilinear_image(raw: np.ndarray, mosaic: Mosaic) -> np.ndarray:
 
 
 #: This module's method (registered by :func:`.demosaic.collect_demosaics`).
+def support_radius(cfa, options: dict) -> int:
+    """How far (px) an output pixel reads the mosaic: the widest tent's half-width."""
+    mosaic = geometry(cfa)
+    return int(max(tent_radius(mosaic, c) for c in range(len(mosaic.channels))))
+
+
 DEMOSAICS = (DemosaicMethod(name="bilinear", function=bilinear, order=1, linear=True, accuracy=AccuracyBar(),
+                            support=support_radius,
                             description="normalised convolution per channel, tent wide enough for each channel's gaps"),)

@@ -79,6 +79,16 @@ class DemosaicMethod:
         a nonlinear method is predicted by the Laplacian's, its linear core).
     accuracy : the :class:`AccuracyBar` it meets on smooth images, or None
         for a baseline that promises none (nearest neighbour).
+    support : ``support(cfa, options) -> int | None``: how far (pixels, in
+        each direction) an output pixel reads the mosaic under ``options``
+        (the method's keywords), so that a window of the mosaic widened by
+        this margin demosaics the window's interior exactly as the whole
+        mosaic does (a study's regions of interest, study/roi.py); None (the
+        default, or returned): the output depends on the whole mosaic, or
+        on more than the method can bound, and it is always demosaiced whole.
+    window_options : ``window_options(mosaic) -> dict``: the keywords a
+        window of ``mosaic`` (as the method receives it) needs to match the
+        whole (the whole mosaic's statistics, e.g. its RMS); None: none.
     """
 
     name: str
@@ -87,6 +97,8 @@ class DemosaicMethod:
     order: int = 1000
     linear: bool = False
     accuracy: AccuracyBar | None = None
+    support: Callable | None = None
+    window_options: Callable | None = None
 
 
 _REGISTRY: dict[str, DemosaicMethod] = {}
@@ -104,17 +116,20 @@ def collect_demosaics(package: str) -> None:
             found.extend(getattr(importlib.import_module(f"{package}.{info.name}"), "DEMOSAICS", ()))
     for m in sorted(found, key=lambda m: m.order):
         if m.name not in _REGISTRY:
-            register_demosaic(m.name, m.function, description=m.description, linear=m.linear, accuracy=m.accuracy)
+            register_demosaic(m.name, m.function, description=m.description, linear=m.linear, accuracy=m.accuracy,
+                              support=m.support, window_options=m.window_options)
 
 
 def register_demosaic(name: str, function: Callable | None = None, *, description: str = "", linear: bool = False,
-                      accuracy: AccuracyBar | None = None, replace: bool = False):
+                      accuracy: AccuracyBar | None = None, replace: bool = False, support: Callable | None = None,
+                      window_options: Callable | None = None):
     """Add a demosaicing method under ``name``.
 
     ``function(raw, cfa, **options) -> (H, W, C)``; ``raw`` is a checked 2-D
     float64 mosaic, ``cfa`` has ``pattern`` and ``channels``.  ``linear`` and
     ``accuracy`` as :class:`DemosaicMethod`'s (default: nonlinear, no
-    accuracy bar).  Usable as a decorator (``@register_demosaic("mine",
+    accuracy bar), ``support`` and ``window_options`` as its (default: the
+    output depends on the whole mosaic).  Usable as a decorator (``@register_demosaic("mine",
     description="...")``).
 
     Examples
@@ -135,7 +150,7 @@ def register_demosaic(name: str, function: Callable | None = None, *, descriptio
             raise CfaMitsubaError(f"a demosaicing method named {name!r} is already registered")
         desc = description or (inspect.getdoc(fn) or "").split("\n", 1)[0]
         _REGISTRY[name] = DemosaicMethod(name=name, function=fn, description=desc, linear=bool(linear),
-                                         accuracy=accuracy)
+                                         accuracy=accuracy, support=support, window_options=window_options)
         return fn
 
     return add(function) if function is not None else add
@@ -164,8 +179,9 @@ def get_demosaic(name: str) -> Callable:
 
 
 #: Keywords the processing fills for a method (its luminance reference, the
-#: channels' luminance weights, an info dict): not options a user sets.
-SUPPLIED_KEYWORDS = frozenset({"reference", "luminance_weights", "info"})
+#: channels' luminance weights, an info dict, the whole mosaic's RMS for a
+#: window of it): not options a user sets.
+SUPPLIED_KEYWORDS = frozenset({"reference", "luminance_weights", "info", "mosaic_rms"})
 
 
 def demosaic_parameters(name: str) -> dict:

@@ -73,14 +73,15 @@ import numpy as np
 from .bilinear import interpolate_channel
 from .demosaic import AccuracyBar, DemosaicMethod
 from .laplacian_reference import (MHC_ALPHA, Reference, _check_gains, _check_weighting, _choose, _eps,  # noqa: F401
-                                  _lin, reference_adaptive, reference_for, reference_laplacian)
+                                  _lin, _stencil_radius, reference_adaptive, reference_for, reference_laplacian,
+                                  reference_stencils, window_rms)
 from .mosaic import Mosaic, directional_samples, extend, geometry, phase_view, tent_radius
 
 # --- stage 2: colour differences ----------------------------------------------------
 
 
 def colour_differences(raw, refimg, mosaic: Mosaic, ref: Reference, chroma_gain: float,
-                       weighting: str | None = None) -> np.ndarray:
+                       weighting: str | None = None, mosaic_rms: float | None = None) -> np.ndarray:
     """(H, W, C): every channel from its samples and the reference's detail;
     edge-directed where ``weighting`` is 'soft' or 'hard'."""
     adaptive = weighting is not None
@@ -97,7 +98,7 @@ def colour_differences(raw, refimg, mosaic: Mosaic, ref: Reference, chroma_gain:
         ext_r, _, _ = extend(refimg, mosaic, radius)
     out = np.empty((*shape, n), dtype=raw.dtype)  # float32 stays float32
     from ._colour_difference_kernel import gaps_and_sites  # here, not at import: Numba loads slowly
-    eps = _eps(raw)
+    eps = _eps(raw, mosaic_rms)
     for c in range(n):
         if c == ref.channel:
             out[..., c] = refimg
@@ -188,7 +189,7 @@ def laplacian(raw, cfa, *, alpha: float = MHC_ALPHA, chroma_gain: float = 1.0, r
 
 
 def adaptive_laplacian(raw, cfa, *, alpha: float = MHC_ALPHA, chroma_gain: float = 1.0, weighting: str = "soft",
-                       reference=None, luminance_weights=None):
+                       reference=None, luminance_weights=None, mosaic_rms: float | None = None):
     """Edge-directed demosaic (Hamilton-Adams on Bayer), any CFA.
 
     Parameters and return as :func:`laplacian`, plus:
@@ -199,6 +200,8 @@ def adaptive_laplacian(raw, cfa, *, alpha: float = MHC_ALPHA, chroma_gain: float
         the same classifiers without the hard switch, measured +0.6 dB on
         scikit-image's photographs on Bayer (docs/isp.md) and no longer
         behind Malvar-He-Cutler on any of them.
+    mosaic_rms : the RMS of the whole mosaic when ``raw`` is a window of
+        it (a study's region of interest): eps is then the whole's.
 
     Examples
     --------
@@ -216,14 +219,32 @@ def adaptive_laplacian(raw, cfa, *, alpha: float = MHC_ALPHA, chroma_gain: float
     _check_weighting(weighting)
     mosaic = geometry(cfa)
     ref = reference_for(cfa, mosaic, reference, luminance_weights)
-    refimg = reference_adaptive(raw, mosaic, ref, alpha, weighting)
-    return colour_differences(raw, refimg, mosaic, ref, chroma_gain, weighting)
+    refimg = reference_adaptive(raw, mosaic, ref, alpha, weighting, mosaic_rms)
+    return colour_differences(raw, refimg, mosaic, ref, chroma_gain, weighting, mosaic_rms)
+
+
+def support_radius(cfa, options: dict, *, adaptive: bool) -> int:
+    """How far (px) an output pixel of 'laplacian' (``adaptive`` False) or
+    'adaptive-laplacian' reads the mosaic: the reference estimate's reach
+    (its stencils', and the directional samples' up to a tile for the
+    adaptive one) plus the colour differences' (the widest tent, or a
+    tile for the directional ones): the extension radii the two stages pad
+    the mosaic by, which bound every sample they read."""
+    mosaic = geometry(cfa)
+    ref = reference_for(cfa, mosaic, options.get("reference"), options.get("luminance_weights"))
+    limit = max(mosaic.tile_shape)
+    stencil = _stencil_radius(reference_stencils(mosaic, ref, options.get("alpha", MHC_ALPHA)))
+    reach_ref = max(limit, stencil) if adaptive and ref.channel is not None else stencil
+    tent = max(tent_radius(mosaic, c) for c in range(len(mosaic.channels)))
+    return int(reach_ref + max(tent, limit if adaptive else 0))
 
 
 #: This module's methods (registered by :func:`.demosaic.collect_demosaics`).
 DEMOSAICS = (
     DemosaicMethod(name="laplacian", function=laplacian, order=2, linear=True, accuracy=AccuracyBar(),
+                   support=lambda cfa, o: support_radius(cfa, o, adaptive=False),
                    description="gradient-corrected linear (Malvar-He-Cutler on Bayer), then colour differences"),
     DemosaicMethod(name="adaptive-laplacian", function=adaptive_laplacian, order=3, accuracy=AccuracyBar(),
+                   support=lambda cfa, o: support_radius(cfa, o, adaptive=True), window_options=window_rms,
                    description="edge-directed (Hamilton-Adams classifiers on Bayer), directional colour differences"),
 )

@@ -161,10 +161,23 @@ def _check_weighting(weighting) -> None:
         raise CfaMitsubaError(f"weighting must be 'soft' or 'hard', got {weighting!r}")
 
 
-def _eps(raw) -> float:
+def mosaic_rms(raw) -> float:
+    """The mosaic's RMS, sqrt(mean(raw^2)), in the mosaic's unit."""
+    return float(np.sqrt(np.mean(raw * raw)))
+
+
+def window_rms(raw) -> dict:
+    """A window's ``mosaic_rms`` keyword: the whole mosaic's RMS (the
+    methods' ``window_options``, study/roi.py)."""
+    return {"mosaic_rms": mosaic_rms(raw)}
+
+
+def _eps(raw, rms: float | None = None) -> float:
     """Regulariser of the soft weights: 1e-3 of the mosaic's RMS (so the
-    method is scale-invariant)."""
-    return 1e-3 * float(np.sqrt(np.mean(raw * raw))) + np.finfo(float).tiny
+    method is scale-invariant); ``rms``: the RMS of the whole mosaic when
+    ``raw`` is a window of it (the same eps, so the window's values are the
+    whole's)."""
+    return 1e-3 * (mosaic_rms(raw) if rms is None else float(rms)) + np.finfo(float).tiny
 
 
 def _choose(estimates: list, costs: list, weighting: str, eps: float):
@@ -180,7 +193,7 @@ def _choose(estimates: list, costs: list, weighting: str, eps: float):
 
 
 def reference_adaptive(raw: np.ndarray, mosaic: Mosaic, ref: Reference, alpha: float,
-                       weighting: str = "soft") -> np.ndarray:
+                       weighting: str = "soft", mosaic_rms: float | None = None) -> np.ndarray:
     """(H, W) edge-directed reference estimate (Hamilton-Adams generalised;
     the non-adaptive one for a luminance reference).
 
@@ -204,15 +217,15 @@ def reference_adaptive(raw: np.ndarray, mosaic: Mosaic, ref: Reference, alpha: f
     arguments, which 'pocs' makes after 'adaptive-laplacian'
     (:class:`~._memo.LastImage`).
     """
-    return _LAST_REFERENCE.get((mosaic, ref, float(alpha), weighting), raw,
-                               lambda: _reference_adaptive(raw, mosaic, ref, alpha, weighting))
+    return _LAST_REFERENCE.get((mosaic, ref, float(alpha), weighting, mosaic_rms), raw,
+                               lambda: _reference_adaptive(raw, mosaic, ref, alpha, weighting, mosaic_rms))
 
 
 #: the last mosaic's edge-directed reference (:func:`reference_adaptive`)
 _LAST_REFERENCE = LastImage()
 
 
-def _reference_adaptive(raw, mosaic, ref, alpha, weighting):
+def _reference_adaptive(raw, mosaic, ref, alpha, weighting, rms=None):
     if ref.channel is None:
         return reference_laplacian(raw, mosaic, ref, alpha)
     th, tw = mosaic.tile_shape
@@ -222,7 +235,7 @@ def _reference_adaptive(raw, mosaic, ref, alpha, weighting):
     ext, ph, pw = extend(raw, mosaic, max(limit, _stencil_radius(fallback)))
     out = raw.copy()
     shape, tile = raw.shape, mosaic.tile_shape
-    eps = _eps(raw)
+    eps = _eps(raw, rms)
     for (i, j), k in np.ndenumerate(mosaic.index):
         if k == r:
             continue

@@ -59,7 +59,7 @@ from scipy import ndimage
 from ..errors import CfaMitsubaError
 from .bilinear import bilinear_image
 from .demosaic import AccuracyBar, DemosaicMethod
-from .laplacian_reference import MHC_ALPHA, reference_adaptive, reference_for
+from .laplacian_reference import MHC_ALPHA, reference_adaptive, reference_for, window_rms
 from .mosaic import geometry
 
 _H0 = np.array([1.0, 2.0, 1.0]) / 4.0
@@ -137,7 +137,7 @@ def _levels(mosaic, levels) -> int:
 
 def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: float = 0.0, levels="auto",
          update_reference: bool = False, alpha: float = MHC_ALPHA, reference=None, luminance_weights=None,
-         info: dict | None = None):
+         info: dict | None = None, mosaic_rms: float | None = None):
     """Alternating-projections demosaic (Gunturk et al. 2002), any CFA.
 
     Parameters
@@ -159,6 +159,8 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
         which initialises the reference.
     info : a dict to receive ``iterations`` (done) and ``change`` (last
         relative RMS change).
+    mosaic_rms : the whole mosaic's RMS when ``raw`` is a window of it
+        (the edge-directed reference's eps, as 'adaptive-laplacian').
 
     Returns
     -------
@@ -187,7 +189,7 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
     x = np.moveaxis(bilinear_image(raw, mosaic), -1, 0).copy()  # (C, H, W), C order
     others = [c for c in range(n) if c != ref.channel]
     w = np.asarray(ref.weights, dtype=raw.dtype)
-    refimg = reference_adaptive(raw, mosaic, ref, alpha)
+    refimg = reference_adaptive(raw, mosaic, ref, alpha, mosaic_rms=mosaic_rms)
     if ref.channel is not None:
         if update_reference:
             refimg = refimg.copy()
@@ -226,8 +228,34 @@ def pocs(raw, cfa, *, iterations: int = 10, tolerance: float = 1e-3, threshold: 
     return np.moveaxis(x, 0, -1)
 
 
+def support_radius(cfa, options: dict) -> int | None:
+    """How far (px) an output pixel reads the mosaic: the start's reach (the
+    bilinear estimates', the edge-directed reference's) plus, per
+    iteration, the low-pass path's half-length (3 px at one level, 9 at
+    two): iterations x half-length, so 10 iterations at one level (Bayer)
+    reach 30 px past the start.  None (the whole mosaic) when the early stop can
+    end the loop (``tolerance`` > 0: the change it compares is the whole
+    image's, so a window could stop after another number of passes), when
+    the detail set clips subbands (``threshold`` > 0: not bounded here), the
+    reference is updated (``update_reference``) or is the luminance (no
+    single densest channel: each pass's ``np.tensordot`` goes to BLAS, whose
+    sums are rounded differently on images of another width, measured).
+    """
+    if options.get("tolerance", 1e-3) > 0 or options.get("threshold", 0.0) != 0 or options.get("update_reference"):
+        return None
+    from .bilinear import support_radius as bilinear_reach
+    from .laplacian import support_radius as laplacian_reach
+
+    mosaic = geometry(cfa)
+    if reference_for(cfa, mosaic, options.get("reference"), options.get("luminance_weights")).channel is None:
+        return None
+    half = (len(lowpass_kernel(_levels(mosaic, options.get("levels", "auto")))) - 1) // 2
+    start = max(bilinear_reach(cfa, options), laplacian_reach(cfa, options, adaptive=True))
+    return int(start + int(options.get("iterations", 10)) * half)
+
+
 #: This module's method (registered by :func:`.demosaic.collect_demosaics`).
-DEMOSAICS = (DemosaicMethod(name="pocs", function=pocs, order=4,
+DEMOSAICS = (DemosaicMethod(name="pocs", function=pocs, order=4, support=support_radius, window_options=window_rms,
                             accuracy=AccuracyBar(ramp_margin_px=16),  # its low-pass spreads the border's fold
                             description="alternating projections onto observation and detail sets (Gunturk et al. "
                                         "2002)"),)

@@ -80,9 +80,16 @@ def achromatic(reference_xyz, test_xyz, white_xyz, *, row: int | None = None, bo
     return MetricResult(float(d[x0:x1].mean()), name="achromatic", unit="L*", details=details)
 
 
+def _reads(geometry: dict, shape, options: dict, reference_xyz=None, white_xyz=None) -> list:
+    """The analysed row, whole (the metric's region of interest)."""
+    row = options.get("row", geometry.get("row"))
+    row = shape[0] // 2 if row is None else int(row)
+    return [(row, 0, row + 1, shape[1])]
+
+
 #: This module's metric records (collected by :mod:`.registry`).
 RECORDS = (
-    MetricRecord(name="achromatic", function=achromatic, scenes=("gray-bar",), inputs="xyz", unit="L*",
+    MetricRecord(name="achromatic", function=achromatic, scenes=("gray-bar",), inputs="xyz", unit="L*", reads=_reads,
                  higher_is_better=False, identical_value=0.0, scored=True, label="AR error", order=6, decimals=3,
                  description="achromatic reproduction error, mean |ΔL*| along the gray bar",
                  paper="ΔR (s. 2.2.6, Fig 14)", score_range=(1.0, 0.5),

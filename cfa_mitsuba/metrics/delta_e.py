@@ -137,9 +137,16 @@ PRACTICAL_DE = ("0.8 dE00: the 50:50 % perceptibility threshold of CIEDE2000 (Pa
                 "just noticeable difference of CIELAB (Mahy, Van Eycken & Oosterlinck 1994, Color Res. Appl. "
                 "19:105-121; colour-science's JND_CIE1976)")
 
+def _reads(geometry: dict, shape, options: dict, reference_xyz=None, white_xyz=None) -> list | None:
+    """The patch interiors; None (the whole image) without patches."""
+    patches = options.get("patches", geometry.get("patches"))
+    return None if patches is None else [tuple(p) for p in patches]
+
+
 #: This module's metric records (collected by :mod:`.registry`).
 _DELTA_E = MetricRecord(
     name="delta-e", function=delta_e, scenes=("macbeth",), inputs="xyz", unit="dE00", higher_is_better=False,
+    reads=_reads,
     identical_value=0.0,
     scored=True, label="ΔE00", order=1, decimals=2, paper="ΔE (s. 2.2.1, Fig 8)", score_range=(6.0, 2.2),
     range_units=("dE00", "dE76"), description="colour error, mean CIEDE2000 over the 24 ColorChecker patches",

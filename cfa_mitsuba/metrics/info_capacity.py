@@ -46,7 +46,7 @@ import numpy as np
 from ..errors import require
 from ._common import as_image
 from ._result import MetricResult
-from .mtf import LUM_WEIGHTS, NBIN, mtf
+from .mtf import LUM_WEIGHTS, NBIN, edge_region, mtf
 from .record import MetricRecord
 
 
@@ -183,6 +183,7 @@ def info_capacity(image, *, roi=None, reference=None, weights=LUM_WEIGHTS, nbin:
 #: This module's metric records (collected by :mod:`.registry`).
 RECORDS = (
     MetricRecord(name="info-capacity", function=info_capacity, scenes=("slanted-edge",), inputs="linear",
+                 reads=edge_region,
                  unit="bit/px", higher_is_better=True, scored=False, label="information capacity", order=42,
                  decimals=3,
                  description="Shannon information capacity of the slanted-edge capture from its MTF and noise power "

@@ -137,9 +137,19 @@ def moire(reference_xyz, test_xyz, white_xyz, *, frequency_cy_per_deg, row: int 
     return MetricResult(float(freq[col]), name="moire", unit="cy/deg", details=details)
 
 
+def _reads(geometry: dict, shape, options: dict, reference_xyz=None, white_xyz=None) -> list:
+    """The band of ``block`` rows around the analysed row, every column."""
+    import inspect
+
+    row = options.get("row", geometry.get("row"))
+    row = shape[0] // 2 if row is None else int(row)
+    half = int(options.get("block", inspect.signature(moire).parameters["block"].default)) // 2
+    return [(max(row - half, 0), 0, min(row + half + 1, shape[0]), shape[1])]
+
+
 #: This module's metric records (collected by :mod:`.registry`).
 RECORDS = (
-    MetricRecord(name="moire", function=moire, scenes=("chirp",), inputs="xyz", unit="cy/deg",
+    MetricRecord(name="moire", function=moire, scenes=("chirp",), inputs="xyz", unit="cy/deg", reads=_reads,
                  higher_is_better=True, scored=True, label="MSP", order=5, decimals=2,
                  description="moiré starting point: first frequency where the block-mean C*ab passes 25",
                  paper="MSP (s. 2.2.5, Figs 12-13)", score_range=(0.04, 0.30), range_scaling="chirp_cy_px",

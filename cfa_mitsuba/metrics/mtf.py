@@ -339,9 +339,17 @@ def _record_mtf(name, rec, main, edge, sign, nbin, per_mm, isetcam: bool = False
     }
 
 
+def edge_region(geometry: dict, shape, options: dict, reference_xyz=None, white_xyz=None) -> list | None:
+    """The edge's region (the scene geometry's ``roi``); None (the whole
+    image, where the edge is searched for) without one."""
+    roi = options.get("roi", geometry.get("roi"))
+    return None if roi is None else [tuple(roi)]
+
+
 #: This module's metric records (collected by :mod:`.registry`).
 _MTF = MetricRecord(
     name="mtf", function=mtf, scenes=("slanted-edge",), inputs="linear", unit="cy/mm", higher_is_better=True,
+    reads=edge_region,
     scored=True, label="MTF50", order=4, decimals=1, paper="MTF50 (s. 2.2.4, Figs 6, 11)",
     score_range=(30.0, 110.0), range_scaling="pixel_pitch", ideal_details=True,
     description="luminance MTF50 of the slanted edge (ISO 12233 e-SFR)",

@@ -80,6 +80,14 @@ class MetricRecord:
         best CFA only when its lead is at least this large
         (study/decisions.py).  ``practical_source`` says where each amount
         comes from (a published threshold, or our choice and why).
+    reads : ``reads(geometry, shape, options, reference_xyz, white_xyz) ->
+        [(y0, x0, y1, x1), ...]``: the rectangles of the camera image
+        (half-open pixel bounds) its values read, given the scene geometry,
+        the image's (H, W), the metric's options and the ideal image and
+        white (a region chosen on the ideal: the gray bar's mid-grey); None (the default, or returned): the whole image.
+        A study demosaics and measures only these regions and each method's
+        support around them (study/roi.py); the metric then gets an image
+        whose other pixels hold the ideal's.
     decibels : the value is an amplitude ratio (an SNR): tables give
         ``20 log10`` of it in dB beside the ratio (metrics.csv's
         ``value_db``, ``ci_low_db``, ``ci_high_db``).
@@ -118,6 +126,7 @@ class MetricRecord:
     practical_difference: tuple[tuple[str, float], ...] = ()
     practical_source: str = ""
     decibels: bool = False
+    reads: Callable[..., Any] | None = None
 
     def __post_init__(self):
         if self.inputs not in INPUT_KINDS:

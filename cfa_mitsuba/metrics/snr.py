@@ -104,7 +104,7 @@ def _nps_at_zero(noise: np.ndarray, lag: int) -> float | None:
 
 
 def ysnr(reference_xyz, test_xyz, white_xyz, *, steps=None, margin: int = 3,
-         grey: float = GREY_REFLECTANCE, correlation_px: int = 4) -> MetricResult:
+         grey: float = GREY_REFLECTANCE, correlation_px: int = 4, step_snrs: bool = True) -> MetricResult:
     """Luminance SNR (and, in the details, chroma SNR) on a flat mid-grey.
 
     Parameters
@@ -118,6 +118,10 @@ def ysnr(reference_xyz, test_xyz, white_xyz, *, steps=None, margin: int = 3,
     grey : the reflectance of the step chosen (Y / Yw of the ideal).
     correlation_px : the largest lag L (pixels) summed for ``ysnr_area``
         (module doc).
+    step_snrs : measure every step for the details' ``steps`` (default);
+        False leaves them None (a study's realisations whose details it does
+        not keep: steps.csv reads the kept ones; the headline and the other
+        details are the same).
 
     Raises CfaMitsubaError on a noise-free image (the ideal against itself).
 
@@ -166,7 +170,7 @@ def ysnr(reference_xyz, test_xyz, white_xyz, *, steps=None, margin: int = 3,
                "region": [y0, x0, y1, x1], "mean_y_rel": float(r[:, 1].mean() / white[1]),
                "noise_y": sd_y / mean_y, "noise_chroma": float(np.sqrt(chroma_var)) / mean_y,
                "ysnr_area": mean_y / float(np.sqrt(nps0)) if nps0 else None, "correlation_px": int(correlation_px),
-               "steps": _step_snrs(ref, test, float(white[1]), steps, int(margin)) if steps else None}
+               "steps": _step_snrs(ref, test, float(white[1]), steps, int(margin)) if steps and step_snrs else None}
     return MetricResult(value, name="ysnr", unit="", details=details)
 
 
@@ -194,8 +198,23 @@ def _step_snrs(ref: np.ndarray, test: np.ndarray, white_y: float, steps, margin:
     return out
 
 
+def _reads(geometry: dict, shape, options: dict, reference_xyz, white_xyz) -> list | None:
+    """The mid-grey step's region (:func:`_region`, chosen on the ideal),
+    and every step, all rows, while ``step_snrs`` measures them; None (the
+    whole image) without steps."""
+    steps = options.get("steps", geometry.get("steps"))
+    if not steps:
+        return None
+    if options.get("step_snrs", True):
+        return [(0, max(int(a), 0), shape[0], min(int(b), shape[1])) for a, b in steps]
+    ref_y = np.asarray(reference_xyz)[..., 1]
+    return [_region(ref_y, float(np.asarray(white_xyz)[1]), steps, int(options.get("margin", 3)),
+                    float(options.get("grey", GREY_REFLECTANCE)))]
+
+
 _YSNR = MetricRecord(
     name="ysnr", function=ysnr, scenes=("gray-bar",), inputs="xyz", unit="", higher_is_better=True, scored=False,
+    reads=_reads, summary_options=(("step_snrs", False),),
     label="YSNR", order=40, decimals=2, decibels=True,
     description="luminance SNR on the gray bar's mid-grey step after demosaic and colour matrix (ISO 15739 region SNR)")
 

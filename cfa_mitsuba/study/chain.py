@@ -14,7 +14,10 @@ The optical image does not depend on the CFA or the demosaic, so a chain
 computes it once per (scene, optics-relevant condition) and keeps it, with
 the ideal sensor's image per luminance and exposure, for every CFA and
 demosaic evaluated in the same process (:class:`_Memo`, a small LRU: a
-puppy-sized optical image is about 0.2 GB).
+puppy-sized optical image is about 0.2 GB), and in a study writes both to
+the study's store for its other workers (:mod:`.image_store`).  Only the
+regions the metrics read are demosaiced and measured where that gives the
+whole image's values (:mod:`.roi`).
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from . import image_store, roi
 from .axes import AXES
 from .conditions import Condition
 from .task_values import CameraOutput, TaskEvaluation, realisation_seeds
@@ -60,7 +64,9 @@ class ChainSettings:
     ``mean_match`` scales each camera output to the ideal's mean (ISETCam);
     ``spectra_sets`` maps a CFA's own spectra set to the set used instead
     (``[sensor.spectra_sets]``); ``metric_options`` the keyword options of
-    each metric (``[metrics.<name>]``); both as sorted pairs.
+    each metric (``[metrics.<name>]``); both as sorted pairs.  ``roi``:
+    demosaic and measure only the regions the metrics read where that gives
+    the whole image's values (:mod:`.roi`; False: whole images always).
     """
 
     optics: object = None
@@ -72,6 +78,7 @@ class ChainSettings:
     spectra_sets: tuple = ()
     metric_options: tuple = ()
     demosaic_options: tuple = ()
+    roi: bool = True
 
     def __post_init__(self):
         from ..optics import OpticsParams
@@ -253,8 +260,9 @@ class CameraChain:
     reuse for that call.
     """
 
-    def __init__(self, settings: ChainSettings | None = None):
+    def __init__(self, settings: ChainSettings | None = None, *, image_store: str | None = None):
         self.settings = settings or ChainSettings()
+        self.image_store = image_store  # a study's folder of optical images (.image_store), shared by its workers
         self.timing = {"optics_s": 0.0, "capture_s": 0.0, "process_s": 0.0, "metrics_s": 0.0}
 
     def _timed(self, stage: str, fn, *args, **kwargs):
@@ -272,14 +280,20 @@ class CameraChain:
 
         optics, sensor = self.settings.for_condition(cond)
 
-        def make():
+        def compute():
             image = scene_image() if callable(scene_image) else scene_image
             return compute_optics(image, optics, pixel_pitch_um=sensor.pixel_pitch_um,
                                   fill_factor=sensor.fill_factor)
 
         if scene_key is None or os.environ.get(NO_MEMO_ENV) == "1":
-            return self._timed("optics_s", make)
+            return self._timed("optics_s", compute)
         key = (scene_key, optics, sensor.pixel_pitch_um, sensor.fill_factor)
+        fields = {"scene": str(scene_key), "optics": repr(optics), "pitch_um": float(sensor.pixel_pitch_um),
+                  "fill_factor": float(sensor.fill_factor)}
+
+        def make():  # from the study's store when another worker made it (.image_store)
+            return image_store.load_or_make(self.image_store, "optical", fields, compute)
+
         return self._timed("optics_s", _OPTICAL.get, key, make)
 
     def ideal(self, oi, cond: Condition, scene_key=None):
@@ -289,7 +303,7 @@ class CameraChain:
 
         _, sensor = self.settings.for_condition(cond)
 
-        def make():
+        def compute():
             raw = capture_ideal(oi, luminance_cd_m2=cond.luminance, sensor=sensor, exposure_s=cond.exposure)
             out = process(raw)
             # compared with every camera output of its task: read-only, so the metrics check it once
@@ -297,8 +311,14 @@ class CameraChain:
             return out
 
         if scene_key is None or os.environ.get(NO_MEMO_ENV) == "1":
-            return self._timed("optics_s", make)
+            return self._timed("optics_s", compute)
         key = (scene_key, *self.settings.for_condition(cond), cond.luminance, cond.exposure)
+        fields = {"scene": str(scene_key), "optics": repr(key[1]), "sensor": repr(sensor),
+                  "luminance": float(cond.luminance), "exposure": str(cond.exposure)}
+
+        def make():  # from the study's store when another worker made it (.image_store)
+            return image_store.load_or_make(self.image_store, "ideal", fields, compute)
+
         return self._timed("optics_s", _IDEAL.get, key, make)
 
     def capture(self, oi, cfa, cond: Condition, seed: int, *, noise: str | None = None):
@@ -437,7 +457,10 @@ class CameraChain:
             try:
                 if prepared is None:
                     prepared = self.prepare(raw, method, cond)  # once for every method (isp.prepare)
-                out = self.process(prepared, method, cond)
+                # only the windows the metrics read, when that gives the whole image's values (.roi)
+                rects = roi.plan(self, prepared, method, cond, ideal, metric_names, details=details)
+                out = (self.process(prepared, method, cond) if rects is None
+                       else roi.process_windows(self, prepared, method, cond, rects, ideal.xyz))
                 results, failures, scale = self.measure(ideal, out, metric_names, cond, details=details)
             except CfaMitsubaError as exc:
                 yield raw, ideal, method, exc

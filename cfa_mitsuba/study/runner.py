@@ -34,6 +34,7 @@ __all__ = ["StudyResult", "run_study", "plan_study", "write_timing", "timing_sum
 
 import hashlib
 import json
+import shutil
 import sys
 import time
 from dataclasses import dataclass, field
@@ -43,6 +44,7 @@ from .._version import __version__
 from ..errors import CfaMitsubaError
 from ..io import atomic_output, check_writable_dir
 from ..metrics import scored_metrics
+from . import image_store
 from .config import StudyConfig
 from .cfa_facts import write_cfa_facts
 from .sensor_curves import write_sensor_curves
@@ -124,8 +126,11 @@ def scene_conditions(config: StudyConfig, scene) -> dict:
     return {c: ([m for m in scene.metrics if m in plan[c][0]], plan[c][1]) for c in ordered}
 
 
-def plan_study(config: StudyConfig, details_dir: str | None) -> tuple[list[dict], list[dict]]:
-    """The render sources and the evaluation tasks of a study, in a fixed order.
+def plan_study(config: StudyConfig, details_dir: str | None, *, image_store: str | None = None
+               ) -> tuple[list[dict], list[dict]]:
+    """The render sources and the evaluation tasks of a study, in a fixed
+    order (``image_store``: the folder of optical images its workers share,
+    :mod:`.image_store`).
 
     Every value has ``render_seeds x seeds`` realisations, realisation
     ``k = r x seeds + s`` the same render seed r and sensor seed for every
@@ -155,7 +160,8 @@ def plan_study(config: StudyConfig, details_dir: str | None) -> tuple[list[dict]
                         source=src, scene=scene.name, condition=cond, base=base, cfa=cfa, cfa_label=label,
                         demosaics=tuple(config.demosaics), metrics=tuple(metrics), chain=chain,
                         details_dir=details_dir if r == 0 else None, details_tag=tag, realisations=per_task,
-                        ideal_rows=i == 0 and r == 0, realisation_offset=r * config.seeds, render_seed=r))
+                        ideal_rows=i == 0 and r == 0, realisation_offset=r * config.seeds, render_seed=r,
+                        image_store=image_store))
     return sources, tasks
 
 
@@ -261,7 +267,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     work = out / ".work"
     details = out / "details"
 
-    sources, tasks = plan_study(config, str(details))
+    sources, tasks = plan_study(config, str(details), image_store=str(work / image_store.FOLDER))
     timing: dict = {"phases": {}, "tasks": {"optics_s": 0.0, "capture_s": 0.0, "process_s": 0.0, "metrics_s": 0.0}}
     t_start = time.perf_counter()
 
@@ -280,7 +286,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     with terminate_cleanly(log), executor:  # issue 27: SIGTERM stops the workers too
         # Written once the executor is up (a Dask scheduler that cannot be
         # reached leaves nothing behind).
-        work.mkdir(exist_ok=True)
+        image_store.fresh(work)  # .work made; no optical image of an earlier run read
         with atomic_output(out / "config.json") as tmp:
             tmp.write_text(json.dumps({**_portable_config(config, out),
                                        "base_condition": config.base_condition().to_dict()}, indent=1, default=str))
@@ -313,8 +319,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
             with atomic_output(work / f"{tid}.json") as tmp:
                 tmp.write_text(json.dumps(result.to_dict()))
             done[tid] = result
-            for k, v in result.timing.items():
-                timing["tasks"][k] = timing["tasks"].get(k, 0.0) + v
+            _add_timing(timing, task, result)
 
         def got_group(group, results):
             for task, result in zip(group, results):
@@ -324,6 +329,7 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
         _run_tasks(executor, evaluate_group, groups, "evaluate", progress, got_group, size=len)
         timing["phases"]["evaluate_s"] = time.perf_counter() - t
         _say_recycled(executor, log)
+        shutil.rmtree(work / image_store.FOLDER, ignore_errors=True)  # the optical images: not kept past the run
 
     results = [done[_task_id(task)] for task in tasks]
     rows = [r for result in results for r in result.rows]
@@ -353,6 +359,21 @@ def run_study(config: StudyConfig, out_dir, *, workers: int | None = None, sched
     result = StudyResult(out, metrics, scores, timing, len(tasks), reused)
     write_timing(result)
     return result
+
+
+def _add_timing(timing: dict, task, result) -> None:
+    """Add a task's worker seconds per stage to timing.json's ``tasks`` and
+    to its scene's entry in ``scenes`` (with the captures, one per
+    realisation the task measured, and the camera outputs, a capture per
+    demosaic: the per-capture cost benchmarks/bench_study.py prints)."""
+    scene = timing.setdefault("scenes", {}).setdefault(task.scene, {"tasks": 0, "captures": 0, "outputs": 0})
+    captures = int(task.realisations) if result.rows else 0
+    scene["tasks"] += 1
+    scene["captures"] += captures
+    scene["outputs"] += captures * len(task.demosaics)
+    for k, v in result.timing.items():
+        timing["tasks"][k] = timing["tasks"].get(k, 0.0) + v
+        scene[k] = scene.get(k, 0.0) + v
 
 
 def _say_recycled(executor, log) -> None:

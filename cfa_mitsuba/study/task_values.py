@@ -51,6 +51,8 @@ class EvaluationTask:
         as ``render_seed``; 0 for a scene rendered once).
     ideal_rows : also measure the ideal sensor against itself.
     base : the condition is one of the study's own (scored), not a sweep's.
+    image_store : the study's folder of optical images, shared by its
+        workers (:mod:`.image_store`; None: each worker makes its own).
     """
 
     source: dict[str, object]
@@ -67,6 +69,7 @@ class EvaluationTask:
     ideal_rows: bool = False
     base: bool = True
     realisation_offset: int = 0
+    image_store: str | None = None
     render_seed: int = 0
 
     @classmethod
@@ -81,8 +84,10 @@ class EvaluationTask:
         return cls(**{**task, "demosaics": tuple(task["demosaics"]), "metrics": tuple(task["metrics"])})
 
     def identity(self) -> dict:
-        """Everything that determines the task's rows (not where its details go)."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name != "details_dir"}
+        """Everything that determines the task's rows (not where its details
+        or its study's optical images go)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+                if f.name not in ("details_dir", "image_store")}
 
     @property
     def label(self) -> str:

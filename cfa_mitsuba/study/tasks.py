@@ -215,7 +215,8 @@ def evaluate_task(task) -> TaskResult:
     tag = t.details_tag or f"L{t.condition.luminance:g}"
     # the ideal's curves are written once per scene and condition, by the first task of its group to get there
     ideal_details = details_dir is not None and not (ideal_folder(details_dir, t.scene) / f"{tag}.png").exists()
-    evaluation = CameraChain(t.chain).run(t, lambda: load_scene_image(t.source), ideal_details=ideal_details)
+    evaluation = CameraChain(t.chain, image_store=t.image_store).run(t, lambda: load_scene_image(t.source),
+                                                                     ideal_details=ideal_details)
     if details_dir is not None:
         _write_details(evaluation, details_dir, tag)
     return evaluation.result()
