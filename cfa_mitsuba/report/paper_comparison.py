@@ -254,7 +254,7 @@ def comparison_markdown(runs) -> str:
             "written before that rule: rank interval exactly 1). A spread or a bound is compared with the "
             "intervals' ends. An MSP is printed as >= only when every realisation is a bound. Spearman "
             "correlations carry their 95 % interval (Fisher z). Every number in an explanation is generated from "
-            "the run it explains (cfa_mitsuba/report/claim_facts.py). tests/report/test_claim_verdicts.py recomputes "
+            "the run it explains (cfa_mitsuba/report/claim_facts.py). tests/test_claim_verdicts.py recomputes "
             "every verdict and every explanation's facts from the committed CSVs.", ""]
     out += ["## Verdicts at a glance", ""] + _glance(runs)
     # a claim the data marks as physically wrong is listed when every run contradicts it

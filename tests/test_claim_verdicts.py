@@ -30,7 +30,7 @@ import pytest
 from cfa_mitsuba.metrics import get_metric, scored_metrics
 from cfa_mitsuba.report import claim_verdicts
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[1]
 PAGE = REPO / "docs" / "paper-comparison.md"
 CLAIMS = tomllib.loads((REPO / "cfa_mitsuba" / "data" / "paper" / "claims.toml").read_text())["claim"]
 #: the page's column for each committed run (a run whose folder is not committed is not on the page)
