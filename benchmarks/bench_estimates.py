@@ -136,11 +136,12 @@ def table(runs: list[dict]) -> str:
     study_costs.toml measured on a quiet machine, so its ratio is this
     machine's slowdown against that one (other work sharing the cores)."""
     quick = next((r["ratio"] for r in runs if r["name"] == "quick"), None)
-    lines = [f"{'study':<15} {'conditions':>10} {'tasks':>6} {'estimated s':>11} {'measured s':>10} "
+    w = max([15, *(len(r["name"]) for r in runs)])
+    lines = [f"{'study':<{w}} {'conditions':>10} {'tasks':>6} {'estimated s':>11} {'measured s':>10} "
              f"{'measured/estimated':>18}" + (f" {'over quick':>10}" if quick else "")]
     for r in runs:
         over = f" {r['ratio'] / quick:>10.2f}" if quick else ""
-        lines.append(f"{r['name']:<15} {r['conditions']:>10,} {r['tasks']:>6,} "
+        lines.append(f"{r['name']:<{w}} {r['conditions']:>10,} {r['tasks']:>6,} "
                      f"{r['estimate_without_renders_s']:>11.1f} {r['measured_s']:>10.1f} {r['ratio']:>18.2f}{over}")
     return "\n".join(lines)
 
@@ -177,7 +178,7 @@ def main(argv=None) -> int:
               f"tables_per_condition = {fitted['tables_per_condition']:.4g} s "
               f"(residuals {', '.join(f'{v:+.1f}' for v in fitted['residual_s'])} s)")
     if args.json:
-        doc = {"workers": workers, "cores": len(os.sched_getaffinity(0)), "load_average": os.getloadavg(),
+        doc = {"workers": workers, "cores": saved.get("cores", len(os.sched_getaffinity(0))), "load_average": load,
                "runs": [{k: v for k, v in r.items()} for r in runs], "fit": fitted,
                "table": [{k: r[k] for k in ("name", "conditions", "tasks", "estimate_without_renders_s",
                                              "measured_s", "ratio")} for r in shown]}
