@@ -26,26 +26,21 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-SMALL = """\
-name = "small"
-seed = 1
-seeds = 2
-scenes = ["macbeth"]
-cfas = ["bayer", "rgb4", "cmy1", "rgbw1", "rgb1", "rgb2"]
-demosaics = ["bilinear", "pocs"]
-luminances = [100]
-[render.macbeth]
-width = 120
-height = 106
-[output]
-report = false
-"""
+
+def _refusal_cases():
+    """The test suite's own configs (tests/study/test_stop_and_resume.py), so that what is timed here is
+    exactly what the tests refuse, not a copy that can drift from it."""
+    import importlib.util
+
+    sys.path.insert(0, str(REPO / "tests"))  # the test module imports its conftest
+    path = REPO / "tests" / "study" / "test_stop_and_resume.py"
+    spec = importlib.util.spec_from_file_location("refusal_cases", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.SMALL, module._sweep_of_a_million
 
 
-def _sweep_of_a_million() -> str:
-    values = ", ".join(f"{1 + i / 100:g}" for i in range(100))
-    seeds = ", ".join(str(i) for i in range(100))
-    return SMALL + f'\n[[sweep]]\nscene = "macbeth"\nread_noise_e = [{values}]\npixel_pitch_um = [{values}]\nseed = [{seeds}]\n'
+SMALL, _sweep_of_a_million = _refusal_cases()
 
 
 def _cli(tmp: Path, *args, env=None) -> float:
