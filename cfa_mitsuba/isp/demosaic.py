@@ -107,14 +107,9 @@ _REGISTRY: dict[str, DemosaicMethod] = {}
 def collect_demosaics(package: str) -> None:
     """Register the ``DEMOSAICS`` declared by every module of ``package``,
     in their ``order`` (done once by ``cfa_mitsuba.isp``)."""
-    import importlib
-    import pkgutil
+    from .declared import declared_records
 
-    found = []
-    for info in pkgutil.iter_modules(importlib.import_module(package).__path__):
-        if not info.name.startswith("_"):
-            found.extend(getattr(importlib.import_module(f"{package}.{info.name}"), "DEMOSAICS", ()))
-    for m in sorted(found, key=lambda m: m.order):
+    for m in declared_records(package, "DEMOSAICS"):
         if m.name not in _REGISTRY:
             register_demosaic(m.name, m.function, description=m.description, linear=m.linear, accuracy=m.accuracy,
                               support=m.support, window_options=m.window_options)

@@ -53,14 +53,9 @@ _REGISTRY: dict[str, SharpenMethod] = {}
 
 def collect_sharpeners(package: str = __name__) -> None:
     """Register the ``SHARPENERS`` of every module of ``package`` in their ``order``."""
-    import importlib
-    import pkgutil
+    from ..declared import declared_records
 
-    found = []
-    for info in pkgutil.iter_modules(importlib.import_module(package).__path__):
-        if not info.name.startswith("_"):
-            found.extend(getattr(importlib.import_module(f"{package}.{info.name}"), "SHARPENERS", ()))
-    for m in sorted(found, key=lambda m: m.order):
+    for m in declared_records(package, "SHARPENERS"):
         if m.name not in _REGISTRY:
             register_sharpener(m)
 
