@@ -104,7 +104,7 @@ def test_a_worker_past_its_memory_limit_is_restarted_and_its_task_retried(local_
     _same_tables(tmp_path / "dask", local)
 
 
-@pytest.mark.parametrize("dask_cluster", [("--lifetime", "5s", "--lifetime-stagger", "1s", "--lifetime-restart",
+@pytest.mark.parametrize("dask_cluster", [("--lifetime", "3s", "--lifetime-stagger", "1s", "--lifetime-restart",
                                            "--nthreads", "1")], indirect=True)
 def test_workers_recycled_by_their_lifetime_lose_nothing(local_run, dask_cluster, tmp_path):
     """Dask's worker lifetime options (docs/study.md) recycle long-lived
