@@ -76,14 +76,9 @@ def as_white(white_xyz) -> np.ndarray:
 
 
 def _colour():
-    import warnings
+    from .colour_science import colour_science
 
-    # colour-science warns at import about optional packages it does not need here.
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        import colour
-
-    return colour
+    return colour_science()
 
 
 def srgb8_to_srgb(codes) -> np.ndarray:

@@ -44,7 +44,6 @@ __all__ = [
 ]
 
 import functools
-import warnings
 
 import numpy as np
 
@@ -262,12 +261,9 @@ def _frozen(a: np.ndarray) -> np.ndarray:
 
 
 def _colour():
-    # colour-science warns at import about optional packages it does not need here.
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        import colour
+    from .colour_science import colour_science
 
-    return colour
+    return colour_science()
 
 
 @functools.lru_cache(maxsize=64)

@@ -26,7 +26,7 @@ PACKAGE = REPO / "cfa_mitsuba"
 #: Stage order; a module may import its own stage, an earlier one, or a leaf.
 STAGES = {"render": 1, "optics": 2, "sensor": 3, "isp": 4, "metrics": 5, "study": 6, "report": 7, "design": 8,
           "commands": 9, "cli": 9, "__main__": 9}
-LEAVES = {"errors", "spectra", "values", "colorimetry", "colour_kernels", "_version", "io", "data"}
+LEAVES = {"errors", "spectra", "values", "colorimetry", "colour_kernels", "colour_science", "_version", "io", "data"}
 
 
 def _module_name(path: Path) -> str:

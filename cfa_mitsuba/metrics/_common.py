@@ -7,7 +7,6 @@ import weakref
 import numpy as np
 
 from ..errors import CfaMitsubaError, require, require_finite
-from ._bounds_kernel import within
 
 #: The largest magnitude a metric accepts in any input (XYZ in cd/m^2, linear
 #: RGB, 8-bit codes): far above any scene (the sun's disc is about 1.6e9
@@ -41,6 +40,8 @@ def check_values(arr, what: str) -> np.ndarray:
     checked again while it lives (nothing can have written to it since: a
     study's ideal image and its sRGB codes, compared with every camera
     output of a task, 1.5 ms a check on the puppy's size)."""
+    from ._bounds_kernel import within  # numba: imported by the first check, not by every command
+
     a = np.asarray(arr, dtype=np.float64)
     known = _PASSED.get(id(a))
     if known is not None and known() is a and _unchangeable(a):

@@ -16,7 +16,6 @@ __all__ = ["compute_optics", "integrate_pixels", "check_oversample", "scene_geom
 import math
 
 import numpy as np
-import scipy.fft
 
 from .. import spectra as _spectra
 from ..errors import CfaMitsubaError, require
@@ -107,6 +106,8 @@ def scene_geometry_inputs(scene: SpectralImage, params: OpticsParams, oversample
 def _aperture_axis(x: np.ndarray, axis: int, k: int, side: float, workers) -> np.ndarray:
     """Average over a centred aperture of ``side`` pixel pitches along one
     axis, sampled at the pixel centres (module doc of :func:`integrate_pixels`)."""
+    import scipy.fft  # here, not at the top: a command that computes no optics does not pay for it
+
     n = x.shape[axis]
     c = scipy.fft.dct(x, type=2, axis=axis, workers=workers)
     f_px = np.arange(n) * k / (2.0 * n)  # frequency of DCT term i in cycles per sensor pixel

@@ -24,7 +24,6 @@ from __future__ import annotations
 __all__ = ["diffraction_mtf", "apply_diffraction"]
 
 import numpy as np
-import scipy.fft
 
 #: Table of H(v) on [0, 1] (then zeros), interpolated linearly by direct
 #: indexing: the worst interpolation error is below 1e-7 (near v = 1, where
@@ -92,6 +91,8 @@ def apply_diffraction(cube_bhw: np.ndarray, wavelengths_nm, sample_pitch_um: flo
     -------
     (B, H, W) filtered irradiance, mirror-symmetric boundaries (module doc).
     """
+    import scipy.fft  # here, not at the top: a command that computes no optics does not pay for it
+
     b, h, w = cube_bhw.shape
     dx_mm = float(sample_pitch_um) * 1e-3
     fy = np.arange(h) / (2.0 * h * dx_mm)

@@ -312,12 +312,9 @@ def _chirp_geometry(width, height, fov_deg, oversample) -> dict:
 def gray_steps(width: int) -> list[dict]:
     """The gray-bar steps: [x0, x1) column ranges (pixel boundaries at
     round(i W / N)), reflectance (CIE 1976 Y/Yn of the step's L*) and L*."""
-    import warnings
+    from ..colour_science import colour_science
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        import colour
-
+    colour = colour_science()
     n = len(GRAY_L_STAR)
     if width < n:
         raise CfaMitsubaError(f"gray-bar needs at least {n} pixels across (got {width})")

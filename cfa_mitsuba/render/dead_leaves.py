@@ -55,7 +55,6 @@ __all__ = ["PALETTE", "FLAT_PATCH", "RADIUS_MIN_SENSOR_PX", "RADIUS_MAX_FRACTION
 import functools
 import math
 
-import numba as nb
 import numpy as np
 
 from .. import spectra
@@ -99,32 +98,6 @@ def layout(width: int, height: int, oversample: int) -> dict:
     return {"texture_rect": [m, m, m + side, m + side], "flat_rect": [m, flat_x0, height - m, width - m]}
 
 
-@nb.njit(cache=True)
-def _paint(labels, cx, cy, r, colour, cell, start_uncovered):  # pragma: no cover - compiled
-    """Paint discs front to back on the cell grid ``labels`` (-1: bare):
-    each takes the bare cells whose centres it covers.  Returns (the bare
-    cells left, the discs used)."""
-    n_y, n_x = labels.shape
-    bare = start_uncovered
-    for d in range(cx.size):
-        if bare == 0:
-            return bare, d
-        x_lo = max(int(math.floor((cx[d] - r[d]) / cell)), 0)
-        x_hi = min(int(math.ceil((cx[d] + r[d]) / cell)), n_x)
-        y_lo = max(int(math.floor((cy[d] - r[d]) / cell)), 0)
-        y_hi = min(int(math.ceil((cy[d] + r[d]) / cell)), n_y)
-        r2 = r[d] * r[d]
-        for i in range(y_lo, y_hi):
-            dy = (i + 0.5) * cell - cy[d]
-            for j in range(x_lo, x_hi):
-                if labels[i, j] < 0:
-                    dx = (j + 0.5) * cell - cx[d]
-                    if dx * dx + dy * dy <= r2:
-                        labels[i, j] = colour[d]
-                        bare -= 1
-    return bare, cx.size
-
-
 @functools.lru_cache(maxsize=2)
 def disc_labels(side_px: int, cells_per_px: int, r_min_px: float, r_max_px: float, n_colours: int,
                 seed: int) -> tuple[np.ndarray, int]:
@@ -132,6 +105,8 @@ def disc_labels(side_px: int, cells_per_px: int, r_min_px: float, r_max_px: floa
     int8 read-only; the number of discs drawn).  Coordinates in EXR pixels
     from the square's top-left corner; radii from p(r) ∝ r^-3 on [r_min,
     r_max] by its inverse CDF r = (r_min^-2 - u (r_min^-2 - r_max^-2))^-1/2."""
+    from ._dead_leaves_kernel import paint_discs  # numba: imported when a chart is drawn, not by every command
+
     t = int(cells_per_px)
     labels = np.full((side_px * t, side_px * t), -1, dtype=np.int8)
     rng = np.random.default_rng(np.random.SeedSequence(int(seed)))
@@ -146,7 +121,7 @@ def disc_labels(side_px: int, cells_per_px: int, r_min_px: float, r_max_px: floa
         cy = -r_max_px + u[1] * (side_px + 2 * r_max_px)
         r = (a - u[2] * (a - b)) ** -0.5
         colour = np.minimum((u[3] * n_colours).astype(np.int8), n_colours - 1).astype(np.int8)
-        bare, n = _paint(labels, cx, cy, r, colour, 1.0 / t, bare)
+        bare, n = paint_discs(labels, cx, cy, r, colour, 1.0 / t, bare)
         used += int(n)
     labels.flags.writeable = False
     return labels, used

@@ -61,8 +61,9 @@ def _chart(values: np.ndarray, colours: np.ndarray, labels=None) -> np.ndarray:
 def _ideal_colours(g) -> np.ndarray:
     """sRGB of each patch as the ideal sensor sees it (CIELAB against a D65
     white, as the study's CIELAB is against the scene white)."""
-    import colour
+    from ..colour_science import colour_science
 
+    colour = colour_science()
     lab = g[["l_ideal", "a_ideal", "b_ideal"]].to_numpy(float)
     d65 = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
     xyz = colour.Lab_to_XYZ(lab, d65)
