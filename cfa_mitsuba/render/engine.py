@@ -200,11 +200,14 @@ def _digest_paths() -> list[Path]:
     """The files :func:`_source_digest` hashes."""
     import importlib
 
+    from ..colour_science import colour_science
+
     package = Path(__file__).resolve().parents[1]
     paths = []
     for name in _CODE_FILES:
         p = package / name
         paths += sorted(p.rglob("*.py")) if p.is_dir() else [p]
+    colour_science()  # the package first, as every other import of it here (without its plotting)
     for module in _DATA_MODULES:
         paths.append(Path(importlib.import_module(module).__file__).resolve())
     return paths
