@@ -272,26 +272,47 @@ def test_decisions_name_exactly_the_cfas_whose_rank_interval_contains_one(quick)
     assert (ideal.loc[s["cfa"], "total_rank"].to_numpy() == s["total_rank"].to_numpy()).all()
 
 
-def test_profile_study_after_profiles_the_tables_and_report_on_a_copy(quick, tmp_path, capsys):
+#: A finished study for profile_study.py --after: two CFAs on the Macbeth chart (the quick study's report
+#: under cProfile took 33 s of the suite; this one's takes a few, and every stage and check is the same)
+TINY = """
+name = "tiny"
+seed = 1
+seeds = 2
+scenes = ["macbeth"]
+cfas = ["bayer", "rgbw1"]
+demosaics = ["bilinear"]
+luminances = [100]
+[render.macbeth]
+width = 120
+height = 106
+"""
+
+
+def test_profile_study_after_profiles_the_tables_and_report_on_a_copy(tmp_path, capsys):
     """benchmarks/profile_study.py --after: the work after the evaluation of a
     finished study, by stage and by function, on a copy (the results are not
     touched); a folder that is not a finished run of the config is refused."""
     import importlib.util
     import shutil
 
+    from cfa_mitsuba.cli import main
+
     spec = importlib.util.spec_from_file_location("profile_study", REPO / "benchmarks" / "profile_study.py")
     prof = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(prof)
-    out, _ = quick
+    config, out = tmp_path / "tiny.toml", tmp_path / "tiny"
+    config.write_text(TINY)
+    assert main(["study", str(config), "--out", str(out), "--quiet", "--workers", "1"]) == 0
+    capsys.readouterr()
     before = {p: p.stat().st_mtime_ns for p in (out / "report.html", out / "metrics.csv", out / "scores.csv")}
-    assert prof.main(["--after", str(out), "--top", "5"]) == 0
+    assert prof.main(["--config", str(config), "--after", str(out), "--top", "5"]) == 0
     text = capsys.readouterr().out
     assert re.search(r"tables \(the study resumed: every task reused\)\s+[\d.]+", text)
     assert re.search(r"report \(one process\)\s+[\d.]+", text) and "build_report" in text
     assert {p: p.stat().st_mtime_ns for p in before} == before
-    assert prof.main(["--after", str(tmp_path)]) == 2  # no .work/
+    assert prof.main(["--config", str(config), "--after", str(tmp_path / "none")]) == 2  # no .work/
     part = tmp_path / "part"
     shutil.copytree(out / ".work", part / ".work")
     next(iter((part / ".work").glob("*.json"))).unlink()
-    assert prof.main(["--after", str(part)]) == 2
-    assert "1 task(s) of quick.toml are not finished" in capsys.readouterr().err
+    assert prof.main(["--config", str(config), "--after", str(part)]) == 2
+    assert "1 task(s) of tiny.toml are not finished" in capsys.readouterr().err
