@@ -140,10 +140,11 @@ DAMAGE = {
 
 
 def test_untrusted_resume_files_are_recomputed_with_one_notice(small, tmp_path):
+    import shutil
+
     config, reference = small
     out = tmp_path / "damaged"
-    first = _study(config, out, "--workers", 1)
-    assert first.returncode == 0, first.stderr
+    shutil.copytree(reference, out)  # a finished study's saved task results (the same config)
     files = sorted((out / ".work").glob("*.json"))
     assert len(files) == 6
     for f, text in zip(files, DAMAGE.values()):
