@@ -7,24 +7,12 @@ from __future__ import annotations
 
 import pytest
 
+import tiny_study
 from cli_limits import assert_error_last, run_limited
 from cfa_mitsuba.errors import CfaMitsubaError
 from cfa_mitsuba.study.config import load_config
 
-TINY = """\
-name = "tiny"
-seed = 1
-seeds = 2
-scenes = ["macbeth"]
-cfas = ["bayer", "rgbw1"]
-demosaics = ["bilinear"]
-luminances = [100]
-[render.macbeth]
-width = 60
-height = 40
-[output]
-report = false
-"""
+TINY = tiny_study.TINY + tiny_study.NO_REPORT
 
 
 @pytest.mark.parametrize("extra,match", [

@@ -11,23 +11,11 @@ import sys
 
 import pytest
 
+import tiny_study
 from conftest import REPO
 from cfa_mitsuba.study.resume import load_finished
 
-TINY = """\
-name = "tiny"
-seed = 1
-seeds = 2
-scenes = ["macbeth"]
-cfas = ["bayer", "rgb4"]
-demosaics = ["bilinear"]
-luminances = [100]
-[render.macbeth]
-width = 120
-height = 106
-[output]
-report = false
-"""
+TINY = tiny_study.TINY + tiny_study.NO_REPORT
 
 
 def _result():

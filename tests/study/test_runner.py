@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+import tiny_study
 from conftest import REPO
 from dask_cluster import dask_cluster  # noqa: F401 (the suite's one Dask cluster fixture)
 
@@ -272,20 +273,6 @@ def test_decisions_name_exactly_the_cfas_whose_rank_interval_contains_one(quick)
     assert (ideal.loc[s["cfa"], "total_rank"].to_numpy() == s["total_rank"].to_numpy()).all()
 
 
-#: A finished study for profile_study.py --after: two CFAs on the Macbeth chart (the quick study's report
-#: under cProfile took 33 s of the suite; this one's takes a few, and every stage and check is the same)
-TINY = """
-name = "tiny"
-seed = 1
-seeds = 2
-scenes = ["macbeth"]
-cfas = ["bayer", "rgbw1"]
-demosaics = ["bilinear"]
-luminances = [100]
-[render.macbeth]
-width = 120
-height = 106
-"""
 
 
 def test_profile_study_after_profiles_the_tables_and_report_on_a_copy(tmp_path, capsys):
@@ -301,7 +288,7 @@ def test_profile_study_after_profiles_the_tables_and_report_on_a_copy(tmp_path, 
     prof = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(prof)
     config, out = tmp_path / "tiny.toml", tmp_path / "tiny"
-    config.write_text(TINY)
+    config.write_text(tiny_study.TINY)  # a study with its report (the quick study's, under cProfile, took 33 s)
     assert main(["study", str(config), "--out", str(out), "--quiet", "--workers", "1"]) == 0
     capsys.readouterr()
     before = {p: p.stat().st_mtime_ns for p in (out / "report.html", out / "metrics.csv", out / "scores.csv")}
