@@ -10,6 +10,10 @@ import math
 
 import numba as nb
 
+from ..io.jit_cache import tolerate_cache_write_errors
+
+tolerate_cache_write_errors()  # the kernel cache is a write that may fail (a full disk): io/jit_cache.py
+
 
 @nb.njit(cache=True)
 def paint_discs(labels, cx, cy, r, colour, cell, start_uncovered):  # pragma: no cover - compiled
