@@ -23,6 +23,10 @@ REPO = Path(__file__).resolve().parents[1]
 def pytest_configure(config):
     if hasattr(config, "workerinput"):
         return  # an xdist worker: the controller set the cache before starting it
+    # a study, design or report that names no worker count runs in its own process: pytest's two workers
+    # already fill the 2-core machine, and two more processes per study only added their imports (a tiny
+    # study: 3.6 s of CPU in one process, 8.1 s with two workers); tests of the pools pass --workers
+    os.environ["CFA_MITSUBA_WORKERS"] = "1"
     chosen = os.environ.get("CFA_MITSUBA_TEST_CACHE", "").strip()
     if chosen:
         os.environ["CFA_MITSUBA_CACHE"] = chosen

@@ -27,7 +27,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("config", metavar="CONFIG.toml", help="the design config (see configs/design-*.toml)")
     parser.add_argument("--out", metavar="DIR", help="results directory (default: results/<config name>)")
     parser.add_argument("--workers", type=positive_int, metavar="N",
-                        help="local worker processes for the full chain (default: the config's, else 2)")
+                        help="local worker processes for the full chain "
+                             "(default: the config's, else $CFA_MITSUBA_WORKERS, else 2)")
     parser.add_argument("--scheduler", metavar="ADDRESS", help="run the full chain on a Dask cluster")
     parser.add_argument("--quiet", action="store_true", help="no progress bars or log lines: print only the report's path")
     parser.add_argument("--force", action="store_true", help="start a search estimated above 24 h")

@@ -26,7 +26,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("config", metavar="CONFIG.toml", help="the study config (see configs/)")
     parser.add_argument("--out", metavar="DIR", help="results directory (default: results/<config name>)")
     parser.add_argument("--workers", type=positive_int, metavar="N",
-                        help="local worker processes (default: the config's 'workers', else 2)")
+                        help="local worker processes (default: the config's 'workers', else $CFA_MITSUBA_WORKERS, else 2)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="run on a Dask cluster, e.g. tcp://HOST:8786 (needs the 'dask' extra)")
     parser.add_argument("--worker-max-tasks", type=positive_int, metavar="N",

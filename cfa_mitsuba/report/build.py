@@ -185,11 +185,12 @@ def _load(out_dir, timing: dict | None) -> Results:
 
 
 def report_workers(workers: int | None) -> int:
-    """The processes a report is drawn in: ``workers`` (default 2), at most
-    the cores this process may use, at least 1."""
-    from ..study.executors import _cpu_count
+    """The processes a report is drawn in: ``workers`` (default: a study's,
+    :func:`~cfa_mitsuba.study.executors.default_workers`), at most the cores
+    this process may use, at least 1."""
+    from ..study.executors import _cpu_count, default_workers
 
-    return max(1, min(int(workers or 2), _cpu_count()))
+    return max(1, min(int(workers or default_workers()), _cpu_count()))
 
 
 def _check_workers(workers) -> int:

@@ -30,7 +30,8 @@ variable ``CFA_MITSUBA_THREADS``, which the render stage applies with
 
 from __future__ import annotations
 
-__all__ = ["LocalExecutor", "DaskExecutor", "make_executor", "thread_budget", "check_scheduler_address"]
+__all__ = ["LocalExecutor", "DaskExecutor", "make_executor", "thread_budget", "check_scheduler_address",
+           "WORKERS_ENV", "default_workers"]
 
 import concurrent.futures as cf
 import multiprocessing
@@ -50,6 +51,24 @@ def _cpu_count() -> int:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not Linux
         return os.cpu_count() or 1
+
+
+#: Set to a whole number >= 1: the local worker processes of a study, a
+#: design search and a report's drawing when neither ``--workers`` nor the
+#: config's ``workers`` says (the test suite sets 1: its two pytest workers
+#: already fill a 2-core machine, and each extra process costs its imports).
+WORKERS_ENV = "CFA_MITSUBA_WORKERS"
+
+
+def default_workers() -> int:
+    """The local worker processes when nothing else says: ``$CFA_MITSUBA_WORKERS``,
+    else 2 capped at the cores."""
+    raw = os.environ.get(WORKERS_ENV, "").strip()
+    if not raw:
+        return min(2, _cpu_count())
+    if not raw.isdigit() or int(raw) < 1:
+        raise CfaMitsubaError(f"${WORKERS_ENV} must be a whole number >= 1, got {raw!r}")
+    return int(raw)
 
 
 def thread_budget(workers_on_node: int) -> int:
@@ -139,7 +158,7 @@ class LocalExecutor:
     description: str
 
     def __init__(self, workers: int | None = None, *, max_tasks: int | None = None, max_memory: int | None = None):
-        n = int(workers) if workers else min(2, _cpu_count())
+        n = int(workers) if workers else default_workers()
         if n < 1:
             raise CfaMitsubaError(f"--workers must be at least 1, got {workers}")
         self.workers = n

@@ -332,7 +332,7 @@ def test_a_failed_worker_pool_still_gives_the_whole_report(built_report, report_
     assert _files(out / "figures") == _files(built_report / "figures")
 
 
-def test_report_workers_are_checked(report_study, tmp_path, capsys):
+def test_report_workers_are_checked(report_study, tmp_path, capsys, monkeypatch):
     from cfa_mitsuba.cli import main
     from cfa_mitsuba.errors import CfaMitsubaError
     from cfa_mitsuba.report import build_report, report_workers
@@ -344,6 +344,7 @@ def test_report_workers_are_checked(report_study, tmp_path, capsys):
     assert_one_line_error(subprocess.CompletedProcess([], rc, "", capsys.readouterr().err), "report workers")
     assert not (report_study / "report.html").exists()
     cores = len(os.sched_getaffinity(0))
+    monkeypatch.delenv("CFA_MITSUBA_WORKERS", raising=False)  # the suite's own default (tests/conftest.py)
     assert report_workers(None) == min(2, cores) and report_workers(10 ** 6) == cores
 
 

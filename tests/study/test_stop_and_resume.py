@@ -207,7 +207,7 @@ def test_the_count_never_builds_the_conditions(monkeypatch):
                                                                           24_000_024)
 
 
-def test_config_workers_are_capped_at_the_cores_unless_the_command_insists():
+def test_config_workers_are_capped_at_the_cores_unless_the_command_insists(monkeypatch):
     from cfa_mitsuba.study.executors import _cpu_count
     from cfa_mitsuba.study.sizing import resolve_workers
 
@@ -216,7 +216,8 @@ def test_config_workers_are_capped_at_the_cores_unless_the_command_insists():
     assert len(said) == 1 and "capped" in said[0] and "--workers 1000" in said[0]
     said.clear()
     assert resolve_workers(1000, 1, said.append) == 1000 and not said
-    assert resolve_workers(None, None, said.append) is None and not said
+    monkeypatch.delenv("CFA_MITSUBA_WORKERS", raising=False)  # the suite's own default (tests/conftest.py)
+    assert resolve_workers(None, None, said.append) == min(2, _cpu_count()) and not said
 
 
 def test_the_memory_check_covers_every_worker(tmp_path):
