@@ -257,7 +257,10 @@ class CameraChain:
 
     ``scene_key`` (any hashable, e.g. the render's cache key or a file path)
     names a scene image so its optical image can be reused; None disables
-    reuse for that call.
+    reuse for that call.  The optical and ideal images are kept for the
+    process's life under that key, so it must name the image's content,
+    not the object: ``id(image)`` is reused by a later image once the first
+    is freed, which then gets the first one's optical image.
     """
 
     def __init__(self, settings: ChainSettings | None = None, *, image_store: str | None = None):
