@@ -42,6 +42,7 @@ __all__ = [
 
 import numpy as np
 
+from .colour_science import colour_science as _colour  # colour-science, imported on first call
 from .errors import require, require_finite
 
 #: IEC 61966-2-1 linear sRGB -> XYZ (Y of white = 1), the standard's 4 digits.
@@ -73,12 +74,6 @@ def as_white(white_xyz) -> np.ndarray:
     require(w.size == 3, f"white point must have 3 values (X, Y, Z), got {w.size}")
     require(bool(np.all(w > 0)), f"white point must be positive, got {w.tolist()}")
     return w
-
-
-def _colour():
-    from .colour_science import colour_science
-
-    return colour_science()
 
 
 def srgb8_to_srgb(codes) -> np.ndarray:

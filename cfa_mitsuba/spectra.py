@@ -47,6 +47,7 @@ import functools
 
 import numpy as np
 
+from .colour_science import colour_science as _colour  # colour-science, imported on first call
 from .errors import CfaMitsubaError
 
 #: The default band centres (nm): 400, 410, ..., 700, i.e. 31 bands of 10 nm.
@@ -258,12 +259,6 @@ def _frozen(a: np.ndarray) -> np.ndarray:
     a = np.array(a, dtype=np.float64)
     a.flags.writeable = False
     return a
-
-
-def _colour():
-    from .colour_science import colour_science
-
-    return colour_science()
 
 
 @functools.lru_cache(maxsize=64)
