@@ -16,7 +16,7 @@ bilinear demosaicing, f/4, 2.2 um pixels:
   edge at 0.25 with the metric's default luminance (the paper's 0.3 R +
   0.6 G + 0.1 B); plus the analytic MTF (diffraction weighted by D65 x
   ybar, times the pixel box) at 0.25 against mono's texture MTF, and
-  Bayer bilinear's in-band response at 0.25 (:func:`_in_band`);
+  Bayer bilinear's in-band response at 0.25 (tests/bayer_in_band.py);
 - ``denoised``: Bayer, noise on (seed 4), the mean over 0.1-0.25 cy/px of
   the cross-correlation texture MTF over the edge MTF, both through the
   same denoiser, per (method, scale, luminance); for the wavelet methods
@@ -63,28 +63,6 @@ def _edge(img, weights=None, **kw):
     extra = {} if weights is None else {"weights": weights}
     rec = evaluate("mtf", _inputs(img, **kw), **extra).details["records"]["lum"]
     return lambda f: np.interp(f, rec["freq_cy_px"], rec["mtf"])
-
-
-def _in_band(f_cy_px: float, angles: int = 1, n: int = 128, border: int = 8) -> float:
-    """Bayer bilinear's in-band (phase-averaged) response at ``f_cy_px``
-    through the colour matrix to Y, from the demosaic itself: a neutral
-    complex grating (its balanced channels equal) demosaiced, weighted by
-    the matrix's Y column, projected on the grating; along x (``angles`` =
-    1) or averaged over that many directions from 0 to 90 degrees."""
-    img = cm.render.render_cached("slanted-edge", width=640, height=576)
-    raw = cm.sensor.capture(img, "bayer", luminance_cd_m2=100.0, noise="off")
-    matrix = np.asarray(cm.isp.process(raw, "bilinear").meta["isp"]["colour_matrix"])
-    y_of_channels = matrix[:, 1] / matrix[:, 1].sum()
-    bayer = cm.sensor.get_cfa("bayer")
-    y, x = np.mgrid[0:n, 0:n].astype(float)
-    inner = (slice(border, n - border),) * 2
-    out = []
-    for t in np.linspace(0.0, np.pi / 2, angles) if angles > 1 else [0.0]:
-        wave = np.exp(2j * np.pi * f_cy_px * (np.cos(t) * x + np.sin(t) * y))
-        resp = sum(w * cm.isp.demosaic(g, bayer, "bilinear") @ y_of_channels
-                   for g, w in ((wave.real, 1.0), (wave.imag, 1j)))
-        out.append(abs(np.mean(resp[inner] * np.conj(wave[inner]))))
-    return float(np.mean(out))
 
 
 def _analytic(f_cy_px: float) -> float:
@@ -145,13 +123,18 @@ def main(argv=None) -> int:
                            "edge_at_0.2_max": max(edge_at_02)}
         print(f"{name} x{scale:g} at {lum:g} cd/m^2: texture / edge over 0.1-0.25 cy/px "
               + ", ".join(f"{r:.3f}" for r in ratios) + f" (edge at 0.2 cy/px {max(edge_at_02):.3f} at most)")
-    in_band = {"along_x": _in_band(0.25), "ring": _in_band(0.25, angles=7)}
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the test's own reference
+    from bayer_in_band import in_band as bayer_in_band, ring_mean, y_of_channels
+
+    weights = y_of_channels(edges["640x576"])
+    in_band = {"along_x": bayer_in_band(weights, 0.25, 0.0), "ring": ring_mean(weights, 0.25)}
     mono_edge = linear["mono/640x576/texture-mtf"]["edge_at_0.25"]
     in_band["times_mono_edge_along_x"] = in_band["along_x"] * mono_edge
     in_band["times_mono_texture_ring"] = in_band["ring"] * linear["mono/640x576/texture-mtf-cross"]["texture_at_0.25"]
     print("Bayer bilinear in-band response at 0.25 cy/px: " + "  ".join(f"{k} {v:.4f}" for k, v in in_band.items()))
     out = {"linear": linear, "denoised": denoised, "analytic_at_0.25": _analytic(0.25),
-           "bayer_bilinear_in_band_at_0.25": in_band, "denoised_seed_spread": spread, "seconds": time.perf_counter() - t0}
+           "bayer_bilinear_in_band_at_0.25": in_band, "denoised_seed_spread": spread,
+           "seconds": time.perf_counter() - t0}
     print(f"analytic MTF at 0.25 cy/px {out['analytic_at_0.25']:.3f}; {out['seconds']:.0f} s")
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)

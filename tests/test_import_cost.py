@@ -25,11 +25,15 @@ print(json.dumps(sorted(m for m in {names!r} if m in sys.modules)))
 """
 
 
-def _imported_by(argv, names) -> list[str]:
-    proc = subprocess.run([sys.executable, "-c", _PROBE.format(argv=list(argv), names=list(names))], cwd=REPO,
-                          capture_output=True, text=True, timeout=300)
+def _printed_json(code: str):
+    """What ``code``, run in a fresh interpreter, prints as JSON on its last line."""
+    proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def _imported_by(argv, names) -> list[str]:
+    return _printed_json(_PROBE.format(argv=list(argv), names=list(names)))
 
 
 def test_listing_and_help_import_no_compiler_fft_or_plotting():
@@ -48,9 +52,7 @@ def test_colour_science_comes_without_its_plotting_until_it_is_read():
         "from colour.plotting import plot_single_sd\n"
         "after = ['matplotlib.pyplot' in sys.modules, type(colour.plotting).__name__, callable(plot_single_sd)]\n"
         "print(json.dumps([before, after, float(y.max())]))\n")
-    proc = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr
-    before, after, y_max = json.loads(proc.stdout.strip().splitlines()[-1])
+    before, after, y_max = _printed_json(code)
     assert before == [False, "_ImportedOnUse"]
     assert after == [True, "module", True]
     assert 0.9 < y_max <= 1.0  # ybar peaks at 1 near 555 nm: the data came through

@@ -53,6 +53,19 @@ def local_run(tmp_path_factory):
     return config, config.parent / "local"
 
 
+def _first_in_cluster(marker: str) -> bool:
+    """Whether this worker process is the first to get here: it creates
+    ``marker`` (atomically; the other workers find it made) and writes its
+    pid there."""
+    try:
+        fd = os.open(marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+    except FileExistsError:
+        return False
+    os.write(fd, str(os.getpid()).encode())
+    os.close(fd)
+    return True
+
+
 class Balloon(WorkerPlugin):
     """On the first task any worker starts (once per cluster: a marker file
     decides), hold ``nbytes`` of touched memory in that worker process, so
@@ -64,12 +77,8 @@ class Balloon(WorkerPlugin):
     def transition(self, key, start, finish, **kwargs):
         if finish != "executing" or self.held is not None:
             return
-        try:
-            fd = os.open(self.marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-        except FileExistsError:
+        if not _first_in_cluster(self.marker):
             return  # the balloon went up once already (this may be the restarted worker)
-        os.write(fd, str(os.getpid()).encode())
-        os.close(fd)
         self.held = np.ones(self.nbytes // 8)  # every page written: resident
 
 
@@ -90,12 +99,8 @@ class EndOfLifetime(WorkerPlugin):
     def transition(self, key, start, finish, **kwargs):
         if finish != "memory" or self.worker is None:
             return
-        try:
-            fd = os.open(self.marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-        except FileExistsError:
+        if not _first_in_cluster(self.marker):
             return
-        os.write(fd, str(os.getpid()).encode())
-        os.close(fd)
         self.worker.io_loop.add_callback(self.worker.close_gracefully, reason="worker-lifetime-reached")
 
 

@@ -273,8 +273,6 @@ def test_decisions_name_exactly_the_cfas_whose_rank_interval_contains_one(quick)
     assert (ideal.loc[s["cfa"], "total_rank"].to_numpy() == s["total_rank"].to_numpy()).all()
 
 
-
-
 def test_profile_study_after_profiles_the_tables_and_report_on_a_copy(tmp_path, capsys):
     """benchmarks/profile_study.py --after: the work after the evaluation of a
     finished study, by stage and by function, on a copy (the results are not
