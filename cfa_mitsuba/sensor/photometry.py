@@ -8,7 +8,7 @@ Lambertian reflector of reflectance 1 has luminance L = E / pi.
 
 from __future__ import annotations
 
-__all__ = ["add_photometry", "saturation_rel"]
+__all__ = ["add_photometry", "band_mean_irradiance", "saturation_rel"]
 
 import math
 
@@ -17,9 +17,18 @@ import numpy as np
 from .. import spectra as _spectra
 
 
-def add_photometry(meta: dict, pix: np.ndarray, wl: np.ndarray, s: float, exposure_s: float) -> None:
+def band_mean_irradiance(pix: np.ndarray) -> np.ndarray:
+    """(B,) the mean over the pixels of ``pix`` (..., B), W/(m^2 nm): what
+    :func:`add_photometry` reads of the pixel irradiance (the same for every
+    capture of one optical image, so a caller may keep it)."""
+    return pix.reshape(-1, pix.shape[-1]).mean(axis=0)
+
+
+def add_photometry(meta: dict, pix: np.ndarray | None, wl: np.ndarray, s: float, exposure_s: float, *,
+                   band_mean: np.ndarray | None = None) -> None:
     """The field's units of a capture, added to ``meta`` (s: the luminance
-    scale, ``pix`` the pixel irradiance before it):
+    scale, ``pix`` the pixel irradiance before it, or None with its
+    :func:`band_mean_irradiance` given as ``band_mean``):
 
     * ``scene_illuminance_lux``: the illuminance on the scene that gives its
       white the captured luminance, E = pi L_white (a perfect white diffuser,
@@ -31,7 +40,9 @@ def add_photometry(meta: dict, pix: np.ndarray, wl: np.ndarray, s: float, exposu
     * ``sensor_exposure_lux_s``: that illuminance times the exposure time
       (the photometric exposure H of ISO 12232)."""
     y = _spectra.cmfs_xyz(wl)[:, 1] * _spectra.band_widths(wl) * _spectra.KM_LM_W
-    illuminance = float(pix.reshape(-1, pix.shape[-1]).mean(axis=0) @ y) * s
+    if band_mean is None:
+        band_mean = band_mean_irradiance(pix)
+    illuminance = float(band_mean @ y) * s
     meta["scene_illuminance_lux"] = math.pi * float(meta["white_luminance_cd_m2"])
     meta["sensor_illuminance_lux"] = illuminance
     meta["sensor_exposure_lux_s"] = illuminance * float(exposure_s)

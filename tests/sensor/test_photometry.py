@@ -58,3 +58,16 @@ def test_saturation_is_where_the_brightest_channel_fills_its_well():
     sensor = raw.settings["sensor"]
     clip = min(sensor["well_capacity_e"], (2 ** sensor["adc_bits"] - 1) / raw.dn_per_electron)
     assert raw.meta["saturation_rel"] * white.max() == pytest.approx(clip, rel=1e-9)
+
+
+def test_each_optical_image_gets_its_own_illuminance_when_captures_alternate():
+    """The mean irradiance is kept between captures of one optical image
+    (capture.py's _band_mean): captures alternating between two optical
+    images each read their own."""
+    params = OpticsParams(relative_illumination=False, diffraction=False)
+    dim, bright = (compute_optics(_flat_field(lum), params, pixel_pitch_um=2.2) for lum in (50.0, 150.0))
+    lux = {}
+    for oi in (dim, bright, dim, bright):
+        got = capture(oi, "bayer", exposure_s=0.01, noise="off").meta["sensor_illuminance_lux"]
+        assert lux.setdefault(id(oi), got) == got
+    assert lux[id(bright)] == pytest.approx(3 * lux[id(dim)], rel=1e-12)
