@@ -2,8 +2,8 @@
 
 Per phase, against another commit (issue 25)::
 
-    python benchmarks/bench_study.py --paper [--subset bayer,rgbw1] [--against REV [--same-config] [--abba]]
-                                     [--warm-only] [--keep DIR] [--json FILE] [--workers 2]
+    python benchmarks/bench_study.py --paper [--subset bayer,rgbw1] [--against REV [--same-config] [--abba]
+                                     [--target RATIO]] [--warm-only] [--keep DIR] [--json FILE] [--workers 2]
 
 runs the study (configs/paper.toml with --paper, else --config) through
 ``python -m cfa_mitsuba study`` twice per tree: *cold* (an empty render
@@ -26,7 +26,11 @@ work where this tree's copy asks for more, e.g. ``render_seeds``);
 faster run: a machine that slows (or speeds up) over the runs then favours
 neither (measured: run second, REV's evaluate grew from 158 to 193 s over
 four invocations while this tree's stayed at 108-111 s);
-``--keep DIR`` keeps each run's metrics CSVs and timing.json; ``--json
+``--target RATIO`` records the evaluate time RATIO times faster than REV's
+(the JSON's ``target``), and every run records each scene's floor
+(``scene_floor_s``: the scene's worker seconds over the cores, the wall
+time that scene's work alone needs), so a target can be read against what
+one scene costs by itself; ``--keep DIR`` keeps each run's metrics CSVs and timing.json; ``--json
 FILE`` writes the record (the kept runs, every run's evaluate phase, the
 ratios REV / this tree and the command).  Each tree
 runs its own copy of the config (its own configs/ file).  Each run's
@@ -147,6 +151,23 @@ def _study(tree: Path, config: Path, out: Path, cache: Path | None, workers: int
             "scenes": timing.get("scenes", {})}  # worker seconds per stage per scene (a tree before it: none)
 
 
+def scene_floors(got: dict, cores: int) -> dict:
+    """{scene: its worker seconds of every stage over the cores}: the wall
+    time no schedule of that scene's work alone finishes sooner on this
+    machine (a bound on what leaving out the other scenes' work can reach)."""
+    return {scene: sum(float(t.get(s, 0.0)) for s in STAGES) / cores
+            for scene, t in (got.get("scenes") or {}).items()}
+
+
+def add_target(record: dict, ratio: float) -> None:
+    """The record's ``target``: the evaluate phase ``ratio`` times faster than
+    the tree it is measured against needs (``evaluate_s``), beside each
+    scene's floor in this tree's run (:func:`scene_floors`)."""
+    against = record["runs"][record["against"]]
+    mode = next(iter(against))
+    record["target"] = {"ratio": ratio, "mode": mode, "evaluate_s": against[mode]["evaluate_s"] / ratio}
+
+
 def per_capture_table(name: str, mode: str, got: dict) -> list[str]:
     """The worker milliseconds per capture (one noise realisation of one
     CFA, processed by every demosaic) by scene and stage, from timing.json's
@@ -224,6 +245,7 @@ def phases_main(args) -> int:
     for r in runs.values():  # no schedule finishes before every core has done its share of the CPU time
         for got in r.values():
             got["cpu_floor_s"] = got["cpu_s"] / cores
+            got["scene_floor_s"] = scene_floors(got, cores)
     header = f"{'':<24}" + "".join(f"{n[:14] + ' ' + m:>20}" for n in names for m in runs[n])
     if len(names) == 2:
         header += "".join(f"{'ratio ' + m:>14}" for m in runs[names[0]])
@@ -246,6 +268,8 @@ def phases_main(args) -> int:
         record["against"] = names[1]
         record["ratio"] = {k: runs[names[1]][m][k] / runs[names[0]][m][k] for k in runs[names[0]][m]
                            if isinstance(runs[names[0]][m][k], float) and runs[names[0]][m][k] > 0}
+        if args.target:
+            add_target(record, args.target)
     # paths in the record relative to the folder it is written to (io/portable.py)
     record["command"] = "python3 benchmarks/bench_study.py " + relative_command(
         sys.argv[1:], Path(args.json).parent if args.json else Path.cwd())
@@ -270,9 +294,13 @@ def main() -> int:
     ap.add_argument("--abba", action="store_true",
                     help="with --against: run this, REV, REV, this and keep each tree's faster run (drift-fair)")
     ap.add_argument("--json", metavar="FILE", help="also write the record (runs, ratio REV / this, command) to FILE")
+    ap.add_argument("--target", type=float, metavar="RATIO",
+                    help="with --against: record the evaluate time RATIO times faster than REV's (the JSON's 'target')")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--repeat", type=int, default=1, help="optics-memo mode: best of this many")
     args = ap.parse_args()
+    if args.target is not None and not (args.target > 0 and args.against):
+        ap.error("--target needs --against and a ratio above 0")
     if args.paper or args.against or args.subset or args.warm_only or args.keep or args.json:
         return phases_main(args)
     return memo_main(args)
