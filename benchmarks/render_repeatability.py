@@ -12,13 +12,16 @@ count (hundreds of samples a pixel) Mitsuba's LLVM variant adds a pixel's
 samples from several threads in an order that changes between runs, so
 float32 sums differ in their last bits.  The render cache keeps one render
 per key, so a study is reproducible from its cache; two renders made apart
-are equal only to this precision.  docs/scenes.md quotes the JSON.
+are equal only to this precision.  With one render thread
+(``CFA_MITSUBA_THREADS=1`` in the environment, recorded in the JSON as
+``threads``) the two are identical.  docs/scenes.md quotes the JSON.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -44,7 +47,7 @@ def compare(scene: str, **settings) -> dict:
     rel = np.abs(x - y)[differ] / np.maximum(np.abs(x[differ]), np.finfo(np.float32).tiny)
     return {"scene": scene, "settings": {k: v for k, v in settings.items() if v is not None},
             "spp": a.meta.get("spp"), "variant": a.meta.get("variant"), "shape": list(x.shape),
-            "samples": int(x.size), "differing_samples": int(differ.sum()),
+            "threads": os.environ.get("CFA_MITSUBA_THREADS"), "samples": int(x.size), "differing_samples": int(differ.sum()),
             "differing_share": float(differ.mean()),
             "max_abs_difference": float(np.abs(x - y).max()) if x.size else 0.0,
             "max_rel_difference": float(rel.max()) if rel.size else 0.0,
