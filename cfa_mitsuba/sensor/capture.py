@@ -108,9 +108,20 @@ def _pixel_irradiance(oi: OpticalImage, fill_factor: float) -> np.ndarray:
     return integrate_pixels(oi.irradiance_w_m2_nm, int(oi.meta["oversample"]), fill_factor)
 
 
-#: The last optical image's mean pixel irradiance per band (:func:`_band_mean`):
-#: (optical image, fill factor, (B,) mean); the image compared by identity
-#: and kept alive here, so its id cannot be another image's.
+def _kept(slot: list, oi: OpticalImage, key, make):
+    """What ``make()`` gives for the optical image ``oi`` and ``key``, kept
+    in the one-entry ``slot`` as (image, key, value) and made again only
+    for another image (compared by identity: kept alive in the slot, so its
+    id cannot be another image's) or another key (compared by value); the
+    old entry is dropped before the new one is made."""
+    last = slot[0]
+    if last is None or last[0] is not oi or last[1] != key:
+        slot[0] = None
+        slot[0] = last = (oi, key, make())
+    return last[2]
+
+
+#: The last optical image's mean pixel irradiance per band (:func:`_band_mean`).
 _LAST_BAND_MEAN: list = [None]
 
 
@@ -120,10 +131,8 @@ def _band_mean(oi: OpticalImage, fill_factor: float) -> np.ndarray:
     CFAs, luminances and noise seeds of one optical image, and this mean
     over the whole (H, W, B) cube was a sixth of a capture's time (16 ms of
     a puppy capture, measured); the same values, reused."""
-    last = _LAST_BAND_MEAN[0]
-    if last is None or last[0] is not oi or last[1] != fill_factor:
-        _LAST_BAND_MEAN[0] = last = (oi, fill_factor, band_mean_irradiance(_pixel_irradiance(oi, fill_factor)))
-    return last[2]
+    return _kept(_LAST_BAND_MEAN, oi, fill_factor,
+                 lambda: band_mean_irradiance(_pixel_irradiance(oi, fill_factor)))
 
 
 def _luminance_scale(oi: OpticalImage, luminance_cd_m2) -> float:
@@ -271,11 +280,9 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
                           max_analog_gain)
     inputs = (cfa.name, cfa.pattern.shape, cfa.pattern.tobytes(), qe.tobytes(), s, exposure_s, sensor, program,
               repr(oi.meta.get("on_axis_factor")))
-    last = _LAST_SIGNAL[0]
-    if last is None or last[0] is not oi or last[1] != inputs:  # not another noise seed of the last capture
-        _LAST_SIGNAL[0] = None
-        _LAST_SIGNAL[0] = last = (oi, inputs, _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, program))
-    choice, mode, sensor, photo, epr, well, gain, (h, w) = last[2]
+    # made again unless this is another noise seed of the last capture
+    choice, mode, sensor, photo, epr, well, gain, (h, w) = _kept(
+        _LAST_SIGNAL, oi, inputs, lambda: _noise_free_signal(oi, cfa, qe, wl, s, exposure_s, sensor, program))
     epr = epr.copy()  # returned in the RawImage, which its caller may change
     exposure = choice.exposure_s
     th, tw = cfa.tile_shape
@@ -291,7 +298,7 @@ def capture(image, cfa="bayer", *, luminance_cd_m2: float | None = None, exposur
         raw = read_out(electrons, sensor=sensor, noise=noise, rng=rng, gain=gain)
 
     meta = _scaled_meta(oi, s)
-    _photometry(meta, None, wl, s, exposure, band_mean=_band_mean(oi, sensor.fill_factor))
+    _photometry(meta, _band_mean(oi, sensor.fill_factor), wl, s, exposure)
     # wells that were full before read-out (read noise then spreads their codes)
     full = sensor.well_capacity_e if well is None else well
     meta["saturated_fraction"] = float(np.count_nonzero(electrons >= full)) / electrons.size
@@ -361,7 +368,7 @@ def capture_ideal(image, *, luminance_cd_m2: float | None = None, exposure_s="au
         xyz = (pix.reshape(-1, nb) @ (per_radiance * (s / factor)[:, None])).reshape(h, w, 3)
     _require_representable(xyz, exposure=exposure, scale=s, what="XYZ image")
     meta = _scaled_meta(oi, s)
-    _photometry(meta, pix, wl, s, exposure)
+    _photometry(meta, _band_mean(oi, sensor.fill_factor), wl, s, exposure)
     settings = {
         "cfa": {"name": "ideal", "description": "CIE 1931 XYZ at every pixel, no noise, no mosaic",
                 "tile": "XYZ"},

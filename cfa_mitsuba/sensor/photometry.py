@@ -24,11 +24,10 @@ def band_mean_irradiance(pix: np.ndarray) -> np.ndarray:
     return pix.reshape(-1, pix.shape[-1]).mean(axis=0)
 
 
-def add_photometry(meta: dict, pix: np.ndarray | None, wl: np.ndarray, s: float, exposure_s: float, *,
-                   band_mean: np.ndarray | None = None) -> None:
+def add_photometry(meta: dict, band_mean: np.ndarray, wl: np.ndarray, s: float, exposure_s: float) -> None:
     """The field's units of a capture, added to ``meta`` (s: the luminance
-    scale, ``pix`` the pixel irradiance before it, or None with its
-    :func:`band_mean_irradiance` given as ``band_mean``):
+    scale, ``band_mean`` the pixel irradiance before it averaged over the
+    pixels, (B,) W/(m^2 nm): :func:`band_mean_irradiance`):
 
     * ``scene_illuminance_lux``: the illuminance on the scene that gives its
       white the captured luminance, E = pi L_white (a perfect white diffuser,
@@ -40,8 +39,6 @@ def add_photometry(meta: dict, pix: np.ndarray | None, wl: np.ndarray, s: float,
     * ``sensor_exposure_lux_s``: that illuminance times the exposure time
       (the photometric exposure H of ISO 12232)."""
     y = _spectra.cmfs_xyz(wl)[:, 1] * _spectra.band_widths(wl) * _spectra.KM_LM_W
-    if band_mean is None:
-        band_mean = band_mean_irradiance(pix)
     illuminance = float(band_mean @ y) * s
     meta["scene_illuminance_lux"] = math.pi * float(meta["white_luminance_cd_m2"])
     meta["sensor_illuminance_lux"] = illuminance
