@@ -55,31 +55,27 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=5, help="runs of each case on each side (default 5)")
     ap.add_argument("--json", type=Path, help="write the table here")
     args = ap.parse_args(argv)
-    with tempfile.TemporaryDirectory(prefix="bench_startup_") as tmp:
-        other = Path(tmp) / "other"
-        subprocess.run(["git", "-C", str(REPO), "worktree", "add", "--detach", "-q", str(other), args.against],
-                       check=True)
-        try:
-            for tree in (REPO, other):
-                subprocess.run([sys.executable, "-m", "compileall", "-q", "-j", "0", str(tree / "cfa_mitsuba")],
-                               check=True, stdout=subprocess.DEVNULL)
-            for tree in (REPO, other):  # the tree's package, not an installed one
-                env = {**os.environ, "PYTHONPATH": str(tree)}
-                where = subprocess.run([sys.executable, "-c", "import cfa_mitsuba; print(cfa_mitsuba.__file__)"],
-                                       cwd=tempfile.gettempdir(), env=env, capture_output=True, text=True).stdout
-                if not Path(where.strip()).resolve().is_relative_to(tree.resolve()):
-                    raise SystemExit(f"bench_startup: {tree} imports cfa_mitsuba from {where.strip()}")
-            rows = {}
-            for name, case in CASES:
-                ours, theirs = [], []
-                for i in range(args.repeat):  # A B, then B A: neither side always runs second
-                    pair = ((REPO, ours), (other, theirs)) if i % 2 == 0 else ((other, theirs), (REPO, ours))
-                    for tree, out in pair:
-                        out.append(_time(tree, case))
-                rows[name] = {"this_s": statistics.median(ours), "against_s": statistics.median(theirs)}
-                rows[name]["ratio"] = rows[name]["against_s"] / rows[name]["this_s"]
-        finally:
-            subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(other)], check=False)
+    from _worktree import checked_out  # benchmarks/, beside this script
+
+    with checked_out(args.against) as other:
+        for tree in (REPO, other):
+            subprocess.run([sys.executable, "-m", "compileall", "-q", "-j", "0", str(tree / "cfa_mitsuba")],
+                           check=True, stdout=subprocess.DEVNULL)
+        for tree in (REPO, other):  # the tree's package, not an installed one
+            env = {**os.environ, "PYTHONPATH": str(tree)}
+            where = subprocess.run([sys.executable, "-c", "import cfa_mitsuba; print(cfa_mitsuba.__file__)"],
+                                   cwd=tempfile.gettempdir(), env=env, capture_output=True, text=True).stdout
+            if not Path(where.strip()).resolve().is_relative_to(tree.resolve()):
+                raise SystemExit(f"bench_startup: {tree} imports cfa_mitsuba from {where.strip()}")
+        rows = {}
+        for name, case in CASES:
+            ours, theirs = [], []
+            for i in range(args.repeat):  # A B, then B A: neither side always runs second
+                pair = ((REPO, ours), (other, theirs)) if i % 2 == 0 else ((other, theirs), (REPO, ours))
+                for tree, out in pair:
+                    out.append(_time(tree, case))
+            rows[name] = {"this_s": statistics.median(ours), "against_s": statistics.median(theirs)}
+            rows[name]["ratio"] = rows[name]["against_s"] / rows[name]["this_s"]
     print(f"{'case':24s} {'this tree (s)':>14s} {args.against[:12]:>14s} {'ratio':>7s}")
     for name, r in rows.items():
         print(f"{name:24s} {r['this_s']:14.2f} {r['against_s']:14.2f} {r['ratio']:7.2f}")

@@ -53,6 +53,7 @@ as the runs began and after them are printed with the table and recorded
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import re
@@ -196,45 +197,39 @@ def phases_main(args) -> int:
     runs: dict[str, dict[str, dict]] = {}
     all_evaluate: dict[str, dict[str, list]] = {}  # every run's evaluate phase, in the order run
     before = os.getloadavg()  # what else ran on the machine as the runs began
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as tmp, contextlib.ExitStack() as other_tree:
         tmp = Path(tmp)
         trees = {"this": REPO}
         if args.against:
-            where = tmp / "against"
-            subprocess.run(["git", "-C", str(REPO), "worktree", "add", "--detach", str(where), args.against],
-                           check=True, capture_output=True, text=True)
-            trees[args.against] = where
-        try:
-            configs = {name: _subset_config(tree, config, cfas, tmp / f"config-{i}") for i, (name, tree) in
-                       enumerate(trees.items())}
-            if args.same_config and args.against:  # equal work: this tree runs REV's copy of the config
-                configs["this"] = configs[args.against]
-            order = list(enumerate(trees.items()))
-            if args.abba:  # this, REV, REV, this: a machine that drifts during the runs favours neither tree
-                order = order + order[::-1]
-            for mode in (("warm",) if args.warm_only else ("cold", "warm")):
-                for i, (name, tree) in order:
-                    cache = None if args.warm_only else tmp / f"cache-{i}"  # warm: the cold run's cache again
-                    out = tmp / f"out-{i}-{mode}"
-                    if out.exists():
-                        shutil.rmtree(out)
-                    got = _study(tree, configs[name], out, cache, args.workers)
-                    all_evaluate.setdefault(name, {}).setdefault(mode, []).append(got["evaluate_s"])
-                    seen = runs.setdefault(name, {}).get(mode)
-                    # with --abba each tree runs twice: keep the faster run's numbers, each key the run's own
-                    if seen is None or got["evaluate_s"] < seen["evaluate_s"]:
-                        runs[name][mode] = got
-                    if args.keep:  # the tables, to compare the trees' values
-                        kept = Path(args.keep) / f"{'this' if tree == REPO else 'against'}-{mode}"
-                        kept.mkdir(parents=True, exist_ok=True)
-                        for f in ("metrics.csv", "metrics_realisations.csv", "timing.json"):
-                            if (out / f).is_file():
-                                shutil.copy2(out / f, kept / f)
-                    print(f"  {name} {mode}: evaluate {got['evaluate_s']:.1f} s", file=sys.stderr)
-        finally:
-            if args.against:
-                subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(trees[args.against])],
-                               capture_output=True)
+            from _worktree import checked_out  # benchmarks/, beside this script
+
+            trees[args.against] = other_tree.enter_context(checked_out(args.against))
+        configs = {name: _subset_config(tree, config, cfas, tmp / f"config-{i}") for i, (name, tree) in
+                   enumerate(trees.items())}
+        if args.same_config and args.against:  # equal work: this tree runs REV's copy of the config
+            configs["this"] = configs[args.against]
+        order = list(enumerate(trees.items()))
+        if args.abba:  # this, REV, REV, this: a machine that drifts during the runs favours neither tree
+            order = order + order[::-1]
+        for mode in (("warm",) if args.warm_only else ("cold", "warm")):
+            for i, (name, tree) in order:
+                cache = None if args.warm_only else tmp / f"cache-{i}"  # warm: the cold run's cache again
+                out = tmp / f"out-{i}-{mode}"
+                if out.exists():
+                    shutil.rmtree(out)
+                got = _study(tree, configs[name], out, cache, args.workers)
+                all_evaluate.setdefault(name, {}).setdefault(mode, []).append(got["evaluate_s"])
+                seen = runs.setdefault(name, {}).get(mode)
+                # with --abba each tree runs twice: keep the faster run's numbers, each key the run's own
+                if seen is None or got["evaluate_s"] < seen["evaluate_s"]:
+                    runs[name][mode] = got
+                if args.keep:  # the tables, to compare the trees' values
+                    kept = Path(args.keep) / f"{'this' if tree == REPO else 'against'}-{mode}"
+                    kept.mkdir(parents=True, exist_ok=True)
+                    for f in ("metrics.csv", "metrics_realisations.csv", "timing.json"):
+                        if (out / f).is_file():
+                            shutil.copy2(out / f, kept / f)
+                print(f"  {name} {mode}: evaluate {got['evaluate_s']:.1f} s", file=sys.stderr)
     after = os.getloadavg()
     what = f"{config}" + (f" reduced to {', '.join(cfas)}" if cfas else "") + (
         f", {args.against}'s copy in both trees" if args.same_config and args.against else "")

@@ -27,7 +27,6 @@ import json
 import os
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -75,13 +74,6 @@ def measure(scene: str, cfas: list[str], luminance: float, repeat: int) -> dict:
     return best
 
 
-def _other_tree(rev: str, tmp: Path) -> Path:
-    where = tmp / "against"
-    subprocess.run(["git", "-C", str(REPO), "worktree", "add", "--detach", str(where), rev], check=True,
-                   capture_output=True, text=True)
-    return where
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scene", default="puppy")
@@ -100,13 +92,10 @@ def main(argv=None) -> int:
     this = _run_with_package(REPO, own)  # a fresh process each, so neither inherits the other's caches
     other = None
     if args.against:
-        with tempfile.TemporaryDirectory() as tmp:
-            tree = _other_tree(args.against, Path(tmp))
-            try:
-                other = _run_with_package(tree, own)  # this script, that tree's package
-            finally:
-                subprocess.run(["git", "-C", str(REPO), "worktree", "remove", "--force", str(tree)],
-                               capture_output=True)
+        from _worktree import checked_out  # benchmarks/, beside this script
+
+        with checked_out(args.against) as tree:
+            other = _run_with_package(tree, own)  # this script, that tree's package
     print(f"{args.scene} at {args.luminance:g} cd/m^2, best of {args.repeat} (seconds; "
           f"load average {' '.join(f'{x:.1f}' for x in os.getloadavg())})")
     head = f"{'stage':<44}{'this':>9}"
